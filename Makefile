@@ -1,0 +1,23 @@
+# The two commands of the README. Each one sets everything up first (idempotent, see
+# scripts/setup.sh), so a fresh clone needs nothing installed by hand.
+SHELL := /bin/bash
+ENV := source scripts/env.sh
+
+.PHONY: setup run test lint clean
+
+setup:
+	@bash scripts/setup.sh
+
+# Main job: see README ("make run").
+run: setup
+	@$(ENV) && python scripts/main_job.py $(ARGS)
+
+lint: setup
+	@$(ENV) && ruff check src test scripts conftest.py
+
+# Lint, then every test in one pytest invocation.
+test: lint
+	@$(ENV) && python -m pytest $(PYTEST_ARGS)
+
+clean:
+	rm -rf build install log

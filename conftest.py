@@ -1,0 +1,67 @@
+"""Fixtures shared by every test: a private ROS domain per test and node processes."""
+
+import pytest
+
+from hrc_common.testing import next_domain_id, NodeProcess, ros_environment
+
+
+@pytest.fixture
+def ros_domain_id(monkeypatch):
+    """Give the test a ROS_DOMAIN_ID of its own, also set for the test process itself."""
+    domain_id = next_domain_id()
+    for name, value in ros_environment(domain_id).items():
+        if name.startswith('ROS_'):
+            monkeypatch.setenv(name, value)
+    monkeypatch.delenv('ROS_LOCALHOST_ONLY', raising=False)
+    return domain_id
+
+
+@pytest.fixture
+def ros_env(ros_domain_id):
+    """Return the environment for node subprocesses on the test's domain."""
+    return ros_environment(ros_domain_id)
+
+
+@pytest.fixture
+def rclpy_context(ros_domain_id):
+    """Give an rclpy context on the test's domain, shut down after the test."""
+    import rclpy
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context, domain_id=ros_domain_id)
+    yield context
+    if context.ok():
+        rclpy.shutdown(context=context)
+
+
+@pytest.fixture
+def start_node(ros_env, request):
+    """Start node executables in separate processes; they are stopped after the test.
+
+    Usage: ``start_node('hrc_sim_node', 'sim_node', parameters={'mode': 'lockstep'})``. When the
+    test fails, each node's output is printed to help the diagnosis.
+    """
+    processes = []
+
+    def start(package, executable, **kwargs):
+        kwargs.setdefault('env', ros_env)
+        process = NodeProcess(package, executable, **kwargs)
+        processes.append(process)
+        return process
+
+    yield start
+    for process in processes:
+        process.stop()
+    failed = getattr(request.node, 'rep_call', None)
+    if failed is not None and failed.failed:
+        for process in processes:
+            print(f'----- output of {process.name} -----\n{process.output}')
+
+
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_runtest_makereport(item, call):
+    """Keep each phase's report on the item so fixtures can see whether the test failed."""
+    report = yield
+    setattr(item, 'rep_' + report.when, report)
+    return report

@@ -1,0 +1,1 @@
+"""Shared pieces of the hrc nodes: names, QoS, parameters, wrench axes."""

@@ -1,0 +1,226 @@
+"""One source of truth for node parameters: a dataclass whose fields carry their documentation.
+
+A node's parameters are a dataclass; each field is made with :func:`param`, which stores the
+description, the allowed range or choices, and whether the value may change at run time. Then
+
+* :func:`validate` checks an instance (pure, no ROS) and returns the reasons it is bad;
+* :func:`declare_parameters` declares every field on a node with a ``ParameterDescriptor``
+  (description, ranges), reads the values given (``params/<node>.yaml``, ``-p``), validates
+  them, and raises :class:`ParameterError` with every reason when they are bad;
+* :func:`load_yaml` reads ``params/<node>.yaml`` into the dataclass without ROS (for tests,
+  tools and the pure cores).
+
+A dataclass may define ``check(self) -> list[str]`` for conditions across fields.
+"""
+
+from dataclasses import dataclass, field, fields, MISSING, replace
+import math
+import typing
+
+import yaml
+
+
+class ParameterError(ValueError):
+    """Raised when parameter values are rejected; the message lists every reason."""
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """What a field accepts: description, numeric range (inclusive), or a set of choices."""
+
+    description: str
+    low: typing.Optional[float] = None
+    high: typing.Optional[float] = None
+    choices: typing.Optional[tuple] = None
+    read_only: bool = True
+
+
+def param(default, description, *, low=None, high=None, choices=None, read_only=True):
+    """Make a dataclass field with its documentation and bounds (lists are copied per instance)."""
+    spec = ParamSpec(description, low, high, tuple(choices) if choices else None, read_only)
+    if isinstance(default, list):
+        return field(default_factory=lambda: list(default), metadata={'spec': spec})
+    return field(default=default, metadata={'spec': spec})
+
+
+def spec_of(dataclass_field) -> ParamSpec:
+    """Return the ParamSpec of a field made with :func:`param`."""
+    try:
+        return dataclass_field.metadata['spec']
+    except KeyError:
+        raise TypeError(f'field {dataclass_field.name!r} was not made with params.param()')
+
+
+def default_of(dataclass_field):
+    """Return the default value of a dataclass field."""
+    if dataclass_field.default is not MISSING:
+        return dataclass_field.default
+    return dataclass_field.default_factory()
+
+
+def _check_value(name, value, default, spec):
+    """Return the reasons why ``value`` is not acceptable for a field."""
+    reasons = []
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            return [f'{name}: expected a boolean, got {value!r}']
+    elif isinstance(default, (int, float)):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return [f'{name}: expected a number, got {value!r}']
+        if isinstance(default, int) and not isinstance(value, int):
+            return [f'{name}: expected an integer, got {value!r}']
+        if not math.isfinite(value):
+            return [f'{name}: must be finite, got {value!r}']
+        if spec.low is not None and value < spec.low:
+            reasons.append(f'{name}: {value} is below the minimum {spec.low}')
+        if spec.high is not None and value > spec.high:
+            reasons.append(f'{name}: {value} is above the maximum {spec.high}')
+    elif isinstance(default, str):
+        if not isinstance(value, str):
+            return [f'{name}: expected a string, got {value!r}']
+    elif isinstance(default, list):
+        if not isinstance(value, (list, tuple)):
+            return [f'{name}: expected a list, got {value!r}']
+        if spec.choices is not None:
+            unknown = [item for item in value if item not in spec.choices]
+            if unknown:
+                reasons.append(f'{name}: {unknown} not among {list(spec.choices)}')
+        return reasons
+    if spec.choices is not None and value not in spec.choices:
+        reasons.append(f'{name}: {value!r} is not one of {list(spec.choices)}')
+    return reasons
+
+
+def validate(instance) -> list:
+    """Return every reason why the dataclass ``instance`` holds bad values (empty if good)."""
+    reasons = []
+    for dataclass_field in fields(instance):
+        reasons += _check_value(dataclass_field.name, getattr(instance, dataclass_field.name),
+                                default_of(dataclass_field), spec_of(dataclass_field))
+    if not reasons and hasattr(instance, 'check'):
+        reasons += list(instance.check())
+    return reasons
+
+
+def checked(instance):
+    """Return ``instance`` if valid, else raise ParameterError listing every reason."""
+    reasons = validate(instance)
+    if reasons:
+        raise ParameterError(f'{type(instance).__name__} rejected: ' + '; '.join(reasons))
+    return instance
+
+
+def from_dict(params_cls, values: dict):
+    """Build and validate ``params_cls`` from a dict; unknown keys are an error."""
+    names = {dataclass_field.name for dataclass_field in fields(params_cls)}
+    unknown = sorted(set(values) - names)
+    if unknown:
+        raise ParameterError(f'{params_cls.__name__}: unknown parameters {unknown}; '
+                             f'known: {sorted(names)}')
+    converted = {}
+    for dataclass_field in fields(params_cls):
+        if dataclass_field.name in values:
+            value = values[dataclass_field.name]
+            default = default_of(dataclass_field)
+            # YAML writes 1 for 1.0; accept integers where a float is expected.
+            is_integer = isinstance(value, int) and not isinstance(value, bool)
+            if isinstance(default, float) and is_integer:
+                value = float(value)
+            if isinstance(default, list) and isinstance(value, tuple):
+                value = list(value)
+            converted[dataclass_field.name] = value
+    return checked(params_cls(**converted))
+
+
+def load_yaml(params_cls, path, node_name: str):
+    """Read ``path`` (ROS 2 parameter YAML) and return ``params_cls`` for ``node_name``.
+
+    Accepts the node's own section (``node_name:`` or ``/**:``) with ``ros__parameters``.
+    """
+    with open(path) as stream:
+        document = yaml.safe_load(stream) or {}
+    values = {}
+    for key in ('/**', node_name, '/' + node_name):
+        section = document.get(key)
+        if section is not None:
+            values.update(section.get('ros__parameters', {}) or {})
+    return from_dict(params_cls, values)
+
+
+def with_overrides(instance, **overrides):
+    """Return a validated copy of ``instance`` with some fields replaced."""
+    return checked(replace(instance, **overrides))
+
+
+def as_dict(instance) -> dict:
+    """Return the parameters as a plain dict (for logs, bag metadata, checkpoints)."""
+    return {dataclass_field.name: getattr(instance, dataclass_field.name)
+            for dataclass_field in fields(instance)}
+
+
+def describe(params_cls) -> str:
+    """Return a help text listing every parameter with its default, bounds and description."""
+    lines = []
+    for dataclass_field in fields(params_cls):
+        spec = spec_of(dataclass_field)
+        bounds = ''
+        if spec.low is not None or spec.high is not None:
+            bounds = f' [{spec.low if spec.low is not None else "-inf"}, ' \
+                     f'{spec.high if spec.high is not None else "inf"}]'
+        if spec.choices:
+            bounds = f' {{{", ".join(map(str, spec.choices))}}}'
+        lines.append(f'  {dataclass_field.name} (default {default_of(dataclass_field)!r}){bounds}')
+        lines.append(f'      {spec.description}')
+    return '\n'.join(lines)
+
+
+def declare_parameters(node, params_cls):
+    """Declare every field of ``params_cls`` on ``node`` and return the validated values.
+
+    Ranges go into the ParameterDescriptor (so ``ros2 param describe`` shows them); values that
+    break a range, a choice or a cross-field check raise ParameterError with every reason.
+    Read-only fields cannot change after start; the others are re-validated on every change.
+    """
+    from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                    SetParametersResult)
+    from rclpy.exceptions import InvalidParameterValueException
+
+    values = {}
+    reasons = []
+    for dataclass_field in fields(params_cls):
+        spec = spec_of(dataclass_field)
+        default = default_of(dataclass_field)
+        description = spec.description
+        if spec.choices:
+            description += f' (one of: {", ".join(map(str, spec.choices))})'
+        descriptor = ParameterDescriptor(description=description, read_only=spec.read_only)
+        # rclpy enforces these ranges itself on later changes; validate() words the reasons.
+        if isinstance(default, float) and spec.low is not None and spec.high is not None:
+            descriptor.floating_point_range = [FloatingPointRange(
+                from_value=float(spec.low), to_value=float(spec.high), step=0.0)]
+        elif (isinstance(default, int) and not isinstance(default, bool)
+              and spec.low is not None and spec.high is not None):
+            descriptor.integer_range = [IntegerRange(
+                from_value=int(spec.low), to_value=int(spec.high), step=0)]
+        try:
+            parameter = node.declare_parameter(dataclass_field.name, default, descriptor)
+            values[dataclass_field.name] = parameter.value
+        except InvalidParameterValueException as error:
+            reasons.append(f'{dataclass_field.name}: {error}')
+        except Exception as error:  # a wrong type given on the command line or YAML
+            reasons.append(f'{dataclass_field.name}: {type(error).__name__}: {error}')
+    if reasons:
+        raise ParameterError(f'{params_cls.__name__} rejected: ' + '; '.join(reasons))
+    current = from_dict(params_cls, values)
+
+    def on_set(changes):
+        proposed = {change.name: change.value for change in changes}
+        try:
+            candidate = from_dict(params_cls, {**as_dict(current), **proposed})
+        except ParameterError as error:
+            return SetParametersResult(successful=False, reason=str(error))
+        del candidate
+        return SetParametersResult(successful=True)
+
+    node.add_on_set_parameters_callback(on_set)
+    return current

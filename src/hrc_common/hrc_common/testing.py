@@ -1,0 +1,105 @@
+"""Helpers for tests that run hrc nodes as separate processes over real DDS.
+
+Each test gets its own ``ROS_DOMAIN_ID`` and discovery limited to localhost, so tests never see
+each other's nodes. A node is started exactly as ``ros2 run`` would: the executable found under
+``<prefix>/lib/<package>/`` through the ament index.
+"""
+
+import itertools
+import os
+import pathlib
+import signal
+import subprocess
+import tempfile
+import time
+
+# Domain ids 1..100 are cycled through by one test run; the base spreads concurrent runs apart.
+_DOMAIN_IDS = itertools.cycle(range(1, 101))
+_BASE = os.getpid() % 100
+
+
+def next_domain_id() -> int:
+    """Return a domain id not used by the previous tests of this process."""
+    return (next(_DOMAIN_IDS) + _BASE) % 100 + 1
+
+
+def ros_environment(domain_id: int) -> dict:
+    """Return os.environ with the test's domain id and localhost-only discovery."""
+    env = dict(os.environ)
+    env['ROS_DOMAIN_ID'] = str(domain_id)
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    env.pop('ROS_LOCALHOST_ONLY', None)
+    env['PYTHONUNBUFFERED'] = '1'
+    return env
+
+
+def executable_path(package: str, executable: str) -> pathlib.Path:
+    """Return ``<prefix>/lib/<package>/<executable>`` as ``ros2 run`` finds it."""
+    from ament_index_python.packages import get_package_prefix
+
+    return pathlib.Path(get_package_prefix(package)) / 'lib' / package / executable
+
+
+class NodeProcess:
+    """A node executable running in its own process; its output goes to a temporary file."""
+
+    def __init__(self, package, executable, args=(), env=None, parameters=None,
+                 params_file=None, ros_args=()):
+        command = [str(executable_path(package, executable)), *args]
+        ros_section = list(ros_args)
+        if params_file is not None:
+            ros_section += ['--params-file', str(params_file)]
+        for name, value in (parameters or {}).items():
+            ros_section += ['-p', f'{name}:={format_parameter(value)}']
+        if ros_section:
+            command += ['--ros-args', *ros_section]
+        self.command = command
+        self.name = f'{package}/{executable}'
+        self._log = tempfile.NamedTemporaryFile(prefix=f'{executable}-', suffix='.log',
+                                                delete=False)
+        self.process = subprocess.Popen(command, env=env, stdout=self._log,
+                                        stderr=subprocess.STDOUT, start_new_session=True)
+
+    @property
+    def output(self) -> str:
+        """Everything the process printed so far."""
+        return pathlib.Path(self._log.name).read_text(errors='replace')
+
+    def wait(self, timeout: float) -> int:
+        """Wait for the process to exit and return its exit code."""
+        return self.process.wait(timeout=timeout)
+
+    def stop(self, timeout: float = 10.0) -> int:
+        """SIGINT the process (as Ctrl-C would), then SIGKILL its group if it hangs."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.process.pid, signal.SIGKILL)
+                self.process.wait(timeout=timeout)
+        return self.process.returncode
+
+
+def format_parameter(value) -> str:
+    """Format a Python value for ``-p name:=value`` (YAML syntax)."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, (list, tuple)):
+        return '[' + ','.join(format_parameter(item) for item in value) + ']'
+    if isinstance(value, str):
+        return value if value else "''"
+    return repr(value)
+
+
+def wait_for(condition, timeout: float, interval: float = 0.02, spin=None) -> bool:
+    """Poll ``condition()`` (spinning ``spin()`` in between if given) until true or timeout."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if spin is not None:
+            spin()
+        if condition():
+            return True
+        if spin is None:
+            time.sleep(interval)
+    return condition()
