@@ -1,0 +1,107 @@
+"""hrc_common.params: documented dataclass parameters, validation, YAML, ROS declaration."""
+
+from dataclasses import dataclass
+
+import pytest
+
+from hrc_common.params import (as_dict, checked, declare_parameters, describe, from_dict,
+                               load_yaml, param, ParameterError, validate, with_overrides)
+
+
+@dataclass
+class ExampleParams:
+    """Parameters of a made-up node."""
+
+    mode: str = param('lockstep', 'Clock mode', choices=('lockstep', 'realtime'))
+    period: float = param(0.2, 'Control period (s)', low=0.01, high=1.0)
+    episodes: int = param(3, 'Episodes to run', low=0, high=1000)
+    verbose: bool = param(False, 'Log every step')
+    actors: list = param(['robot', 'human'], 'Actors to wait for', choices=('robot', 'human'))
+
+    def check(self):
+        """Cross-field condition: realtime needs a period of at least 0.05 s."""
+        if self.mode == 'realtime' and self.period < 0.05:
+            return ['period: realtime mode needs at least 0.05 s']
+        return []
+
+
+def test_defaults_are_valid_and_lists_not_shared():
+    first, second = ExampleParams(), ExampleParams()
+    assert validate(first) == []
+    first.actors.append('human')
+    assert second.actors == ['robot', 'human']
+
+
+@pytest.mark.parametrize('overrides, reason', [
+    ({'mode': 'fast'}, "mode: 'fast' is not one of ['lockstep', 'realtime']"),
+    ({'period': 2.0}, 'period: 2.0 is above the maximum 1.0'),
+    ({'period': float('nan')}, 'period: must be finite'),
+    ({'episodes': -1}, 'episodes: -1 is below the minimum 0'),
+    ({'episodes': 1.5}, 'episodes: expected an integer'),
+    ({'verbose': 'yes'}, 'verbose: expected a boolean'),
+    ({'actors': ['robot', 'dog']}, "actors: ['dog'] not among"),
+    ({'mode': 'realtime', 'period': 0.02}, 'realtime mode needs at least 0.05 s'),
+])
+def test_bad_values_are_rejected_with_reason(overrides, reason):
+    with pytest.raises(ParameterError, match=None) as error:
+        from_dict(ExampleParams, overrides)
+    assert reason in str(error.value)
+
+
+def test_every_reason_is_reported_at_once():
+    with pytest.raises(ParameterError) as error:
+        checked(ExampleParams(period=5.0, episodes=-3))
+    assert 'period' in str(error.value) and 'episodes' in str(error.value)
+
+
+def test_unknown_keys_are_an_error_and_ints_become_floats():
+    with pytest.raises(ParameterError, match='unknown parameters'):
+        from_dict(ExampleParams, {'perod': 0.3})
+    assert from_dict(ExampleParams, {'period': 1}).period == 1.0
+    assert with_overrides(ExampleParams(), episodes=7).episodes == 7
+    assert as_dict(ExampleParams())['mode'] == 'lockstep'
+
+
+def test_load_yaml_reads_the_node_section(tmp_path):
+    path = tmp_path / 'example.yaml'
+    path.write_text('example:\n  ros__parameters:\n    period: 0.5\n    actors: [robot]\n'
+                    'other:\n  ros__parameters:\n    period: 0.9\n')
+    loaded = load_yaml(ExampleParams, path, 'example')
+    assert loaded.period == 0.5 and loaded.actors == ['robot']
+
+
+def test_describe_lists_defaults_bounds_and_docs():
+    text = describe(ExampleParams)
+    assert "period (default 0.2) [0.01, 1.0]" in text
+    assert 'Control period (s)' in text
+    assert '{lockstep, realtime}' in text
+
+
+def test_declare_parameters_on_a_real_node(rclpy_context):
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    node = rclpy.create_node('example', context=rclpy_context,
+                             parameter_overrides=[Parameter('period', value=0.5)])
+    try:
+        values = declare_parameters(node, ExampleParams)
+        assert values.period == 0.5 and values.actors == ['robot', 'human']
+        descriptor = node.describe_parameter('period')
+        assert 'Control period' in descriptor.description
+        assert descriptor.floating_point_range[0].to_value == 1.0
+        assert descriptor.read_only
+    finally:
+        node.destroy_node()
+
+
+def test_declare_parameters_rejects_bad_overrides(rclpy_context):
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    node = rclpy.create_node('example', context=rclpy_context,
+                             parameter_overrides=[Parameter('mode', value='warp')])
+    try:
+        with pytest.raises(ParameterError, match="mode: 'warp' is not one of"):
+            declare_parameters(node, ExampleParams)
+    finally:
+        node.destroy_node()
