@@ -1,0 +1,1 @@
+"""The slider-pendulum-ball simulation: PyBullet physics core and the sim node."""

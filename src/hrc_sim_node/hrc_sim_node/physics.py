@@ -1,0 +1,515 @@
+"""The slider-pendulum-ball system of the paper, simulated with PyBullet (no ROS in here).
+
+Description
+-----------
+A vertical rod (``rod_length`` = 0.2 m) carries a slider that moves along it. A pendulum, a
+beam of ``pendulum_length`` = 0.5 m, hangs on a hinge on the slider; the hinge holds the beam at
+its *west end*, so the beam reaches east from the rod. A ball sits on the beam and moves along
+it between two end stops at the beam's ends. Two actors share the system: one pushes the slider
+along the rod (a force), the other turns the pendulum about its hinge (a torque).
+
+Frame (``hrc_common.dof``): x toward the viewer (the hinge axis), y east, z up.
+
+State (:class:`PhysicsState`)
+-----------------------------
+====  =============================  ======  ================================================
+      quantity                       unit    bounds
+====  =============================  ======  ================================================
+S_x   ``slider_position``            m       [-rod_length/2, rod_length/2] = [-0.1, 0.1]
+      ``slider_velocity``            m/s     (damped, a few 0.1 m/s at most)
+P_z   ``pendulum_angle``             rad     [-pendulum_limit, pendulum_limit] = [-pi/2, pi/2]
+      ``pendulum_angular_velocity``  rad/s
+B_y   ``ball_position``              m       [-pendulum_length/2, pendulum_length/2]
+      ``ball_velocity``              m/s
+====  =============================  ======  ================================================
+
+S_x = 0 is the middle of the rod (+ up); P_z = 0 is the horizontal beam pointing east, + raises
+the east end; B_y = 0 is the middle of the beam, + toward the east end.
+
+Actions
+-------
+``step(force, torque)``: ``force`` (N, + up) on the slider along the rod and ``torque``
+(N*m, + raises the east end) on the pendulum about its hinge, held constant over one control
+period (``control_period`` = 0.2 s, ``substeps`` physics steps). Each is clamped to
+``[-max_force, max_force]`` and ``[-max_torque, max_torque]``; a non-finite value raises
+ValueError. ``step_normalized(translation, rotation)`` takes commands in [-1, 1] (clamped) and
+scales them by the limits.
+
+Dynamics
+--------
+PyBullet (Featherstone multibody, DIRECT mode by default) integrates a chain of three joints:
+
+* ``slide``: prismatic along world z, rod -> slider, hard limits at the rod's ends;
+* ``hinge``: revolute about world x, slider -> pendulum, hard limits at +-``pendulum_limit``
+  (the beam cannot swing through the rod it hangs on);
+* ``roll``: prismatic along the beam, pendulum -> ball, hard limits at the beam's ends (the
+  end stops that keep the ball on the pendulum, so no restart is ever needed).
+
+The ball is a point mass on a prismatic joint (sliding, not spinning) with viscous rolling
+resistance. A real rolling sphere (contacts and friction) would add the 2/7 share of spin
+inertia but makes contact solving part of every step, slower and sensitive to solver details;
+the prismatic ball is exact, deterministic and fast. Its centre sits ``ball_radius`` above the
+beam's axis, as a ball resting on top of the beam.
+
+Viscous damping (``slider_damping``, ``pendulum_damping``, ``ball_damping``) acts on each
+joint, applied explicitly at every substep (``params.check`` refuses values that would make
+that unstable). With the damping the slider and the pendulum respond to a held command by
+settling to a speed (force / damping) within about 0.1-0.2 s, which a person at a joystick and
+an agent sampling every 0.2 s can both follow.
+
+Couplings (both actions affect both level-2 subtasks, as in the paper):
+
+* translation -> rotation: the pendulum's centre of mass lies ``pendulum_length/2`` east of the
+  hinge, so accelerating the slider up presses the east end down (and down lifts it): a torque
+  ``-m_p * d * a_slider * cos(P_z)`` on the hinge;
+* rotation -> translation: turning the pendulum accelerates its centre of mass up or down, and
+  the reaction ``-m_p * d * (P_z'' cos P_z - P_z'^2 sin P_z)`` pushes the slider the other way;
+* level 2 -> level 1: along the beam the ball feels ``-(g + a_slider) * sin(P_z)`` (gravity
+  and the slider's acceleration tilted into the beam) plus the centrifugal term; hence the ball
+  is far more sensitive to the pendulum angle than to the slider (at P_z = 0 the slider does
+  not move the ball at all);
+* level 1 -> level 2: the ball off the middle puts ``m_b * g * B_y * cos(P_z)`` of torque on
+  the hinge (east of the middle presses the east end down).
+
+Gravity
+-------
+``gravity`` acts on every body. With ``gravity_compensation`` on (default), the model includes
+what a counterweight would do (a static compensation, computed at every substep):
+
+* a constant force ``(m_slider + m_pendulum + m_ball) * g`` up on the slider, so the slider
+  with its load floats where it is;
+* a torque ``g * (m_p * d * cos P_z + m_b * (L/2 * cos P_z - r_b * sin P_z))`` on the hinge,
+  which balances the beam's weight and the weight of the ball *when the ball is in the middle*.
+
+The ball's displacement from the middle is never compensated: its motion and its torque on the
+beam are the task. Hence a released joystick (zero command) leaves the slider and the
+pendulum where they are (damped); only the ball rolls downhill and, once off the middle, slowly
+tips the beam toward its side (at most ``m_b * g * L/2`` = 0.12 N*m, a quarter of
+``max_torque``), so every state stays recoverable and the task is never made impossible by
+letting go. Without compensation the slider would drop to the bottom stop within half a second
+and the beam would swing down, which a 5 Hz joystick loop cannot catch.
+
+Force and torque limits
+-----------------------
+``max_force`` = 2 N moves the slider at up to 0.2 m/s against ``slider_damping`` = 10 N*s/m
+(the whole rod in 1 s, 0.04 m per control period) and exceeds the largest reaction the pendulum
+puts on the slider (about 1.5 N at full torque, for less than 0.1 s). ``max_torque`` = 0.5 N*m
+turns the beam at up to 1 rad/s against ``pendulum_damping`` = 0.5 N*m*s/rad (0.2 rad per
+control period) and is four times the largest torque of the ball at an end stop (0.12 N*m), so
+the rotation actor can always bring the ball back. Smaller limits leave the actors unable to
+catch the ball; larger ones make one 0.2 s command overshoot (a person's joystick deflection
+maps linearly to the limit).
+
+Reward
+------
+None here: the agent owns the reward (the task tree).
+
+Episode start
+-------------
+``reset(seed)``: slider, pendulum and ball start at rest at positions drawn uniformly from
+``[-initial_*_spread, initial_*_spread]`` with a numpy Generator seeded by ``seed``; with
+``seed=None`` the generator of the previous reset continues (seeded from the OS entropy if
+never seeded), as in Gymnasium.
+
+Episode end
+-----------
+Truncation after ``episode_duration`` = 40 s (``steps_per_episode`` = 200 control steps): the
+state of step 200 has ``truncated`` set. Nothing terminates the episode (``terminated`` is
+always false): the end stops keep every body on the model. ``step()`` after the last step
+raises RuntimeError; call ``reset()``.
+"""
+
+from dataclasses import dataclass, fields
+import math
+import os
+import tempfile
+
+import numpy
+
+from hrc_common.params import checked, param
+
+# PyBullet joint indices of the chain rod -> slider -> pendulum -> ball.
+SLIDE_JOINT, HINGE_JOINT, ROLL_JOINT = 0, 1, 2
+JOINTS = (SLIDE_JOINT, HINGE_JOINT, ROLL_JOINT)
+
+# Cross sections of the visual bodies (m); they do not enter the dynamics except BEAM_HEIGHT,
+# which places the ball's centre on top of the beam.
+BEAM_WIDTH = 0.03
+BEAM_HEIGHT = 0.01
+SLIDER_SIZE = (0.05, 0.05, 0.03)
+ROD_RADIUS = 0.006
+
+
+@dataclass
+class PhysicsParams:
+    """Physical and timing parameters of :class:`SliderPendulumBall` (SI units)."""
+
+    control_period: float = param(
+        0.2, "control period (s): one action is held this long; the paper's sample time",
+        low=0.01, high=1.0)
+    substeps: int = param(
+        20, 'physics substeps per control period (step = control_period / substeps)',
+        low=1, high=1000)
+    episode_duration: float = param(
+        40.0, 'episode length (s); a multiple of control_period; the episode is truncated then',
+        low=0.2, high=3600.0)
+    max_force: float = param(
+        2.0, 'limit of |force| on the slider (N); normalized command 1 = this force',
+        low=0.01, high=100.0)
+    max_torque: float = param(
+        0.5, 'limit of |torque| on the pendulum (N*m); normalized command 1 = this torque',
+        low=0.001, high=50.0)
+    gravity: float = param(9.81, 'gravitational acceleration (m/s^2), acting along -z',
+                           low=0.0, high=20.0)
+    gravity_compensation: bool = param(
+        True, 'static counterweight: slider and pendulum (with the ball in the middle) float; '
+        "the ball's offset is never compensated")
+    rod_length: float = param(0.2, 'length of the vertical rod (m); slider stops at +-half',
+                              low=0.02, high=2.0)
+    pendulum_length: float = param(0.5, 'length of the pendulum beam (m), hinged at its west '
+                                   'end; ball stops at +-half', low=0.05, high=5.0)
+    pendulum_limit: float = param(math.pi / 2, 'hinge stops at +-this angle (rad)',
+                                  low=0.1, high=math.pi / 2)
+    slider_mass: float = param(1.0, 'mass of the slider (kg)', low=0.01, high=100.0)
+    pendulum_mass: float = param(0.5, 'mass of the pendulum beam (kg), uniform',
+                                 low=0.01, high=100.0)
+    ball_mass: float = param(0.05, 'mass of the ball (kg)', low=0.001, high=10.0)
+    ball_radius: float = param(0.02, 'radius of the ball (m): its centre sits this far above '
+                               'the beam', low=0.001, high=0.2)
+    slider_damping: float = param(10.0, 'viscous damping of the slider on the rod (N*s/m)',
+                                  low=0.0, high=1000.0)
+    pendulum_damping: float = param(0.5, 'viscous damping of the hinge (N*m*s/rad)',
+                                    low=0.0, high=100.0)
+    ball_damping: float = param(0.1, 'viscous rolling resistance of the ball (N*s/m)',
+                                low=0.0, high=100.0)
+    initial_slider_spread: float = param(0.03, 'initial S_x drawn from [-this, this] (m)',
+                                         low=0.0, high=1.0)
+    initial_angle_spread: float = param(0.1, 'initial P_z drawn from [-this, this] (rad)',
+                                        low=0.0, high=math.pi / 2)
+    initial_ball_spread: float = param(0.05, 'initial B_y drawn from [-this, this] (m)',
+                                       low=0.0, high=2.5)
+
+    @property
+    def steps_per_episode(self) -> int:
+        """Control steps in one episode (200 for 40 s at 0.2 s)."""
+        return int(round(self.episode_duration / self.control_period))
+
+    @property
+    def time_step(self) -> float:
+        """Physics substep (s)."""
+        return self.control_period / self.substeps
+
+    @property
+    def pendulum_com_distance(self) -> float:
+        """Distance from the hinge to the beam's centre of mass (m)."""
+        return self.pendulum_length / 2
+
+    @property
+    def hinge_inertia(self) -> float:
+        """Moment of inertia about the hinge of the beam and the ball in the middle (kg*m^2)."""
+        half = self.pendulum_length / 2
+        beam = self.pendulum_mass * self.pendulum_length ** 2 / 3
+        return beam + self.ball_mass * (half ** 2 + self.ball_radius ** 2)
+
+    def check(self) -> list:
+        """Return the reasons why the fields do not fit together (empty if they do)."""
+        reasons = []
+        ratio = self.episode_duration / self.control_period
+        if abs(ratio - round(ratio)) > 1e-6:
+            reasons.append(f'episode_duration {self.episode_duration} s is not a multiple of '
+                           f'control_period {self.control_period} s')
+        if self.initial_slider_spread > self.rod_length / 2:
+            reasons.append(f'initial_slider_spread {self.initial_slider_spread} m exceeds the '
+                           f"rod's half length {self.rod_length / 2} m")
+        if self.initial_angle_spread > self.pendulum_limit:
+            reasons.append(f'initial_angle_spread {self.initial_angle_spread} rad exceeds '
+                           f'pendulum_limit {self.pendulum_limit} rad')
+        if self.initial_ball_spread > self.pendulum_length / 2:
+            reasons.append(f'initial_ball_spread {self.initial_ball_spread} m exceeds the '
+                           f"beam's half length {self.pendulum_length / 2} m")
+        # Explicit damping is stable while damping * dt / inertia < 2; keep a margin of 2.
+        carried_mass = self.slider_mass + self.pendulum_mass + self.ball_mass
+        for name, damping, inertia in (
+                ('slider_damping', self.slider_damping, carried_mass),
+                ('pendulum_damping', self.pendulum_damping, self.hinge_inertia),
+                ('ball_damping', self.ball_damping, self.ball_mass)):
+            if damping * self.time_step / inertia > 1.0:
+                reasons.append(f'{name} {damping} with a substep of {self.time_step:.4g} s '
+                               f'would make the explicit damping unstable (needs '
+                               f'damping * dt / {inertia:.4g} <= 1): lower it or raise substeps')
+        return reasons
+
+
+@dataclass(frozen=True)
+class PhysicsState:
+    """The system after a control step (or a reset); SI units, see the module docstring."""
+
+    step: int                          # control step within the episode, 0 after reset
+    time: float                        # s since reset (step * control_period)
+    slider_position: float             # S_x (m), 0 = middle of the rod, + up
+    slider_velocity: float             # m/s
+    pendulum_angle: float              # P_z (rad), 0 = horizontal east, + = east end up
+    pendulum_angular_velocity: float   # rad/s
+    ball_position: float               # B_y (m), 0 = middle of the beam, + = east
+    ball_velocity: float               # m/s
+    applied_force: float               # N: the actors' force held during the last period
+    applied_torque: float              # N*m: the actors' torque held during the last period
+    terminated: bool                   # always false (nothing ends an episode early)
+    truncated: bool                    # time limit reached: the last state of the episode
+
+
+def _inertial(mass, com, inertia):
+    ixx, iyy, izz = inertia
+    return (f'<inertial><origin xyz="{com[0]} {com[1]} {com[2]}"/><mass value="{mass}"/>'
+            f'<inertia ixx="{ixx}" iyy="{iyy}" izz="{izz}" ixy="0" ixz="0" iyz="0"/>'
+            f'</inertial>')
+
+
+def _visual(geometry, xyz, material, rgba):
+    return (f'<visual><origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}"/><geometry>{geometry}</geometry>'
+            f'<material name="{material}"><color rgba="{rgba}"/></material></visual>')
+
+
+def model_urdf(params: PhysicsParams) -> str:
+    """Return the URDF text of the rod-slider-pendulum-ball chain for ``params``."""
+    half_rod = params.rod_length / 2
+    half_beam = params.pendulum_length / 2
+    beam_inertia_xz = params.pendulum_mass * params.pendulum_length ** 2 / 12
+    # The beam's inertia about its own length hardly matters (it never spins about y).
+    beam_inertia_y = params.pendulum_mass * (BEAM_WIDTH ** 2 + BEAM_HEIGHT ** 2) / 12
+    slider_inertia = params.slider_mass * (SLIDER_SIZE[0] ** 2) / 6
+    # A point mass has no inertia; a tiny one keeps the solver well conditioned.
+    ball_inertia = 0.4 * params.ball_mass * params.ball_radius ** 2
+    ball_height = BEAM_HEIGHT / 2 + params.ball_radius
+    rod = (_inertial(1.0, (0, 0, 0), (1, 1, 1))
+           + _visual(f'<cylinder radius="{ROD_RADIUS}" length="{params.rod_length + 0.04}"/>',
+                     (-0.03, 0, 0), 'grey', '0.6 0.6 0.6 1'))
+    slider = (_inertial(params.slider_mass, (0, 0, 0), (slider_inertia,) * 3)
+              + _visual('<box size="{} {} {}"/>'.format(*SLIDER_SIZE), (-0.03, 0, 0),
+                        'orange', '1.0 0.55 0.1 1'))
+    pendulum = (_inertial(params.pendulum_mass, (0, half_beam, 0),
+                          (beam_inertia_xz, beam_inertia_y, beam_inertia_xz))
+                + _visual(f'<box size="{BEAM_WIDTH} {params.pendulum_length} {BEAM_HEIGHT}"/>',
+                          (0, half_beam, 0), 'blue', '0.15 0.35 0.85 1'))
+    ball = (_inertial(params.ball_mass, (0, 0, 0), (ball_inertia,) * 3)
+            + _visual(f'<sphere radius="{params.ball_radius}"/>', (0, 0, 0), 'ball_grey',
+                      '0.45 0.45 0.45 1'))
+    limit = params.pendulum_limit
+    return f"""<?xml version="1.0"?>
+<robot name="slider_pendulum_ball">
+  <link name="rod">{rod}</link>
+  <link name="slider">{slider}</link>
+  <link name="pendulum">{pendulum}</link>
+  <link name="ball">{ball}</link>
+  <joint name="slide" type="prismatic">
+    <parent link="rod"/><child link="slider"/><origin xyz="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="{-half_rod}" upper="{half_rod}" effort="1e6" velocity="1e6"/>
+  </joint>
+  <joint name="hinge" type="revolute">
+    <parent link="slider"/><child link="pendulum"/><origin xyz="0 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="{-limit}" upper="{limit}" effort="1e6" velocity="1e6"/>
+  </joint>
+  <joint name="roll" type="prismatic">
+    <parent link="pendulum"/><child link="ball"/><origin xyz="0 {half_beam} {ball_height}"/>
+    <axis xyz="0 1 0"/>
+    <limit lower="{-half_beam}" upper="{half_beam}" effort="1e6" velocity="1e6"/>
+  </joint>
+</robot>
+"""
+
+
+def _finite(name: str, value) -> float:
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f'{name} must be finite, got {value!r}')
+    return value
+
+
+def _clamp(value: float, bound: float) -> float:
+    return max(-bound, min(bound, value))
+
+
+class SliderPendulumBall:
+    """The slider-pendulum-ball system (see the module docstring: state, actions, dynamics).
+
+    Each instance owns a private PyBullet physics client (DIRECT by default, GUI on request),
+    so several instances can live in one process. Call :meth:`reset` before :meth:`step`.
+    """
+
+    def __init__(self, params: PhysicsParams = None, gui: bool = False):
+        import pybullet
+
+        self.params = checked(params if params is not None else PhysicsParams())
+        self._bullet = pybullet
+        self._client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
+        if self._client < 0:
+            raise RuntimeError('PyBullet could not connect (GUI needs a display)')
+        self._rng = None
+        self._state = None
+        self._build()
+
+    # -- model -----------------------------------------------------------------------------
+    def _build(self):
+        bullet, client, params = self._bullet, self._client, self.params
+        bullet.resetSimulation(physicsClientId=client)
+        bullet.setGravity(0, 0, -params.gravity, physicsClientId=client)
+        bullet.setPhysicsEngineParameter(fixedTimeStep=params.time_step, numSubSteps=0,
+                                         physicsClientId=client)
+        with tempfile.NamedTemporaryFile('w', suffix='.urdf', delete=False) as urdf:
+            urdf.write(model_urdf(params))
+        try:
+            self._body = bullet.loadURDF(urdf.name, useFixedBase=True,
+                                         flags=bullet.URDF_USE_INERTIA_FROM_FILE,
+                                         physicsClientId=client)
+        finally:
+            os.unlink(urdf.name)
+        for joint in JOINTS:
+            # PyBullet adds a little damping of its own by default; the model has its own.
+            bullet.changeDynamics(self._body, joint, linearDamping=0.0, angularDamping=0.0,
+                                  jointDamping=0.0, physicsClientId=client)
+        # Joints default to a velocity motor holding them still: switch it off.
+        bullet.setJointMotorControlArray(self._body, JOINTS, bullet.VELOCITY_CONTROL,
+                                         forces=[0.0, 0.0, 0.0], physicsClientId=client)
+        carried_mass = params.slider_mass + params.pendulum_mass + params.ball_mass
+        self._slider_compensation = carried_mass * params.gravity
+        self._ball_height = BEAM_HEIGHT / 2 + params.ball_radius
+
+    def _joint_states(self):
+        states = self._bullet.getJointStates(self._body, JOINTS, physicsClientId=self._client)
+        return [(position, velocity) for position, velocity, _, _ in states]
+
+    def _compensation_torque(self, angle: float) -> float:
+        """Counterweight torque on the hinge: beam and ball-in-the-middle weights (N*m)."""
+        params = self.params
+        cos_angle, sin_angle = math.cos(angle), math.sin(angle)
+        beam = params.pendulum_mass * params.pendulum_com_distance * cos_angle
+        ball = params.ball_mass * (params.pendulum_length / 2 * cos_angle
+                                   - self._ball_height * sin_angle)
+        return params.gravity * (beam + ball)
+
+    # -- episode -----------------------------------------------------------------------------
+    def reset(self, seed: int = None) -> PhysicsState:
+        """Start an episode at rest from a seeded random configuration; return step 0."""
+        if seed is not None:
+            self._rng = numpy.random.default_rng(seed)
+        elif self._rng is None:
+            self._rng = numpy.random.default_rng()
+        params = self.params
+        slider = self._rng.uniform(-params.initial_slider_spread, params.initial_slider_spread)
+        angle = self._rng.uniform(-params.initial_angle_spread, params.initial_angle_spread)
+        ball = self._rng.uniform(-params.initial_ball_spread, params.initial_ball_spread)
+        # Rebuilding the world (a few ms) rather than moving the joints makes every episode
+        # independent of the previous one: no solver warm start carries over.
+        self._build()
+        for joint, position in zip(JOINTS, (slider, angle, ball)):
+            self._bullet.resetJointState(self._body, joint, float(position), 0.0,
+                                         physicsClientId=self._client)
+        self._state = self._read_state(0, 0.0, 0.0)
+        return self._state
+
+    def step(self, force: float, torque: float) -> PhysicsState:
+        """Hold ``force`` (N) and ``torque`` (N*m) for one control period; return the state.
+
+        Values beyond the limits are clamped to ``max_force``/``max_torque``; non-finite
+        values raise ValueError (nothing is applied then).
+        """
+        force = _clamp(_finite('force', force), self.params.max_force)
+        torque = _clamp(_finite('torque', torque), self.params.max_torque)
+        if self._state is None:
+            raise RuntimeError('call reset() before step()')
+        if self._state.truncated or self._state.terminated:
+            raise RuntimeError(f'the episode ended at step {self._state.step}: call reset()')
+        bullet, client, body, params = self._bullet, self._client, self._body, self.params
+        compensate = params.gravity_compensation
+        torque_control = bullet.TORQUE_CONTROL
+        for _ in range(params.substeps):
+            (_, slider_velocity), (angle, angular_velocity), (_, ball_velocity) = \
+                self._joint_states()
+            slider_force = force - params.slider_damping * slider_velocity
+            hinge_torque = torque - params.pendulum_damping * angular_velocity
+            if compensate:
+                slider_force += self._slider_compensation
+                hinge_torque += self._compensation_torque(angle)
+            ball_force = -params.ball_damping * ball_velocity
+            # PyBullet applies a torque-control command for the next substep only.
+            bullet.setJointMotorControlArray(body, JOINTS, torque_control,
+                                             forces=[slider_force, hinge_torque, ball_force],
+                                             physicsClientId=client)
+            bullet.stepSimulation(physicsClientId=client)
+        step = self._state.step + 1
+        self._state = self._read_state(step, force, torque)
+        return self._state
+
+    def step_normalized(self, translation: float, rotation: float) -> PhysicsState:
+        """Step with commands in [-1, 1] (clamped) scaled by ``max_force``/``max_torque``."""
+        translation = _clamp(_finite('translation', translation), 1.0)
+        rotation = _clamp(_finite('rotation', rotation), 1.0)
+        return self.step(translation * self.params.max_force,
+                         rotation * self.params.max_torque)
+
+    def _read_state(self, step: int, force: float, torque: float) -> PhysicsState:
+        (slider, slider_velocity), (angle, angular_velocity), (ball, ball_velocity) = \
+            self._joint_states()
+        return PhysicsState(
+            step=step, time=step * self.params.control_period,
+            slider_position=slider, slider_velocity=slider_velocity,
+            pendulum_angle=angle, pendulum_angular_velocity=angular_velocity,
+            ball_position=ball, ball_velocity=ball_velocity,
+            applied_force=force, applied_torque=torque,
+            terminated=False, truncated=step >= self.params.steps_per_episode)
+
+    @property
+    def state(self) -> PhysicsState:
+        """The state after the last reset or step."""
+        if self._state is None:
+            raise RuntimeError('call reset() first')
+        return self._state
+
+    # -- output ------------------------------------------------------------------------------
+    def body_poses(self) -> dict:
+        """Return {'slider'|'pendulum'|'ball': (position xyz, quaternion xyzw)} in the world."""
+        links = self._bullet.getLinkStates(self._body, JOINTS, physicsClientId=self._client)
+        names = ('slider', 'pendulum', 'ball')
+        # linkWorldPosition/Orientation: the link frame (hinge for the pendulum, centre for
+        # the slider and the ball).
+        return {name: (tuple(link[4]), tuple(link[5])) for name, link in zip(names, links)}
+
+    def render(self, width: int = 320, height: int = 240) -> numpy.ndarray:
+        """Return an RGB image (uint8, shape (height, width, 3)) seen from the viewer (+x)."""
+        bullet, client = self._bullet, self._client
+        target = (0.0, self.params.pendulum_length * 0.35, 0.0)
+        view = bullet.computeViewMatrix(cameraEyePosition=(1.3, target[1], 0.05),
+                                        cameraTargetPosition=target, cameraUpVector=(0, 0, 1),
+                                        physicsClientId=client)
+        projection = bullet.computeProjectionMatrixFOV(fov=45.0, aspect=width / height,
+                                                       nearVal=0.1, farVal=5.0,
+                                                       physicsClientId=client)
+        _, _, rgba, _, _ = bullet.getCameraImage(width, height, view, projection,
+                                                 renderer=bullet.ER_TINY_RENDERER,
+                                                 physicsClientId=client)
+        image = numpy.asarray(rgba, dtype=numpy.uint8).reshape(height, width, 4)
+        return numpy.ascontiguousarray(image[:, :, :3])
+
+    def close(self):
+        """Disconnect the physics client (idempotent)."""
+        client = getattr(self, '_client', None)
+        if client is not None and client >= 0:
+            try:
+                self._bullet.disconnect(physicsClientId=client)
+            except Exception:  # already gone (interpreter shutdown)
+                pass
+        self._client = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc_info):
+        self.close()
+
+    def __del__(self):
+        self.close()
+
+
+def physics_fields() -> tuple:
+    """Names of the PhysicsParams fields (the sim node declares them as its parameters)."""
+    return tuple(dataclass_field.name for dataclass_field in fields(PhysicsParams))
