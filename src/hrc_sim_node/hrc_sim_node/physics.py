@@ -138,6 +138,9 @@ BEAM_WIDTH = 0.03
 BEAM_HEIGHT = 0.01
 SLIDER_SIZE = (0.05, 0.05, 0.03)
 ROD_RADIUS = 0.006
+# The rod and the slider are drawn behind the beam (-x, away from the viewer) so they do not
+# hide it; the hinge itself is on the rod's axis.
+BODY_DEPTH_OFFSET = -0.03
 
 
 @dataclass
@@ -283,9 +286,9 @@ def model_urdf(params: PhysicsParams) -> str:
     ball_height = BEAM_HEIGHT / 2 + params.ball_radius
     rod = (_inertial(1.0, (0, 0, 0), (1, 1, 1))
            + _visual(f'<cylinder radius="{ROD_RADIUS}" length="{params.rod_length + 0.04}"/>',
-                     (-0.03, 0, 0), 'grey', '0.6 0.6 0.6 1'))
+                     (BODY_DEPTH_OFFSET, 0, 0), 'grey', '0.6 0.6 0.6 1'))
     slider = (_inertial(params.slider_mass, (0, 0, 0), (slider_inertia,) * 3)
-              + _visual('<box size="{} {} {}"/>'.format(*SLIDER_SIZE), (-0.03, 0, 0),
+              + _visual('<box size="{} {} {}"/>'.format(*SLIDER_SIZE), (BODY_DEPTH_OFFSET, 0, 0),
                         'orange', '1.0 0.55 0.1 1'))
     pendulum = (_inertial(params.pendulum_mass, (0, half_beam, 0),
                           (beam_inertia_xz, beam_inertia_y, beam_inertia_xz))
@@ -373,10 +376,29 @@ class SliderPendulumBall:
         carried_mass = params.slider_mass + params.pendulum_mass + params.ball_mass
         self._slider_compensation = carried_mass * params.gravity
         self._ball_height = BEAM_HEIGHT / 2 + params.ball_radius
+        self._stops = (params.rod_length / 2, params.pendulum_limit, params.pendulum_length / 2)
 
     def _joint_states(self):
         states = self._bullet.getJointStates(self._body, JOINTS, physicsClientId=self._client)
         return [(position, velocity) for position, velocity, _, _ in states]
+
+    def _hold_at_stops(self, joint_states):
+        """Put a joint that went past its stop back on it and drop its outward velocity.
+
+        PyBullet's joint limits pass the impact's impulse on to the other bodies but let a
+        fast body sink up to about v * dt (mm) past the stop for a substep; this projection
+        keeps every reported position within its documented bounds.
+        """
+        held = []
+        for joint, (position, velocity), bound in zip(JOINTS, joint_states, self._stops):
+            if abs(position) > bound:
+                position = math.copysign(bound, position)
+                if velocity * position > 0:  # still moving outward
+                    velocity = 0.0
+                self._bullet.resetJointState(self._body, joint, position, velocity,
+                                             physicsClientId=self._client)
+            held.append((position, velocity))
+        return held
 
     def _compensation_torque(self, angle: float) -> float:
         """Counterweight torque on the hinge: beam and ball-in-the-middle weights (N*m)."""
@@ -422,9 +444,9 @@ class SliderPendulumBall:
         bullet, client, body, params = self._bullet, self._client, self._body, self.params
         compensate = params.gravity_compensation
         torque_control = bullet.TORQUE_CONTROL
+        joint_states = self._joint_states()
         for _ in range(params.substeps):
-            (_, slider_velocity), (angle, angular_velocity), (_, ball_velocity) = \
-                self._joint_states()
+            (_, slider_velocity), (angle, angular_velocity), (_, ball_velocity) = joint_states
             slider_force = force - params.slider_damping * slider_velocity
             hinge_torque = torque - params.pendulum_damping * angular_velocity
             if compensate:
@@ -436,6 +458,7 @@ class SliderPendulumBall:
                                              forces=[slider_force, hinge_torque, ball_force],
                                              physicsClientId=client)
             bullet.stepSimulation(physicsClientId=client)
+            joint_states = self._hold_at_stops(self._joint_states())
         step = self._state.step + 1
         self._state = self._read_state(step, force, torque)
         return self._state
@@ -466,14 +489,6 @@ class SliderPendulumBall:
         return self._state
 
     # -- output ------------------------------------------------------------------------------
-    def body_poses(self) -> dict:
-        """Return {'slider'|'pendulum'|'ball': (position xyz, quaternion xyzw)} in the world."""
-        links = self._bullet.getLinkStates(self._body, JOINTS, physicsClientId=self._client)
-        names = ('slider', 'pendulum', 'ball')
-        # linkWorldPosition/Orientation: the link frame (hinge for the pendulum, centre for
-        # the slider and the ball).
-        return {name: (tuple(link[4]), tuple(link[5])) for name, link in zip(names, links)}
-
     def render(self, width: int = 320, height: int = 240) -> numpy.ndarray:
         """Return an RGB image (uint8, shape (height, width, 3)) seen from the viewer (+x)."""
         bullet, client = self._bullet, self._client
@@ -510,6 +525,37 @@ class SliderPendulumBall:
         self.close()
 
 
-def physics_fields() -> tuple:
-    """Names of the PhysicsParams fields (the sim node declares them as its parameters)."""
-    return tuple(dataclass_field.name for dataclass_field in fields(PhysicsParams))
+def physics_params_of(params) -> PhysicsParams:
+    """Return the PhysicsParams part of any object carrying those fields (e.g. SimParams)."""
+    return PhysicsParams(**{dataclass_field.name: getattr(params, dataclass_field.name)
+                            for dataclass_field in fields(PhysicsParams)})
+
+
+def _rotation_about_x(angle: float) -> tuple:
+    """Quaternion (x, y, z, w) of a rotation by ``angle`` (rad) about the world x axis."""
+    return (math.sin(angle / 2), 0.0, 0.0, math.cos(angle / 2))
+
+
+def body_poses(state: PhysicsState, params: PhysicsParams) -> dict:
+    """Return the centre pose of each body for ``state`` (pure geometry, no PyBullet).
+
+    {'rod' | 'slider' | 'pendulum' | 'ball': ((x, y, z) m, (qx, qy, qz, qw))} in the world
+    frame, matching the model's joints: hinge at the slider's centre, beam reaching east.
+    """
+    angle = state.pendulum_angle
+    cos_angle, sin_angle = math.cos(angle), math.sin(angle)
+    hinge_height = state.slider_position
+    half_beam = params.pendulum_length / 2
+    # The ball's centre: along the beam from the hinge, lifted by the ball's height above it.
+    along = half_beam + state.ball_position
+    above = BEAM_HEIGHT / 2 + params.ball_radius
+    identity = (0.0, 0.0, 0.0, 1.0)
+    return {
+        'rod': ((BODY_DEPTH_OFFSET, 0.0, 0.0), identity),
+        'slider': ((BODY_DEPTH_OFFSET, 0.0, hinge_height), identity),
+        'pendulum': ((0.0, half_beam * cos_angle, hinge_height + half_beam * sin_angle),
+                     _rotation_about_x(angle)),
+        'ball': ((0.0, along * cos_angle - above * sin_angle,
+                  hinge_height + along * sin_angle + above * cos_angle),
+                 _rotation_about_x(angle)),
+    }
