@@ -1,0 +1,416 @@
+"""The robot's whole per-step and per-episode logic, without ROS: :class:`AgentCore`.
+
+The agent node and the offline loop (``offline.py``) call the same methods in the same order,
+so they cannot diverge::
+
+    core = AgentCore(params)
+    while core.phase != 'done':
+        plan = core.start_episode()              # episode index, seed, evaluation or not
+        state = <reset the sim with plan.seed>
+        while not (state.truncated or state.terminated):
+            decision = core.act(state, human_action)   # robot action for this state
+            state = <step the sim>
+        result = core.end_episode(state)          # reward of the last step, metrics, strategy
+        if core.phase == 'updating':
+            core.update()                         # PPO, between episodes only
+        <save core.checkpoint()>
+
+Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
+``evaluation`` -> ``done``. Training ends when the strategy's last step converges or after
+``max_training_episodes``; evaluation runs the frozen deterministic policy for
+``evaluation_episodes`` episodes in the last training step's setting (human involved as there).
+
+Reward timing: the reward of the action taken in state s_k is computed from the state reached,
+s_k+1 (eq. 3-5 on S_x, P_z, B_y of s_k+1). So the record of step k (``StepRecord``) is complete
+when s_k+1 arrives: :meth:`act` returns it for the previous step, :meth:`end_episode` for the
+last one.
+"""
+
+from dataclasses import dataclass, field
+import math
+
+import numpy as np
+
+from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
+from hrc_agent_node.strategies import load_cases, StrategyProgress
+from hrc_agent_node.task_tree import TaskTree
+from hrc_common.params import checked
+
+PHASES = ('training', 'updating', 'evaluation', 'paused', 'done', 'aborted')
+
+
+@dataclass(frozen=True)
+class EpisodePlan:
+    """What the next episode is: its index in the session, its seed, and its kind."""
+
+    episode: int
+    seed: int
+    evaluation: bool
+    training_step: int
+    human_involved: bool
+
+
+@dataclass
+class StepRecord:
+    """The agent's decision in one state and the reward it earned (one AgentStep message)."""
+
+    episode: int
+    step: int
+    observed_human_action: float
+    action: float            # normalized command sent, in [-1, 1]
+    raw_action: float        # Gaussian sample before clipping (what PPO's log-prob refers to)
+    wrench: float            # N or N*m
+    value: float
+    log_prob: float
+    deterministic: bool
+    subtask_ids: tuple = ()
+    reward_components: tuple = ()
+    reward: float = 0.0
+
+
+@dataclass
+class Decision:
+    """What :meth:`AgentCore.act` returns."""
+
+    action: float            # normalized, [-1, 1], on the robot's degree of freedom
+    wrench: float            # the action in N (translation) or N*m (rotation)
+    record: StepRecord       # this step (its reward is filled in when the next state arrives)
+    previous: StepRecord = None  # the previous step, now complete with its reward
+
+
+@dataclass
+class EpisodeResult:
+    """Summary of a finished episode (one EpisodeSummary message) and what it changed."""
+
+    episode: int
+    training_step: int
+    human_involved: bool
+    evaluation: bool
+    steps: int
+    terminated: bool
+    truncated: bool
+    episode_return: float
+    errors: dict             # subtask id -> mean |x - mu| over the states reached
+    robot_effort: float      # variance of the robot's normalized action
+    human_effort: float      # variance of the human's normalized action
+    converged: bool          # the step's condition was met after this episode
+    event: str               # '' | 'advanced' | 'training_finished' | 'evaluation_finished'
+    last_record: StepRecord = None
+    phase_after: str = ''
+
+    @property
+    def total_error(self) -> float:
+        """Return the sum of the errors (mixed units, as the paper's Table II)."""
+        return float(sum(self.errors.values()))
+
+
+@dataclass
+class _EpisodeLog:
+    """Samples and metrics of the running episode."""
+
+    plan: EpisodePlan
+    observations: list = field(default_factory=list)
+    raw_actions: list = field(default_factory=list)
+    log_probs: list = field(default_factory=list)
+    values: list = field(default_factory=list)
+    train_rewards: list = field(default_factory=list)
+    rewards: list = field(default_factory=list)
+    robot_actions: list = field(default_factory=list)
+    human_actions: list = field(default_factory=list)
+    error_sums: dict = field(default_factory=dict)
+    states_reached: int = 0
+    pending: StepRecord = None
+    next_step: int = 0
+
+
+def derive_seed(session_seed: int, episode: int) -> int:
+    """Return the reset seed of an episode, derived from the session seed (31-bit)."""
+    return int(np.random.SeedSequence([int(session_seed), int(episode)]).generate_state(1)[0]
+               & 0x7FFFFFFF)
+
+
+class AgentCore:
+    """Task tree, reward, strategy progress, PPO learner and counters of one session."""
+
+    def __init__(self, params: AgentParams = None, tree: TaskTree = None, cases: dict = None):
+        self.params = checked(params or AgentParams())
+        p = self.params
+        self.tree = tree or TaskTree.from_file(p.task_tree_file or share_file(TREE_FILE_NAME),
+                                               p.preset)
+        cases = cases or load_cases(p.cases_file or share_file(CASES_FILE_NAME), self.tree)
+        if p.case not in cases:
+            raise ValueError(f'case {p.case} is not defined; the cases file has {sorted(cases)}')
+        self.case = cases[p.case]
+        self.progress = StrategyProgress(self.case, self.tree, p.convergence_window,
+                                         p.satisfied_window)
+        self.observation_size = 7 if p.observe_rates else 4
+        self.ppo = PPO(self.observation_size, p, p.seed)
+        self.reward_scaler = RewardScaler(p.gamma, p.normalize_rewards)
+        self.buffer = RolloutBuffer()
+        self.phase = 'evaluation' if p.evaluation_only else 'training'
+        self.episode = 0                    # index of the current (or next) episode
+        self.total_episodes = 0             # training episodes finished
+        self.human_involved_episodes = 0    # of which the human took part
+        self.evaluation_results = []        # EpisodeResult of this session's evaluation
+        self.last_update = None             # statistics of the last PPO update
+        self._log = None
+
+    # ------------------------------------------------------------------ the session right now
+
+    @property
+    def robot_dof(self) -> str:
+        """Return the degree of freedom the robot drives."""
+        return self.case.robot_dof
+
+    @property
+    def human_dof(self) -> str:
+        """Return the degree of freedom the human drives."""
+        return self.case.human_dof
+
+    @property
+    def training_step(self):
+        """Return the TrainingStep in force (the last one in evaluation)."""
+        if self.phase in ('evaluation', 'done') or self.progress.finished:
+            return self.case.steps[-1]
+        return self.progress.step
+
+    @property
+    def human_involved(self) -> bool:
+        """Return whether the human acts now."""
+        return self.training_step.human_involved
+
+    @property
+    def robot_subtasks(self) -> tuple:
+        """Return the subtask ids in the robot's reward now."""
+        return self.training_step.robot_subtasks
+
+    @property
+    def human_subtasks(self) -> tuple:
+        """Return the subtask ids the human is asked to hold now."""
+        return self.training_step.human_subtasks
+
+    @property
+    def session_id(self) -> str:
+        """Return the session id."""
+        return self.params.effective_session_id
+
+    @property
+    def in_episode(self) -> bool:
+        """Return True between start_episode() and end_episode()."""
+        return self._log is not None
+
+    @property
+    def update_due(self) -> bool:
+        """Return True when the rollout buffer holds a horizon of samples."""
+        return len(self.buffer) >= self.params.horizon
+
+    def wrench_of(self, action: float) -> float:
+        """Return the force (N) or torque (N*m) of a normalized robot action."""
+        limit = self.params.max_force if self.robot_dof == 'translation' \
+            else self.params.max_torque
+        return float(action) * limit
+
+    def status_line(self) -> str:
+        """Return one line saying where the session is (for logs and SessionStatus)."""
+        step = self.training_step
+        return (f'case {self.case.case_id} ({self.case.strategy}), phase {self.phase}, '
+                f'step {step.index + 1}/{len(self.case.steps)} "{step.name}": robot '
+                f'{self.robot_dof} rewarded on {list(step.robot_subtasks)}, human '
+                f'{"involved on " + str(list(step.human_subtasks)) if step.human_involved else "not involved"}; '  # noqa: E501
+                f'episode {self.episode}, {self.total_episodes} training episodes '
+                f'({self.human_involved_episodes} with the human)')
+
+    # ------------------------------------------------------------------ episode
+
+    def start_episode(self) -> EpisodePlan:
+        """Begin the next episode and return its plan."""
+        if self.phase not in ('training', 'evaluation'):
+            raise RuntimeError(f'cannot start an episode in phase {self.phase!r}')
+        if self._log is not None:
+            raise RuntimeError(f'episode {self.episode} is still running')
+        plan = EpisodePlan(self.episode, derive_seed(self.params.seed, self.episode),
+                           self.phase == 'evaluation', self.training_step.index,
+                           self.human_involved)
+        self._log = _EpisodeLog(plan, error_sums={subtask_id: 0.0
+                                                  for subtask_id in self.tree.subtasks})
+        self.reward_scaler.start_episode()
+        return plan
+
+    def observation(self, state, human_action: float) -> np.ndarray:
+        """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates)."""
+        p = self.params
+        values = [state.ball_position / p.ball_position_scale,
+                  state.pendulum_angle / p.pendulum_angle_scale,
+                  state.slider_position / p.slider_position_scale,
+                  human_action]
+        if p.observe_rates:
+            values += [state.ball_velocity / p.ball_velocity_scale,
+                       state.pendulum_angular_velocity / p.pendulum_velocity_scale,
+                       state.slider_velocity / p.slider_velocity_scale]
+        # Clip: a wild state must not saturate the tanh layers into a useless gradient.
+        return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
+
+    def act(self, state, human_action: float = 0.0) -> Decision:
+        """Return the robot's action for a non-final state of the running episode.
+
+        ``human_action`` is the human's normalized command for the same step; it is observed as
+        0 when the human is not involved. A non-finite human action is observed as 0.
+        """
+        log = self._require_episode()
+        if state.truncated or state.terminated:
+            raise ValueError('the final state of an episode needs no action: call end_episode')
+        if int(state.step) < log.next_step:
+            raise ValueError(f'expected the state of step {log.next_step} or later, got step '
+                             f'{state.step} again')
+        # A later step than expected means states were lost: the pending step's reward comes
+        # from the state that did arrive (a gap, reported by the caller), and the episode goes on.
+        previous = self._close_pending(state) if log.next_step > 0 else None
+        plan = log.plan
+        if not plan.human_involved or not math.isfinite(human_action):
+            human_action = 0.0
+        human_action = min(1.0, max(-1.0, float(human_action)))
+        observation = self.observation(state, human_action)
+        raw, action, log_prob, value = self.ppo.act(observation, deterministic=plan.evaluation)
+        record = StepRecord(plan.episode, int(state.step), human_action, action, raw,
+                            self.wrench_of(action), value, log_prob, plan.evaluation)
+        log.pending = record
+        log.observations.append(observation)
+        log.raw_actions.append(raw)
+        log.log_probs.append(log_prob)
+        log.values.append(value)
+        log.robot_actions.append(action)
+        log.human_actions.append(human_action)
+        log.next_step = int(state.step) + 1
+        return Decision(action, record.wrench, record, previous)
+
+    def end_episode(self, final_state) -> EpisodeResult:
+        """Close the running episode at its final state; update counters and the strategy."""
+        log = self._require_episode()
+        if not (final_state.truncated or final_state.terminated):
+            raise ValueError('end_episode needs the final state (truncated or terminated)')
+        plan = log.plan
+        last = self._close_pending(final_state) if log.pending is not None else None
+        terminated = bool(final_state.terminated)
+        steps = len(log.rewards)
+        errors = {subtask_id: (total / log.states_reached if log.states_reached else 0.0)
+                  for subtask_id, total in log.error_sums.items()}
+        converged, event = False, ''
+        if not plan.evaluation:
+            if steps:
+                # Truncation (time limit) bootstraps from V(final state); termination from 0.
+                final_value = 0.0 if terminated else self.ppo.value_of(
+                    self.observation(final_state, log.human_actions[-1]))
+                self.buffer.add_episode(log.observations, log.raw_actions, log.log_probs,
+                                        log.values, log.train_rewards, final_value, terminated,
+                                        self.params.gamma, self.params.gae_lambda)
+            self.total_episodes += 1
+            self.human_involved_episodes += int(plan.human_involved)
+            converged, event = self.progress.record(errors)
+            if event == 'finished':
+                event = 'training_finished'
+            if event == 'training_finished' \
+                    or self.total_episodes >= self.params.max_training_episodes:
+                event = 'training_finished'
+                self.buffer.clear()  # the converged (or last) policy is the one evaluated
+                self.phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
+            elif self.update_due:
+                self.phase = 'updating'
+        result = EpisodeResult(
+            plan.episode, plan.training_step, plan.human_involved, plan.evaluation, steps,
+            terminated, bool(final_state.truncated), float(sum(log.rewards)), errors,
+            float(np.var(log.robot_actions)) if log.robot_actions else 0.0,
+            float(np.var(log.human_actions)) if log.human_actions else 0.0,
+            converged, event, last)
+        if plan.evaluation:
+            self.evaluation_results.append(result)
+            if len(self.evaluation_results) >= self.params.evaluation_episodes:
+                self.phase = 'done'
+                result.event = 'evaluation_finished'
+        self._log = None
+        self.episode += 1
+        result.phase_after = self.phase
+        return result
+
+    def update(self) -> dict:
+        """Run the PPO update on the buffer (phase ``updating``), then go back to training."""
+        if self.phase != 'updating':
+            raise RuntimeError(f'no update is due in phase {self.phase!r}')
+        self.last_update = self.ppo.update(self.buffer)
+        self.buffer.clear()
+        self.phase = 'training'
+        return self.last_update
+
+    def evaluation_summary(self) -> dict:
+        """Return the Table II metrics averaged over the evaluation episodes."""
+        results = self.evaluation_results
+        if not results:
+            return {}
+        summary = {f'{subtask_id}_error': float(np.mean([r.errors[subtask_id] for r in results]))
+                   for subtask_id in self.tree.subtasks}
+        summary.update(
+            total_error=float(np.mean([r.total_error for r in results])),
+            robot_effort=float(np.mean([r.robot_effort for r in results])),
+            human_effort=float(np.mean([r.human_effort for r in results])),
+            episode_return=float(np.mean([r.episode_return for r in results])),
+            episodes=len(results), training_episodes=self.total_episodes,
+            human_involved_episodes=self.human_involved_episodes,
+            human_involved_percentage=(100.0 * self.human_involved_episodes
+                                       / self.total_episodes if self.total_episodes else 0.0))
+        return summary
+
+    # ------------------------------------------------------------------ internals
+
+    def _require_episode(self) -> _EpisodeLog:
+        if self._log is None:
+            raise RuntimeError('no episode is running: call start_episode() first')
+        return self._log
+
+    def _close_pending(self, reached) -> StepRecord:
+        """Fill in the reward of the pending step from the state it reached."""
+        log = self._log
+        record = log.pending
+        subtasks = self.robot_subtasks
+        components, reward = self.tree.reward(reached, subtasks)
+        record.subtask_ids = tuple(subtasks)
+        record.reward_components = tuple(components)
+        record.reward = reward
+        log.rewards.append(reward)
+        log.train_rewards.append(self.reward_scaler.scale(reward, learn=not log.plan.evaluation))
+        for subtask_id in self.tree.subtasks:
+            log.error_sums[subtask_id] += self.tree.error(subtask_id, reached)
+        log.states_reached += 1
+        log.pending = None
+        return record
+
+    # ------------------------------------------------------------------ checkpoints
+
+    def state_dict(self) -> dict:
+        """Return everything needed to continue the session (see checkpoint.py)."""
+        if self._log is not None:
+            raise RuntimeError('checkpoints are taken between episodes, not during one')
+        return {'ppo': self.ppo.state_dict(), 'reward_scaler': self.reward_scaler.state_dict(),
+                'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
+                'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
+                             'human_involved_episodes': self.human_involved_episodes},
+                'phase': self.phase}
+
+    def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
+        """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""
+        self.ppo.load_state_dict(state['ppo'], policy_only=policy_only)
+        counters = state['counters']
+        self.episode = int(counters['episode'])
+        self.total_episodes = int(counters['total_episodes'])
+        self.human_involved_episodes = int(counters['human_involved_episodes'])
+        if policy_only:
+            return
+        self.reward_scaler.load_state_dict(state['reward_scaler'])
+        self.buffer.load_state_dict(state['buffer'])
+        self.progress.load_state_dict(state['progress'])
+        phase = state['phase']
+        # A session stopped while an update was due does the update first when resumed; a
+        # finished one is evaluated again (its evaluation results are not part of the state).
+        if phase == 'done':
+            phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
+        self.phase = phase if phase in ('training', 'updating', 'evaluation', 'done') \
+            else 'training'

@@ -1,0 +1,373 @@
+"""The agent node (``agent``): the PPO robot of a session, driving the episode loop.
+
+Thin: messages in and out, the reset service client, timers and parameters. Everything the
+robot decides lives in :class:`hrc_agent_node.agent_core.AgentCore` (shared with the offline
+loop). The step protocol (docs/architecture.md):
+
+* at start: publish ``/hrc/session`` (transient local), wait for ``/hrc/sim/reset``, call it
+  for episode 0 with a seed derived from the session seed;
+* every non-final ``/hrc/state`` of the running episode is answered on
+  ``/hrc/robot/cmd_wrench`` with the state's stamp, on the robot's degree of freedom only. In
+  lockstep the agent first waits for the ``/hrc/human/action`` of the same step (stamp match, up
+  to ``human_action_timeout`` wall seconds, then 0 and a warning) so the observation is
+  deterministic; in realtime it uses the newest human action it has. When the human is not
+  involved the observed human action is 0;
+* the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
+  computed from the state reached);
+* on the final state (truncated/terminated): ``/hrc/agent/step`` of the last action,
+  ``/hrc/episode``; the PPO update when the buffer holds a horizon (phase ``updating`` announced
+  first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with any change; then the
+  reset for the next episode. After training (last step converged or max_training_episodes) the
+  evaluation phase runs the frozen deterministic policy; then phase ``done`` and the node exits
+  with code 0.
+"""
+
+import math
+import os
+import time
+
+from geometry_msgs.msg import WrenchStamped
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import CheckpointError, load_into, save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.strategies import CasesError
+from hrc_agent_node.task_tree import TaskTreeError
+from hrc_common import qos, topics
+from hrc_common.dof import DOF_INDEX, set_wrench_value
+from hrc_common.nodes import run_node
+from hrc_common.params import declare_parameters, ParameterError
+from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
+from hrc_msgs.srv import ResetEpisode
+from rclpy.node import Node
+
+PHASE_CODES = {'training': SessionStatus.PHASE_TRAINING,
+               'updating': SessionStatus.PHASE_UPDATING,
+               'evaluation': SessionStatus.PHASE_EVALUATION,
+               'paused': SessionStatus.PHASE_PAUSED,
+               'done': SessionStatus.PHASE_DONE,
+               'aborted': SessionStatus.PHASE_ABORTED}
+# Wall seconds between the last message and the exit, so reliable subscribers receive it.
+EXIT_LINGER_S = 0.5
+# Human actions kept for stamp matching (a few steps are enough: they answer the newest state).
+HUMAN_ACTIONS_KEPT = 50
+TICK_S = 0.02
+
+SUMMARY = ('The PPO robot of an hrc session: answers every state on /hrc/robot/cmd_wrench, '
+           "learns between episodes, moves through the case's training steps, evaluates, "
+           'publishes /hrc/session, /hrc/episode and /hrc/agent/step, and exits 0 when done.')
+
+
+def stamp_key(stamp) -> tuple:
+    """Return a hashable key of a builtin_interfaces/Time."""
+    return (int(stamp.sec), int(stamp.nanosec))
+
+
+class AgentNode(Node):
+    """ROS front of an AgentCore session (see the module docstring for the protocol)."""
+
+    def __init__(self):
+        super().__init__('agent')
+        self.params = declare_parameters(self, AgentParams)
+        try:
+            self.core = AgentCore(self.params)
+        except (TaskTreeError, CasesError, ValueError) as error:
+            raise ParameterError(f'AgentParams rejected: {error}') from None
+        if self.params.resume_from:
+            try:
+                load_into(self.core, self.params.resume_from,
+                          resume=not self.params.evaluation_only)
+            except CheckpointError as error:
+                raise ParameterError(f'resume_from rejected: {error}') from None
+            self.get_logger().info(
+                f'loaded {self.params.resume_from} '
+                f'({"policy for evaluation" if self.params.evaluation_only else "session"}): '
+                f'{self.core.total_episodes} training episodes done, next episode '
+                f'{self.core.episode}')
+        self.session_pub = self.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
+        self.episode_pub = self.create_publisher(EpisodeSummary, topics.EPISODE,
+                                                 qos.EPISODE_QOS)
+        self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP, qos.AGENT_STEP_QOS)
+        self.wrench_pub = self.create_publisher(WrenchStamped, topics.ROBOT_CMD_WRENCH,
+                                                qos.COMMAND_QOS)
+        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS)
+        self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
+                                 qos.HUMAN_ACTION_QOS)
+        self.reset_client = self.create_client(ResetEpisode, topics.RESET_SERVICE)
+        self.human_actions = {}         # stamp key -> normalized command
+        self.latest_human_action = 0.0
+        self.pending_state = None       # a state waiting for its human action (lockstep)
+        self.pending_since = 0.0
+        self.stamps = {}                # step -> stamp of the running episode's states
+        self.reset_requested_at = None
+        self.reset_future = None
+        self.waiting_since = time.monotonic()
+        self.exit_at = None
+        self.exit_code = 0
+        self.human_timeouts = 0
+        self.step_gaps = 0
+        self.checkpoint_dir = (os.path.join(self.params.checkpoint_dir, self.core.session_id)
+                               if self.params.checkpoint_dir else '')
+        self.publish_session('session starting: ' + self.core.status_line())
+        self.get_logger().info(f'session {self.core.session_id}: {self.core.status_line()}; '
+                               f'waiting for {topics.RESET_SERVICE}')
+        self.create_timer(TICK_S, self.tick)
+
+    # ------------------------------------------------------------------ session lifecycle
+
+    def tick(self):
+        """Start episodes when the sim is ready, time out human actions, exit when done."""
+        now = time.monotonic()
+        if self.exit_at is not None:
+            if now >= self.exit_at:
+                raise SystemExit(self.exit_code)
+            return
+        if self.core.phase == 'done':
+            return
+        if not self.core.in_episode and self.reset_future is None:
+            if self.core.phase == 'updating':
+                return
+            if not self.reset_client.service_is_ready():
+                if now - self.waiting_since > self.params.reset_timeout:
+                    self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
+                               f'{self.params.reset_timeout} s')
+                return
+            self.start_episode()
+        if self.pending_state is not None \
+                and now - self.pending_since > self.params.human_action_timeout:
+            state = self.pending_state
+            self.human_timeouts += 1
+            self.get_logger().warn(
+                f'no human action for episode {state.episode} step {state.step} within '
+                f'{self.params.human_action_timeout} s: acting on 0 '
+                f'({self.human_timeouts} timeouts so far)', throttle_duration_sec=5.0)
+            self.act(state, 0.0)
+
+    def start_episode(self):
+        """Begin the next episode in the core and ask the sim to reset for it."""
+        plan = self.core.start_episode()
+        self.stamps = {}
+        self.pending_state = None
+        self.human_actions.clear()
+        request = ResetEpisode.Request(seed=plan.seed, episode=plan.episode)
+        self.reset_future = self.reset_client.call_async(request)
+        self.reset_future.add_done_callback(self.on_reset_done)
+        self.publish_session(f'episode {plan.episode} '
+                             f'{"(evaluation)" if plan.evaluation else ""} starting: '
+                             + self.core.status_line())
+
+    def on_reset_done(self, future):
+        """Report a refused reset (the states of the new episode arrive on /hrc/state)."""
+        self.reset_future = None
+        try:
+            response = future.result()
+        except Exception as error:  # the service call itself failed
+            self.abort(f'reset call failed: {error}')
+            return
+        if not response.success:
+            self.abort(f'the sim refused the reset: {response.message}')
+
+    def abort(self, reason: str):
+        """End the session with phase ``aborted`` and exit code 1."""
+        self.get_logger().error(f'session aborted: {reason}')
+        self.core.phase = 'aborted'
+        self.publish_session(f'aborted: {reason}')
+        self.exit_code = 1
+        self.exit_at = time.monotonic() + EXIT_LINGER_S
+
+    # ------------------------------------------------------------------ per step
+
+    def on_human_action(self, msg: HumanAction):
+        """Keep the human's command by stamp; act on a state that waited for it."""
+        if not math.isfinite(msg.command):
+            self.get_logger().warn(f'non-finite human action at step {msg.step} refused',
+                                   throttle_duration_sec=5.0)
+            return
+        key = stamp_key(msg.header.stamp)
+        self.human_actions[key] = float(msg.command)
+        self.latest_human_action = float(msg.command)
+        while len(self.human_actions) > HUMAN_ACTIONS_KEPT:
+            self.human_actions.pop(next(iter(self.human_actions)))
+        if self.pending_state is not None and stamp_key(self.pending_state.header.stamp) == key:
+            self.act(self.pending_state, self.human_actions[key])
+
+    def on_state(self, msg: TaskState):
+        """Answer a state of the running episode (or close the episode on its final state)."""
+        if not self.core.in_episode or self.core.phase not in ('training', 'evaluation'):
+            return
+        if msg.episode != self.core.episode:
+            return  # a state of another episode (a late one, or a sim not reset by us)
+        if msg.step in self.stamps:
+            return  # already seen (duplicate delivery)
+        expected = max(self.stamps) + 1 if self.stamps else 0
+        if msg.step != expected:
+            self.step_gaps += 1
+            self.get_logger().warn(f'episode {msg.episode}: got step {msg.step}, expected '
+                                   f'{expected} (states lost)', throttle_duration_sec=5.0)
+        self.stamps[msg.step] = msg.header.stamp
+        if msg.truncated or msg.terminated:
+            self.pending_state = None
+            self.finish_episode(msg)
+            return
+        if not self.core.human_involved:
+            self.act(msg, 0.0)
+            return
+        key = stamp_key(msg.header.stamp)
+        if key in self.human_actions:
+            self.act(msg, self.human_actions[key])
+        elif self.params.mode == 'realtime':
+            self.act(msg, self.latest_human_action)
+        else:
+            self.pending_state = msg
+            self.pending_since = time.monotonic()
+
+    def act(self, msg: TaskState, human_action: float):
+        """Decide, publish the wrench for this state, and the completed previous step."""
+        self.pending_state = None
+        decision = self.core.act(msg, human_action)
+        wrench = WrenchStamped()
+        wrench.header.stamp = msg.header.stamp
+        wrench.header.frame_id = 'world'
+        set_wrench_value(wrench.wrench, self.core.robot_dof, decision.wrench)
+        self.wrench_pub.publish(wrench)
+        if decision.previous is not None:
+            self.publish_step(decision.previous)
+
+    def publish_step(self, record):
+        """Publish one AgentStep (the state acted on, the action and the reward it earned)."""
+        msg = AgentStep()
+        stamp = self.stamps.get(record.step)
+        if stamp is not None:
+            msg.header.stamp = stamp
+        msg.header.frame_id = 'world'
+        msg.episode = record.episode
+        msg.step = record.step
+        msg.observation_human_action = record.observed_human_action
+        msg.action = record.action
+        msg.wrench = record.wrench
+        msg.subtask_ids = list(record.subtask_ids)
+        msg.reward_components = [float(value) for value in record.reward_components]
+        msg.reward = record.reward
+        msg.value_estimate = record.value
+        msg.log_prob = record.log_prob
+        msg.deterministic = record.deterministic
+        self.step_pub.publish(msg)
+
+    # ------------------------------------------------------------------ per episode
+
+    def finish_episode(self, final: TaskState):
+        """Close the episode: summaries, update, checkpoint, session change, next reset."""
+        step_before = self.core.training_step.index
+        result = self.core.end_episode(final)
+        if result.last_record is not None:
+            self.publish_step(result.last_record)
+        self.publish_episode(result, final)
+        errors = ', '.join(f'{name} {value:.4f}' for name, value in result.errors.items())
+        self.get_logger().info(
+            f'episode {result.episode} {"evaluation " if result.evaluation else ""}done: '
+            f'{result.steps} steps, return {result.episode_return:.2f}, mean errors {errors}, '
+            f'effort robot {result.robot_effort:.4f} human {result.human_effort:.4f}'
+            f'{", condition met" if result.converged else ""}'
+            f'{", human timeouts " + str(self.human_timeouts) if self.human_timeouts else ""}')
+        if result.event == 'advanced':
+            self.get_logger().info(f'training step {step_before + 1} converged after '
+                                   f'{self.core.total_episodes} episodes; next: '
+                                   + self.core.status_line())
+        if self.core.phase == 'updating':
+            self.publish_session(f'updating the policy after episode {result.episode} '
+                                 f'({len(self.core.buffer)} samples)')
+            stats = self.core.update()
+            self.get_logger().info(
+                f'PPO update {stats["update"]}: {stats["samples"]} samples in '
+                f'{stats["seconds"]:.2f} s, policy loss {stats["policy_loss"]:.4f}, value loss '
+                f'{stats["value_loss"]:.4f}, approx kl {stats["approx_kl"]:.5f}, action std '
+                f'{stats["action_std"]:.3f}')
+        self.save_checkpoint('latest.pt')
+        if result.event == 'training_finished':
+            outcome = 'converged' if result.converged else 'not converged'
+            self.get_logger().info(f'training finished after {self.core.total_episodes} '
+                                   f'episodes ({self.core.human_involved_episodes} with the '
+                                   f'human), {outcome}')
+        if self.core.phase == 'done':
+            self.finish_session()
+            return
+        self.publish_session(self.core.status_line())
+
+    def publish_episode(self, result, final: TaskState):
+        """Publish the EpisodeSummary of a finished episode."""
+        msg = EpisodeSummary()
+        msg.header.stamp = final.header.stamp
+        msg.header.frame_id = 'world'
+        msg.session_id = self.core.session_id
+        msg.case_id = self.core.case.case_id
+        msg.episode = result.episode
+        msg.training_step = result.training_step
+        msg.human_involved = result.human_involved
+        msg.evaluation = result.evaluation
+        msg.steps = result.steps
+        msg.terminated = result.terminated
+        msg.truncated = result.truncated
+        msg.episode_return = result.episode_return
+        msg.slider_error = float(result.errors.get('slider', 0.0))
+        msg.pendulum_error = float(result.errors.get('pendulum', 0.0))
+        msg.ball_error = float(result.errors.get('ball', 0.0))
+        msg.total_error = result.total_error
+        msg.robot_effort = result.robot_effort
+        msg.human_effort = result.human_effort
+        msg.converged = result.converged
+        self.episode_pub.publish(msg)
+
+    def finish_session(self):
+        """Log the evaluation, save the final checkpoint, announce ``done``, exit soon."""
+        summary = self.core.evaluation_summary()
+        if summary:
+            metrics = ', '.join(f'{name} {value:.4f}' if isinstance(value, float)
+                                else f'{name} {value}' for name, value in summary.items())
+            self.get_logger().info(f'evaluation: {metrics}')
+        self.save_checkpoint('final.pt')
+        self.publish_session('session done: ' + self.core.status_line())
+        self.get_logger().info(f'session {self.core.session_id} done')
+        self.exit_at = time.monotonic() + EXIT_LINGER_S
+
+    def save_checkpoint(self, name: str):
+        """Write a checkpoint into the session's checkpoint directory (if any)."""
+        if not self.checkpoint_dir:
+            return
+        path = os.path.join(self.checkpoint_dir, name)
+        try:
+            save_checkpoint(self.core, path)
+        except OSError as error:
+            self.get_logger().error(f'checkpoint {path} not written: {error}')
+
+    def publish_session(self, message: str):
+        """Publish the SessionStatus (transient local: late joiners get the newest)."""
+        core = self.core
+        step = core.training_step
+        msg = SessionStatus()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.session_id = core.session_id
+        msg.case_id = core.case.case_id
+        msg.strategy = core.case.strategy
+        msg.training_step = step.index
+        msg.training_step_count = len(core.case.steps)
+        msg.robot_dof = DOF_INDEX[core.robot_dof]
+        msg.human_dof = DOF_INDEX[core.human_dof]
+        msg.human_involved = core.human_involved
+        msg.robot_subtasks = list(core.robot_subtasks)
+        msg.human_subtasks = list(core.human_subtasks)
+        msg.episode = core.episode
+        msg.total_episodes = core.total_episodes
+        msg.human_involved_episodes = core.human_involved_episodes
+        msg.phase = PHASE_CODES[core.phase]
+        msg.message = message
+        self.session_pub.publish(msg)
+
+
+def main(args=None) -> int:
+    """Run the agent node."""
+    return run_node(AgentNode, 'agent_node', SUMMARY, AgentParams, args)
+
+
+if __name__ == '__main__':
+    import sys
+
+    sys.exit(main())

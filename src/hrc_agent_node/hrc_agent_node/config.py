@@ -1,0 +1,140 @@
+"""The agent's parameters: one dataclass for the node, the offline loop and the checkpoints. Pure.
+
+Defaults are the paper's where it gives them (Table I: PPO; section IV: reward, 40 s episodes)
+and documented choices where it does not. Mirrored in ``params/agent.yaml``.
+"""
+
+from dataclasses import dataclass
+import os
+
+from hrc_common.params import param
+
+PACKAGE = 'hrc_agent_node'
+TREE_FILE_NAME = 'task_tree.yaml'
+CASES_FILE_NAME = 'cases.yaml'
+
+
+@dataclass
+class AgentParams:
+    """Parameters of the agent (node ``agent``)."""
+
+    # --- session
+    session_id: str = param('', 'Session id stamped on every message and checkpoint; empty = '
+                                'derived from case and seed (case<N>_seed<S>)')
+    case: int = param(1, 'Paper case 1..6 (params/cases.yaml): strategy and role assignment',
+                      low=1, high=6)
+    seed: int = param(0, 'Session seed: network init, exploration noise, episode seeds',
+                      low=0, high=2**31 - 1)
+    mode: str = param('lockstep', 'Clock mode of the sim: lockstep waits for the human action '
+                                  'of each step (up to human_action_timeout); realtime uses the '
+                                  'latest one', choices=('lockstep', 'realtime'))
+    max_training_episodes: int = param(60, 'Training ends after this many training episodes '
+                                           'if the last training step has not converged',
+                                       low=1, high=100000)
+    evaluation_episodes: int = param(5, 'Episodes of the frozen deterministic policy after '
+                                        'training (Table II metrics)', low=0, high=10000)
+    evaluation_only: bool = param(False, 'Skip training: load resume_from and evaluate it')
+    task_tree_file: str = param('', 'Task tree YAML; empty = share/hrc_agent_node/params/'
+                                    'task_tree.yaml')
+    cases_file: str = param('', 'Strategies and cases YAML; empty = share/hrc_agent_node/'
+                                'params/cases.yaml')
+    preset: str = param('paper', 'Reward preset of the task tree file (paper = alpha 10, '
+                                 'sigma 1, mu 0; tuned = sigma scaled to each range)')
+    checkpoint_dir: str = param('runs/checkpoints', 'Directory of checkpoints '
+                                                    '(<dir>/<session_id>/latest.pt, final.pt); '
+                                                    'empty = no checkpoints')
+    resume_from: str = param('', 'Checkpoint to resume (counters continue); empty = fresh start')
+    max_force: float = param(2.0, 'N for a normalized action of 1 on translation (must match '
+                                   'the sim)', low=0.001, high=1000.0)
+    max_torque: float = param(0.5, 'N*m for a normalized action of 1 on rotation (must match '
+                                   'the sim)', low=0.001, high=1000.0)
+    human_action_timeout: float = param(1.0, 'Lockstep: wall seconds to wait for the human '
+                                             'action of a step before acting with 0 (reported)',
+                                        low=0.0, high=60.0)
+    reset_timeout: float = param(30.0, 'Wall seconds to wait for the sim reset service before '
+                                       'the session aborts', low=0.1, high=3600.0)
+    torch_threads: int = param(1, 'torch intra-op threads (the sim and the human share the 2 '
+                                  'cores)', low=1, high=64)
+    # --- strategy criteria (the paper does not define them; see strategies.py)
+    convergence_window: int = param(3, "converged: the step's robot subtasks satisfied in each "
+                                       'of this many last episodes of the step', low=1, high=1000)
+    satisfied_window: int = param(3, 'lower_levels_satisfied: level-2 subtasks satisfied in each '
+                                     'of this many last episodes of the step', low=1, high=1000)
+    # --- PPO (Table I unless noted)
+    gamma: float = param(0.995, 'Discount factor (Table I)', low=0.0, high=1.0)
+    gae_lambda: float = param(0.95, 'GAE factor (Table I)', low=0.0, high=1.0)
+    horizon: int = param(512, 'Experience horizon: update once the buffer holds this many '
+                              'steps, at an episode end (Table I)', low=2, high=1000000)
+    minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)
+    epochs: int = param(3, 'Epochs per update (Table I)', low=1, high=100)
+    learning_rate: float = param(0.001, 'Adam learning rate (Table I)', low=1e-7, high=1.0)
+    clip_coef: float = param(0.05, 'PPO clip factor (Table I)', low=0.0, high=1.0)
+    entropy_coef: float = param(0.02, 'Entropy loss weight (Table I)', low=0.0, high=10.0)
+    value_coef: float = param(0.5, 'Value loss weight (not in the paper; CleanRL/SB3 default)',
+                              low=0.0, high=100.0)
+    max_grad_norm: float = param(0.5, 'Global gradient-norm clip (CleanRL/SB3 default)',
+                                 low=0.0, high=100.0)
+    hidden_size: int = param(64, 'Units per hidden layer of the policy and value networks',
+                             low=1, high=4096)
+    hidden_layers: int = param(2, 'Hidden layers (tanh) of each network', low=1, high=8)
+    initial_log_std: float = param(-0.5, 'Initial log standard deviation of the Gaussian policy '
+                                         '(state-independent, learned)', low=-5.0, high=2.0)
+    normalize_advantages: bool = param(True, 'Normalize advantages per minibatch')
+    normalize_rewards: bool = param(True, 'Divide rewards by the running std of the discounted '
+                                          'return for training (reported rewards stay raw)')
+    # --- observation {B_y, P_z, S_x, a_h} (+ rates), each divided by its scale
+    observe_rates: bool = param(True, "Add dB_y/dt, dP_z/dt, dS_x/dt to the paper's "
+                                      'observation (the state is not Markov without them)')
+    ball_position_scale: float = param(0.25, 'm: B_y / this enters the observation',
+                                       low=1e-6, high=1e6)
+    pendulum_angle_scale: float = param(0.5, 'rad: P_z / this enters the observation',
+                                        low=1e-6, high=1e6)
+    slider_position_scale: float = param(0.1, 'm: S_x / this enters the observation',
+                                         low=1e-6, high=1e6)
+    ball_velocity_scale: float = param(0.5, 'm/s: dB_y/dt / this enters the observation',
+                                       low=1e-6, high=1e6)
+    pendulum_velocity_scale: float = param(1.0, 'rad/s: dP_z/dt / this enters the observation',
+                                           low=1e-6, high=1e6)
+    slider_velocity_scale: float = param(0.2, 'm/s: dS_x/dt / this enters the observation',
+                                         low=1e-6, high=1e6)
+
+    def check(self):
+        """Conditions across fields."""
+        reasons = []
+        if self.minibatch_size > self.horizon:
+            reasons.append(f'minibatch_size: {self.minibatch_size} exceeds horizon '
+                           f'{self.horizon}')
+        if self.evaluation_only and not self.resume_from:
+            reasons.append('evaluation_only: needs resume_from (the policy to evaluate)')
+        if self.evaluation_only and self.evaluation_episodes == 0:
+            reasons.append('evaluation_only: needs evaluation_episodes of at least 1')
+        return reasons
+
+    @property
+    def effective_session_id(self) -> str:
+        """Return session_id, or the id derived from case and seed when it is empty."""
+        return self.session_id or f'case{self.case}_seed{self.seed}'
+
+
+def share_file(name: str) -> str:
+    """Return the installed data file ``share/hrc_agent_node/params/<name>``.
+
+    Falls back to the repository's ``params/`` when the package is not installed (tests that
+    run from a source tree).
+    """
+    try:
+        from ament_index_python.packages import (get_package_share_directory,
+                                                 PackageNotFoundError)
+        try:
+            return os.path.join(get_package_share_directory(PACKAGE), 'params', name)
+        except PackageNotFoundError:
+            pass
+    except ImportError:
+        pass
+    return os.path.join(repository_params_dir(), name)
+
+
+def repository_params_dir() -> str:
+    """Return the repository's ``params/`` directory (next to ``src/``)."""
+    here = os.path.dirname(os.path.realpath(__file__))
+    return os.path.normpath(os.path.join(here, '..', '..', '..', 'params'))

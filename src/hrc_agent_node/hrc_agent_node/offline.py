@@ -1,0 +1,146 @@
+"""A whole session in one process, without ROS: physics + partner + AgentCore + strategy.
+
+The same :class:`~hrc_agent_node.agent_core.AgentCore` calls as the agent node, in the same
+order (see agent_core.py), with the physics core stepped directly. It is the in-process
+baseline of the benchmark "full graph over DDS vs the same pure components in one process", the
+learning test's loop, and the tool for "episodes to convergence per case".
+
+A partner is a callable ``partner(state, subtasks) -> command in [-1, 1]`` on the human's
+degree of freedom (``ScriptedPartner``, or hrc_joystick_node's simulated human ``.act``). When
+the current training step does not involve the human its command is 0 and it is not called.
+
+Command line::
+
+    python -m hrc_agent_node.offline --case 2 --preset tuned --episodes 60 --seed 0
+"""
+
+import argparse
+import json
+import sys
+import time
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import load_into, save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.partners import ScriptedPartner
+from hrc_common.params import with_overrides
+
+
+def run_episode(core: AgentCore, sim, partner, on_step=None):
+    """Run one episode of ``core`` on ``sim`` (a SliderPendulumBall); return its EpisodeResult.
+
+    ``on_step(state, decision, human_action)`` is called after each decision, if given.
+    """
+    plan = core.start_episode()
+    state = sim.reset(plan.seed)
+    human_subtasks = core.human_subtasks
+    while not (state.truncated or state.terminated):
+        human_action = float(partner(state, human_subtasks)) \
+            if plan.human_involved and partner is not None else 0.0
+        decision = core.act(state, human_action)
+        if on_step is not None:
+            on_step(state, decision, human_action)
+        if core.robot_dof == 'translation':
+            state = sim.step_normalized(decision.action, human_action)
+        else:
+            state = sim.step_normalized(human_action, decision.action)
+    return core.end_episode(state)
+
+
+def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=None,
+                max_episodes=None) -> dict:
+    """Run ``core`` until phase ``done`` (or ``max_episodes`` more episodes); return a summary.
+
+    After every episode: the PPO update when due, a checkpoint when ``checkpoint_path`` is
+    given, then ``on_episode(result, update_stats)``.
+    """
+    started = time.perf_counter()
+    update_seconds = []
+    convergence = {}
+    episodes_run = 0
+    while core.phase != 'done' and (max_episodes is None or episodes_run < max_episodes):
+        result = run_episode(core, sim, partner)
+        episodes_run += 1
+        if result.event in ('advanced', 'training_finished') and result.converged:
+            convergence[f'step{result.training_step}'] = core.total_episodes
+        stats = core.update() if core.phase == 'updating' else None
+        if stats is not None:
+            update_seconds.append(stats['seconds'])
+        if checkpoint_path is not None:
+            save_checkpoint(core, checkpoint_path)
+        if on_episode is not None:
+            on_episode(result, stats)
+    summary = {'case': core.case.case_id, 'strategy': core.case.strategy,
+               'preset': core.tree.preset, 'seed': core.params.seed,
+               'training_episodes': core.total_episodes,
+               'human_involved_episodes': core.human_involved_episodes,
+               'converged': core.progress.finished,
+               'episodes_to_step_end': convergence,
+               'updates': len(update_seconds),
+               'mean_update_seconds': (sum(update_seconds) / len(update_seconds)
+                                       if update_seconds else 0.0),
+               'wall_seconds': time.perf_counter() - started}
+    summary['evaluation'] = core.evaluation_summary()
+    return summary
+
+
+def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0) -> ScriptedPartner:
+    """Return the scripted PD partner on the human's degree of freedom of ``core``'s case."""
+    return ScriptedPartner(core.human_dof, max_torque=core.params.max_torque, noise=noise,
+                           seed=seed)
+
+
+def main(argv=None) -> int:
+    """Run one offline session and print its summary as JSON."""
+    parser = argparse.ArgumentParser(description='Run an hrc agent session in one process '
+                                                 '(physics + scripted PD partner), no ROS.')
+    parser.add_argument('--case', type=int, default=1)
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--preset', default='paper')
+    parser.add_argument('--episodes', type=int, default=60, help='max training episodes')
+    parser.add_argument('--evaluation-episodes', type=int, default=3)
+    parser.add_argument('--partner-noise', type=float, default=0.0,
+                        help="std of the partner's command noise")
+    parser.add_argument('--threads', type=int, default=1)
+    parser.add_argument('--checkpoint', default=None, help='save a checkpoint here each episode')
+    parser.add_argument('--resume', default=None, help='resume from this checkpoint')
+    parser.add_argument('--quiet', action='store_true')
+    parser.add_argument('--set', nargs='*', default=[], metavar='NAME=VALUE',
+                        help='other AgentParams overrides (YAML values)')
+    args = parser.parse_args(argv)
+
+    import yaml
+    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+    overrides = {name: yaml.safe_load(value) for name, value in
+                 (item.split('=', 1) for item in args.set)}
+    physics = PhysicsParams()
+    params = with_overrides(AgentParams(), case=args.case, seed=args.seed, preset=args.preset,
+                            max_training_episodes=args.episodes,
+                            evaluation_episodes=args.evaluation_episodes,
+                            torch_threads=args.threads, max_force=physics.max_force,
+                            max_torque=physics.max_torque, **overrides)
+    core = AgentCore(params)
+    if args.resume:
+        load_into(core, args.resume)
+    partner = make_partner(core, args.partner_noise, args.seed)
+
+    def report(result, stats):
+        if args.quiet:
+            return
+        errors = ' '.join(f'{name}={value:.4f}' for name, value in result.errors.items())
+        update = f' update {stats["seconds"]:.2f}s std={stats["action_std"]:.3f}' \
+            if stats else ''
+        print(f'episode {result.episode:3d} {"eval " if result.evaluation else ""}step '
+              f'{result.training_step} return {result.episode_return:8.2f} {errors} '
+              f'robot_effort={result.robot_effort:.3f}{" converged" if result.converged else ""}'
+              f' {result.event}{update}', file=sys.stderr, flush=True)
+
+    with SliderPendulumBall(PhysicsParams()) as sim:
+        summary = run_session(core, sim, partner, args.checkpoint, report)
+    print(json.dumps(summary, indent=2))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,272 @@
+"""Learning strategies, the paper's six cases, and a session's progress through them. Pure.
+
+A strategy is a sequence of training steps (``params/cases.yaml``). Each step says which
+subtasks the robot's reward sums (eq. 6-10), whether the human acts, which subtasks the human is
+asked to hold, and the condition that ends the step. A case binds a strategy to a role
+assignment (which action the robot executes; the human executes the other).
+
+The paper does not define its convergence condition nor "all lower-level subtasks satisfied".
+Chosen here (and parameters of the agent):
+
+* a subtask is **satisfied** in an episode when the mean of |x - mu| over the episode's states
+  is within the subtask's ``tolerance`` (``params/task_tree.yaml``: slider 0.01 m, pendulum
+  0.1 rad, ball 0.05 m). Measured in the task's own units, so the criterion does not depend on
+  the reward preset (the paper's sigma = 1 reward is nearly flat; a reward threshold would be
+  met by any policy at all);
+* ``converged``: every subtask the step watches is satisfied in each of the last
+  ``convergence_window`` episodes of the step (default 3: one episode can be lucky, three in a
+  row with an exploring policy are not). A step watches its robot reward's subtasks unless it
+  lists ``watch`` (responsibility-guided step 1 watches only the robot's direct subtask: alone,
+  the robot cannot hold the subtask driven by the partner's action, see params/cases.yaml);
+* ``lower_levels_satisfied``: every subtask below the highest level (the level-2 subtasks) is
+  satisfied in each of the last ``satisfied_window`` episodes of the step (default 3).
+
+Episodes are counted per step: the window restarts when a step begins, so a new reward is
+judged only on episodes trained under it.
+"""
+
+from dataclasses import dataclass
+
+import yaml
+
+from hrc_agent_node.task_tree import TaskTreeError
+
+ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
+STRATEGIES = ('responsibility_guided', 'level_guided', 'learn_together')
+SELECTOR_PREFIX = 'direct:'
+
+
+class CasesError(ValueError):
+    """The cases file is malformed or names something the tree does not have."""
+
+
+@dataclass(frozen=True)
+class TrainingStep:
+    """One training step of a strategy, resolved for a case."""
+
+    index: int
+    name: str
+    robot_subtasks: tuple   # subtask ids in the robot's reward, tree order
+    human_involved: bool
+    human_subtasks: tuple   # subtask ids the human is asked to hold, tree order
+    advance: str            # one of ADVANCE_CONDITIONS
+    watch: tuple = ()       # subtask ids the advance condition checks, tree order
+
+
+@dataclass(frozen=True)
+class Case:
+    """A paper case: a strategy with a role assignment."""
+
+    case_id: int
+    strategy: str
+    description: str
+    robot_dof: str          # action (degree of freedom) the robot executes
+    human_dof: str          # the other one, executed by the human
+    steps: tuple            # TrainingStep, in order
+
+    @property
+    def executors(self) -> dict:
+        """Return {action id: 'robot' | 'human'}."""
+        return {self.robot_dof: 'robot', self.human_dof: 'human'}
+
+
+def load_cases(path, tree) -> dict:
+    """Load every case of a cases file, resolved against ``tree``: {case id: Case}."""
+    try:
+        with open(path) as stream:
+            document = yaml.safe_load(stream)
+    except OSError as error:
+        raise CasesError(f'cannot read cases file {path}: {error}') from None
+    except yaml.YAMLError as error:
+        raise CasesError(f'cases file {path} is not valid YAML: {error}') from None
+    try:
+        return cases_from_dict(document, tree)
+    except CasesError as error:
+        raise CasesError(f'{path}: {error}') from None
+
+
+def cases_from_dict(document, tree) -> dict:
+    """Resolve the parsed cases document against ``tree``; raise CasesError with every reason."""
+    if not isinstance(document, dict) or not isinstance(document.get('strategies'), dict) \
+            or not isinstance(document.get('cases'), dict):
+        raise CasesError('a cases file needs the mappings `strategies` and `cases`')
+    problems = []
+    cases = {}
+    actions = list(tree.actions)
+    if len(actions) != 2:
+        raise CasesError(f'cases assign one action to the robot and the other to the human; the '
+                         f'tree has {len(actions)} actions {actions}')
+    for raw_id, entry in document['cases'].items():
+        try:
+            case_id = int(raw_id)
+        except (TypeError, ValueError):
+            problems.append(f'case id {raw_id!r} is not an integer')
+            continue
+        if not isinstance(entry, dict):
+            problems.append(f'case {case_id}: needs strategy and robot_action')
+            continue
+        strategy = entry.get('strategy')
+        robot_action = entry.get('robot_action')
+        if strategy not in document['strategies']:
+            problems.append(f'case {case_id}: unknown strategy {strategy!r}; defined: '
+                            f'{sorted(document["strategies"])}')
+            continue
+        if robot_action not in actions:
+            problems.append(f'case {case_id}: robot_action {robot_action!r} is not an action of '
+                            f'the tree {actions}')
+            continue
+        human_action = actions[1] if robot_action == actions[0] else actions[0]
+        try:
+            cases[case_id] = _resolve_case(case_id, strategy, document['strategies'][strategy],
+                                           robot_action, human_action, tree)
+        except CasesError as error:
+            problems.append(str(error))
+    if problems:
+        raise CasesError('invalid cases: ' + '; '.join(problems))
+    return cases
+
+
+def _resolve_case(case_id, strategy, entry, robot_action, human_action, tree) -> Case:
+    """Resolve one strategy's steps for a role assignment."""
+    if not isinstance(entry, dict) or not isinstance(entry.get('steps'), list) \
+            or not entry['steps']:
+        raise CasesError(f'strategy {strategy!r}: needs a non-empty list `steps`')
+    steps = []
+    for index, raw in enumerate(entry['steps']):
+        where = f'case {case_id} ({strategy}) step {index}'
+        if not isinstance(raw, dict):
+            raise CasesError(f'{where}: a step is a mapping')
+        advance = raw.get('advance')
+        if advance not in ADVANCE_CONDITIONS:
+            raise CasesError(f'{where}: advance {advance!r} is not one of {ADVANCE_CONDITIONS}')
+        involved = raw.get('human_involved')
+        if not isinstance(involved, bool):
+            raise CasesError(f'{where}: human_involved must be true or false')
+        robot = _resolve_ids(raw.get('robot_subtasks'), tree, robot_action, human_action, where)
+        human = _resolve_ids(raw.get('human_subtasks') or [], tree, robot_action, human_action,
+                             where)
+        if not robot:
+            raise CasesError(f'{where}: the robot needs at least one subtask in its reward')
+        if not involved and human:
+            raise CasesError(f'{where}: the human is not involved but has subtasks {human}')
+        if 'watch' in raw:
+            watch = _resolve_ids(raw['watch'], tree, robot_action, human_action, where)
+        elif advance == 'converged':
+            watch = robot
+        else:  # lower_levels_satisfied: every subtask below the highest level
+            watch = [subtask_id for subtask_id, subtask in tree.subtasks.items()
+                     if subtask.level > tree.levels[0]]
+        if not watch:
+            raise CasesError(f'{where}: the advance condition watches no subtask')
+        steps.append(TrainingStep(index, str(raw.get('name', f'step {index}')), tuple(robot),
+                                  involved, tuple(human), advance, tuple(watch)))
+    return Case(case_id, strategy, str(entry.get('description', '')), robot_action,
+                human_action, tuple(steps))
+
+
+def _resolve_ids(raw, tree, robot_action, human_action, where) -> list:
+    """Resolve subtask ids and `direct:robot` / `direct:human` selectors, in tree order."""
+    if not isinstance(raw, list):
+        raise CasesError(f'{where}: subtask lists must be lists, got {raw!r}')
+    ids = []
+    for item in raw:
+        if isinstance(item, str) and item.startswith(SELECTOR_PREFIX):
+            who = item[len(SELECTOR_PREFIX):]
+            if who not in ('robot', 'human'):
+                raise CasesError(f'{where}: selector {item!r} must be direct:robot or '
+                                 f'direct:human')
+            ids += tree.direct_subtasks(robot_action if who == 'robot' else human_action)
+        else:
+            ids.append(item)
+    try:
+        return tree.ordered(ids)
+    except TaskTreeError as error:
+        raise CasesError(f'{where}: {error}') from None
+
+
+class StrategyProgress:
+    """Where a session is in its case's training steps, and when to move on.
+
+    Call :meth:`record` after every training episode with the mean error of every subtask; it
+    tells whether the step's condition is met and moves to the next step (or finishes).
+    """
+
+    def __init__(self, case: Case, tree, convergence_window: int = 3,
+                 satisfied_window: int = 3):
+        self.case = case
+        self.tree = tree
+        self.convergence_window = int(convergence_window)
+        self.satisfied_window = int(satisfied_window)
+        self.step_index = 0
+        self.finished = False
+        # Per-episode {subtask id: satisfied} of the episodes of the current step.
+        self.step_history = []
+
+    @property
+    def step(self) -> TrainingStep:
+        """Return the current training step."""
+        return self.case.steps[self.step_index]
+
+    @property
+    def is_last_step(self) -> bool:
+        """Return True on the strategy's last training step."""
+        return self.step_index == len(self.case.steps) - 1
+
+    def satisfied(self, errors: dict) -> dict:
+        """Return {subtask id: mean error within tolerance} for an episode's mean errors."""
+        return {subtask_id: errors[subtask_id] <= subtask.tolerance
+                for subtask_id, subtask in self.tree.subtasks.items()}
+
+    def window(self, step: TrainingStep) -> int:
+        """Return how many consecutive satisfying episodes the step's condition needs."""
+        return self.convergence_window if step.advance == 'converged' else self.satisfied_window
+
+    def condition_met(self) -> bool:
+        """Return True when the current step's condition holds over its recent episodes."""
+        step = self.step
+        window = self.window(step)
+        if len(self.step_history) < window:
+            return False
+        recent = self.step_history[-window:]
+        return all(episode[subtask_id] for episode in recent
+                   for subtask_id in step.watch)
+
+    def record(self, errors: dict) -> tuple:
+        """Record a training episode; return (condition_met, event).
+
+        ``errors`` maps every subtask id to its mean |x - mu| over the episode. ``event`` is
+        ``'advanced'`` (the next step starts with the next episode), ``'finished'`` (the last
+        step's condition held: training ends) or ``''``.
+        """
+        if self.finished:
+            raise RuntimeError('the strategy already finished; no more training episodes')
+        missing = [subtask_id for subtask_id in self.tree.subtasks if subtask_id not in errors]
+        if missing:
+            raise ValueError(f'episode errors lack subtasks {missing}')
+        self.step_history.append(self.satisfied(errors))
+        met = self.condition_met()
+        if not met:
+            return False, ''
+        if self.is_last_step:
+            self.finished = True
+            return True, 'finished'
+        self.step_index += 1
+        self.step_history = []
+        return True, 'advanced'
+
+    def state_dict(self) -> dict:
+        """Return the progress as plain data (for checkpoints)."""
+        return {'case_id': self.case.case_id, 'step_index': self.step_index,
+                'finished': self.finished,
+                'step_history': [dict(episode) for episode in self.step_history]}
+
+    def load_state_dict(self, state: dict) -> None:
+        """Restore progress saved by :meth:`state_dict`."""
+        if state['case_id'] != self.case.case_id:
+            raise ValueError(f'progress of case {state["case_id"]} cannot continue case '
+                             f'{self.case.case_id}')
+        if not 0 <= state['step_index'] < len(self.case.steps):
+            raise ValueError(f'step index {state["step_index"]} out of range')
+        self.step_index = int(state['step_index'])
+        self.finished = bool(state['finished'])
+        self.step_history = [dict(episode) for episode in state['step_history']]
