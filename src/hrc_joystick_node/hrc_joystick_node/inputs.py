@@ -1,0 +1,142 @@
+"""Which input drives the human's command, and the sensor_msgs/Joy adapter; pure, no rclpy.
+
+Inputs (parameter ``input``):
+
+* ``device``: a Linux joystick device (see :mod:`hrc_joystick_node.js_event`);
+* ``joy``: ``sensor_msgs/Joy`` on ``/joy`` as a stock ``joy``/``joy_linux`` node publishes it;
+* ``sim``: the simulated human (:mod:`hrc_joystick_node.sim_human`);
+* ``auto``: the device if it opens, else ``/joy`` if a publisher is seen, else the simulated
+  human; re-evaluated continuously, so a device that appears later takes over.
+
+When the chosen input is lost (the device vanishes, ``/joy`` falls silent past its deadline),
+the fallback (parameter ``on_input_lost``) is the simulated human (``sim``) or a held zero
+(``zero``). The input returns as soon as it is back. :class:`InputSelector` keeps that logic in
+one place and words each change for the log.
+"""
+
+import typing
+
+from hrc_joystick_node.js_event import shape_axis
+
+DEVICE = 'device'
+JOY = 'joy'
+SIM = 'sim'
+AUTO = 'auto'
+ZERO = 'zero'
+INPUT_MODES = (AUTO, DEVICE, JOY, SIM)
+FALLBACKS = (SIM, ZERO)
+
+
+class JoyInput:
+    """The latest ``sensor_msgs/Joy`` values and whether the stream is alive.
+
+    Alive means: a message arrived less than ``timeout`` s ago, or a publisher exists and was
+    first seen less than ``timeout`` s ago (a grace period before its first message). So a
+    stock joy node must publish at least every ``timeout`` s (its ``autorepeat_rate``).
+    """
+
+    def __init__(self, timeout: float):
+        self.timeout = timeout
+        self.axes: typing.List[float] = []
+        self.buttons: typing.List[int] = []
+        self.last_message_time = None  # monotonic s
+        self.publisher_seen_time = None  # monotonic s when a publisher was first seen
+        self.messages = 0
+
+    def on_message(self, axes, buttons, now: float) -> None:
+        """Store one Joy message received at ``now`` (monotonic s)."""
+        self.axes = [float(value) for value in axes]
+        self.buttons = [int(value) for value in buttons]
+        self.last_message_time = now
+        self.messages += 1
+
+    def on_publisher_count(self, count: int, now: float) -> None:
+        """Record how many publishers ``/joy`` has now (the grace period starts at the first)."""
+        if count > 0 and self.publisher_seen_time is None:
+            self.publisher_seen_time = now
+        elif count == 0:
+            self.publisher_seen_time = None
+
+    def alive(self, now: float) -> bool:
+        """Return True when /joy is usable now (see the class docstring)."""
+        if self.last_message_time is not None and now - self.last_message_time <= self.timeout:
+            return True
+        if self.publisher_seen_time is None:
+            return False
+        waiting_for_first = (self.last_message_time is None
+                             or self.last_message_time < self.publisher_seen_time)
+        return waiting_for_first and now - self.publisher_seen_time <= self.timeout
+
+    def status(self, now: float) -> str:
+        """Say why /joy is or is not alive."""
+        if self.last_message_time is not None:
+            age = now - self.last_message_time
+            state = 'alive' if age <= self.timeout else 'silent'
+            return f'/joy {state}: last message {age:.2f} s ago (deadline {self.timeout} s)'
+        if self.publisher_seen_time is not None:
+            return f'/joy has a publisher, no message for {now - self.publisher_seen_time:.2f} s'
+        return '/joy has no publisher'
+
+    def axis(self, number: int) -> typing.Optional[float]:
+        """Return axis ``number`` of the latest message, or None if it has no such axis."""
+        return self.axes[number] if 0 <= number < len(self.axes) else None
+
+    def button(self, number: int) -> typing.Optional[bool]:
+        """Return whether button ``number`` is pressed, or None if the message has none."""
+        return bool(self.buttons[number]) if 0 <= number < len(self.buttons) else None
+
+
+def stick_command(raw_axis: typing.Optional[float], enable_pressed: typing.Optional[bool],
+                  use_enable_button: bool, deadzone: float, invert: bool) -> tuple:
+    """Return (command in [-1, 1], engaged, why) from an axis and the enable button.
+
+    A missing axis reads as 0 (the device has not reported it yet). With an enable (deadman)
+    button configured, the command is 0 and not engaged unless the button is held.
+    """
+    if use_enable_button and not enable_pressed:
+        return 0.0, False, 'enable button released'
+    if raw_axis is None:
+        return 0.0, True, 'axis not reported yet'
+    return shape_axis(raw_axis, deadzone, invert), True, ''
+
+
+class InputSelector:
+    """Choose the active input from the mode, what is available, and the fallback policy."""
+
+    def __init__(self, mode: str, on_input_lost: str):
+        if mode not in INPUT_MODES:
+            raise ValueError(f'input must be one of {INPUT_MODES}, got {mode!r}')
+        if on_input_lost not in FALLBACKS:
+            raise ValueError(f'on_input_lost must be one of {FALLBACKS}, got {on_input_lost!r}')
+        self.mode = mode
+        self.on_input_lost = on_input_lost
+        self.active = None  # DEVICE, JOY, SIM or ZERO
+        self.reason = ''
+        self._had_real_input = False
+
+    def update(self, device_present: bool, device_status: str, joy_alive: bool,
+               joy_status: str) -> typing.Optional[str]:
+        """Re-evaluate; return a log line when the active input changed, else None."""
+        lost = 'lost' if self._had_real_input else 'no input yet'
+        if self.mode == SIM:
+            choice, reason = SIM, 'input is sim'
+        elif self.mode == DEVICE:
+            choice, reason = ((DEVICE, device_status) if device_present
+                              else (self.on_input_lost, f'{lost}: {device_status}'))
+        elif self.mode == JOY:
+            choice, reason = ((JOY, joy_status) if joy_alive
+                              else (self.on_input_lost, f'{lost}: {joy_status}'))
+        elif device_present:
+            choice, reason = DEVICE, f'auto: the device opened ({device_status})'
+        elif joy_alive:
+            choice, reason = JOY, f'auto: no device ({device_status}); {joy_status}'
+        else:
+            # Nothing was ever connected: the simulated human; an input lost: the policy.
+            fallback = self.on_input_lost if self._had_real_input else SIM
+            choice, reason = fallback, f'auto, {lost}: {device_status}; {joy_status}'
+        if choice in (DEVICE, JOY):
+            self._had_real_input = True
+        if choice == self.active:
+            return None
+        previous, self.active, self.reason = self.active, choice, reason
+        return f'input: {previous or "none"} -> {choice} ({reason})'
