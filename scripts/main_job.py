@@ -1,0 +1,24 @@
+#!/usr/bin/env python3
+"""The main job of `make run`: one headless session with the simulated human.
+
+Runs `ros2 run hrc_bringup session` for case 2 (the paper's "learn the task first" case with
+the robot on rotation), lockstep, seed 0, on a private ROS domain, then prints its Table II row
+and where the bags and figures are. Extra arguments are passed to the session runner, e.g.
+`make run ARGS="--case 4 --episodes 20"`.
+"""
+
+import os
+import sys
+
+from hrc_bringup import session
+
+
+def main() -> int:
+    """Run the session with the main job's defaults (overridable on the command line)."""
+    os.environ.setdefault('ROS_DOMAIN_ID', '77')
+    defaults = ['--case', '2', '--seed', '0', '--mode', 'lockstep', '--human', 'sim']
+    return session.main(defaults + sys.argv[1:])
+
+
+if __name__ == '__main__':
+    sys.exit(main())

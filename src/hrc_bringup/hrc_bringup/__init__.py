@@ -1,0 +1,1 @@
+"""Session runner and experiment runner of the hrc graph."""

@@ -1,0 +1,177 @@
+"""Compose the parameters of every node of a session (pure, no rclpy).
+
+A session is one paper case run with one seed. The plan starts from each node's parameter file
+(``params/<node>.yaml``), applies the session-level settings so that every node agrees (case,
+seed, roles, clock mode, force and torque limits, session id), then the user's overrides
+(``--set node.name=value``), and writes one ROS 2 parameter file with a section per node plus a
+``session.yaml`` describing the whole session (it travels in every bag).
+"""
+
+from dataclasses import asdict, dataclass, field
+import datetime
+import pathlib
+import subprocess
+
+import yaml
+
+# Node name -> (package, executable, parameter file). The node name is the section of the file.
+NODES = {
+    'sim': ('hrc_sim_node', 'sim_node', 'sim.yaml'),
+    'agent': ('hrc_agent_node', 'agent_node', 'agent.yaml'),
+    'human': ('hrc_joystick_node', 'human_node', 'human.yaml'),
+    'recorder': ('hrc_bag', 'recorder_node', 'recorder.yaml'),
+}
+# Paper cases: 1, 3, 5 the robot translates (human rotates); 2, 4, 6 swapped.
+STRATEGY_OF_CASE = {1: 'responsibility_guided', 2: 'responsibility_guided',
+                    3: 'level_guided', 4: 'level_guided',
+                    5: 'learn_together', 6: 'learn_together'}
+
+
+def robot_dof_of_case(case: int) -> str:
+    """Return the robot's degree of freedom in a paper case."""
+    return 'translation' if case % 2 == 1 else 'rotation'
+
+
+@dataclass
+class SessionSettings:
+    """What a user chooses for a session; everything else comes from the parameter files."""
+
+    case: int = 2
+    seed: int = 0
+    mode: str = 'lockstep'
+    human_input: str = 'sim'
+    human_profile: str = ''
+    training_episodes: int = 0
+    evaluation_episodes: int = -1
+    session_id: str = ''
+    bags_dir: str = 'bags'
+    runs_dir: str = 'runs'
+    record: bool = True
+    resume_from: str = ''
+    subject_id: str = ''
+    notes: str = ''
+    overrides: dict = field(default_factory=dict)
+
+    def check(self) -> list:
+        """Return the reasons these settings are unusable (empty if fine)."""
+        reasons = []
+        if self.case not in STRATEGY_OF_CASE:
+            reasons.append(f'case must be 1..6, got {self.case}')
+        if self.mode not in ('lockstep', 'realtime'):
+            reasons.append(f"mode must be 'lockstep' or 'realtime', got {self.mode!r}")
+        if self.seed < 0:
+            reasons.append(f'seed must be >= 0, got {self.seed}')
+        for key in self.overrides:
+            if key.split('.', 1)[0] not in NODES:
+                reasons.append(f'--set {key}: the node must be one of {sorted(NODES)}')
+        if any(char in self.session_id for char in '/\\ '):
+            reasons.append(f'session id {self.session_id!r} must not contain / \\ or spaces')
+        return reasons
+
+
+def new_session_id(settings: SessionSettings, now=None) -> str:
+    """Return a session id: case, seed and start time (no personal data)."""
+    now = now or datetime.datetime.now()
+    return f'case{settings.case}-seed{settings.seed}-{now:%Y%m%d-%H%M%S}'
+
+
+def parse_override(text: str):
+    """Parse ``node.name=value`` (value in YAML syntax) into (node, name, value)."""
+    if '=' not in text or '.' not in text.split('=', 1)[0]:
+        raise ValueError(f'--set {text!r}: expected node.parameter=value, e.g. agent.seed=3')
+    key, raw = text.split('=', 1)
+    node, name = key.split('.', 1)
+    return node, name, yaml.safe_load(raw) if raw != '' else ''
+
+
+def load_node_parameters(params_dir: pathlib.Path, node: str) -> dict:
+    """Return the ``ros__parameters`` of ``node`` in its parameter file."""
+    path = params_dir / NODES[node][2]
+    document = yaml.safe_load(path.read_text()) or {}
+    return dict((document.get(node) or {}).get('ros__parameters') or {})
+
+
+def package_version() -> str:
+    """Return the version of the code: the git commit if known, else the package version."""
+    try:
+        commit = subprocess.run(['git', 'describe', '--always', '--dirty'], capture_output=True,
+                                text=True, timeout=5, cwd=pathlib.Path(__file__).parent)
+        if commit.returncode == 0 and commit.stdout.strip():
+            return 'git ' + commit.stdout.strip()
+    except (OSError, subprocess.TimeoutExpired):
+        pass
+    return '0.1.0'
+
+
+def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
+    """Return {node: parameters} for a session; raise ValueError with every reason if bad."""
+    reasons = settings.check()
+    if reasons:
+        raise ValueError('session settings rejected: ' + '; '.join(reasons))
+    nodes = [node for node in NODES if settings.record or node != 'recorder']
+    parameters = {node: load_node_parameters(params_dir, node) for node in nodes}
+    for key, value in settings.overrides.items():
+        node, name = key.split('.', 1)
+        if node in parameters:
+            parameters[node][name] = value
+    sim, agent, human = parameters['sim'], parameters['agent'], parameters['human']
+
+    # One value for what several nodes must agree on (after the overrides, so that e.g.
+    # --set sim.max_force=3 reaches the actors too; seeds and modes come from the settings).
+    for node in (sim, agent, human):
+        node['seed'] = settings.seed
+    sim['mode'] = agent['mode'] = settings.mode
+    for name in ('max_force', 'max_torque'):
+        agent[name] = human[name] = sim[name]
+    # The agent announces the roles on /hrc/session; the start values agree with it.
+    sim['robot_dof'] = robot_dof_of_case(settings.case)
+    human['dof'] = 'rotation' if sim['robot_dof'] == 'translation' else 'translation'
+    agent['case'] = settings.case
+    agent['session_id'] = settings.session_id
+    agent['checkpoint_dir'] = str(pathlib.Path(settings.runs_dir) / 'checkpoints')
+    if settings.training_episodes > 0:
+        agent['max_training_episodes'] = settings.training_episodes
+    if settings.evaluation_episodes >= 0:
+        agent['evaluation_episodes'] = settings.evaluation_episodes
+    if settings.resume_from:
+        agent['resume_from'] = settings.resume_from
+    human['input'] = settings.human_input
+    if settings.human_profile:
+        human['profile'] = settings.human_profile
+    if settings.record:
+        recorder = parameters['recorder']
+        recorder['session_id'] = settings.session_id
+        recorder['output_dir'] = settings.bags_dir
+    return parameters
+
+
+def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path):
+    """Write ``parameters.yaml`` (for --params-file) and ``session.yaml`` (the session config).
+
+    Returns (parameters_path, session_config_path).
+    """
+    session_dir.mkdir(parents=True, exist_ok=True)
+    params_path = session_dir / 'parameters.yaml'
+    params_path.write_text(yaml.safe_dump(
+        {node: {'ros__parameters': values} for node, values in parameters.items()},
+        sort_keys=False))
+    config = {
+        'session_id': settings.session_id,
+        'case': settings.case,
+        'strategy': STRATEGY_OF_CASE[settings.case],
+        'robot_dof': robot_dof_of_case(settings.case),
+        'human_dof': 'rotation' if robot_dof_of_case(settings.case) == 'translation'
+        else 'translation',
+        'seed': settings.seed,
+        'mode': settings.mode,
+        'human_input': settings.human_input,
+        'subject_id': settings.subject_id,
+        'notes': settings.notes,
+        'version': package_version(),
+        'started': datetime.datetime.now().isoformat(timespec='seconds'),
+        'settings': {key: value for key, value in asdict(settings).items()},
+        'parameters': parameters,
+    }
+    config_path = session_dir / 'session.yaml'
+    config_path.write_text(yaml.safe_dump(config, sort_keys=False))
+    return params_path, config_path

@@ -1,0 +1,28 @@
+import glob
+import os
+
+from setuptools import find_packages, setup
+
+package_name = 'hrc_bringup'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        # Every node's parameter file, for `ros2 run hrc_bringup session` outside a checkout.
+        ('share/' + package_name + '/params', glob.glob(os.path.join('..', '..', 'params', '*.yaml'))),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='hrc developers',
+    maintainer_email='hrc@example.org',
+    description='Session and experiment runners of the hrc graph.',
+    license='Apache-2.0',
+    entry_points={'console_scripts': [
+        'session = hrc_bringup.session:main',
+        'experiment = hrc_bringup.experiment:main',
+    ]},
+)
