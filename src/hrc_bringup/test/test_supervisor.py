@@ -34,7 +34,7 @@ def test_exit_is_noticed_and_described(tmp_path):
 
 def test_stop_order_and_escalation(tmp_path):
     order_file = tmp_path / 'order.txt'
-    handler = f'''
+    handler = f"""
         import signal, sys, time
         def stop(signum, frame):
             with open({str(order_file)!r}, 'a') as out:
@@ -43,14 +43,14 @@ def test_stop_order_and_escalation(tmp_path):
         signal.signal(signal.SIGINT, stop)
         print('ready', flush=True)
         time.sleep(60)
-    '''
-    stubborn = '''
+    """
+    stubborn = """
         import signal, time
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_IGN)
         print('ready', flush=True)
         time.sleep(60)
-    '''
+    """
     supervisor = Supervisor(tmp_path)
     for name in ('recorder', 'sim', 'agent'):
         supervisor.start(name, python(handler) + [name])
@@ -67,14 +67,14 @@ def test_stop_order_and_escalation(tmp_path):
 
 def test_children_die_with_a_killed_supervisor(tmp_path):
     pid_file = tmp_path / 'child.pid'
-    parent = f'''
+    parent = f"""
         import sys, time
         from hrc_bringup.supervisor import Supervisor
         supervisor = Supervisor({str(tmp_path)!r})
         process = supervisor.start('child', [sys.executable, '-c', 'import time; time.sleep(60)'])
         open({str(pid_file)!r}, 'w').write(str(process.popen.pid))
         time.sleep(60)
-    '''
+    """
     runner = subprocess.Popen(python(parent))
     deadline = time.monotonic() + 30
     while not pid_file.exists() or not pid_file.read_text():
