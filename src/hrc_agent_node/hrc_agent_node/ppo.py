@@ -313,7 +313,7 @@ class PPO:
             stats[key] /= max(batches, 1)
         self.updates += 1
         stats.update(samples=samples, minibatches=batches, seconds=time.perf_counter() - start,
-                     update=self.updates, action_std=float(self.policy.log_std.exp()[0]))
+                     update=self.updates, action_std=float(self.policy.log_std.detach().exp()[0]))
         return stats
 
     def state_dict(self) -> dict:
@@ -328,9 +328,9 @@ class PPO:
         """Restore a state saved by :meth:`state_dict` (``policy_only``: networks alone)."""
         self.policy.load_state_dict(state['policy'])
         self.value.load_state_dict(state['value'])
+        self.updates = int(state['updates'])
         if policy_only:
             return
         self.optimizer.load_state_dict(state['optimizer'])
         self.action_generator.set_state(state['action_generator'])
         self.shuffle_generator.set_state(state['shuffle_generator'])
-        self.updates = int(state['updates'])

@@ -1,0 +1,120 @@
+"""Checkpoints: identical outputs after a round trip, resumed sessions continue exactly,
+evaluation-only loading, and clear errors for incompatible or foreign files."""
+
+import numpy as np
+import pytest
+import torch
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import (CheckpointError, load_into, make_checkpoint,
+                                       save_checkpoint)
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import make_partner, run_session
+from hrc_common.params import with_overrides
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+# Short episodes (4 s = 20 steps) and a small horizon keep these tests fast.
+PHYSICS = PhysicsParams(episode_duration=4.0)
+
+
+def params(**overrides):
+    values = dict(case=3, seed=5, preset='tuned', horizon=40, minibatch_size=16,
+                  max_training_episodes=6, evaluation_episodes=1, checkpoint_dir='')
+    values.update(overrides)
+    return with_overrides(AgentParams(), **values)
+
+
+def run(core, episodes):
+    with SliderPendulumBall(PHYSICS) as sim:
+        returns = []
+        run_session(core, sim, make_partner(core),
+                    on_episode=lambda result, stats: returns.append(result.episode_return),
+                    max_episodes=episodes)
+    return returns
+
+
+def observations():
+    return np.random.default_rng(0).normal(size=(10, 7)).astype(np.float32)
+
+
+def test_round_trip_gives_identical_policy_outputs(tmp_path):
+    core = AgentCore(params())
+    run(core, 3)                         # trained a little: one update happened
+    assert core.ppo.updates == 1
+    path = save_checkpoint(core, tmp_path / 'a.pt')
+    loaded = AgentCore(params(seed=99))  # another seed: different initial weights
+    load_into(loaded, path)
+    for observation in observations():
+        assert loaded.ppo.act(observation, deterministic=True) == \
+            core.ppo.act(observation, deterministic=True)
+        # The exploration generator travels too: the same noise follows.
+        assert loaded.ppo.act(observation) == core.ppo.act(observation)
+    assert (loaded.episode, loaded.total_episodes, loaded.human_involved_episodes) == \
+        (core.episode, core.total_episodes, core.human_involved_episodes)
+
+
+def test_resumed_session_continues_exactly(tmp_path):
+    straight = AgentCore(params())
+    straight_returns = run(straight, 5)
+    first = AgentCore(params())
+    first_returns = run(first, 2)
+    save_checkpoint(first, tmp_path / 'latest.pt')
+    resumed = AgentCore(params())
+    load_into(resumed, tmp_path / 'latest.pt')
+    assert resumed.episode == 2 and resumed.total_episodes == 2
+    resumed_returns = run(resumed, 3)
+    assert first_returns + resumed_returns == pytest.approx(straight_returns, rel=0, abs=0)
+    assert resumed.total_episodes == straight.total_episodes == 5
+
+
+def test_policy_loads_for_evaluation_alone(tmp_path):
+    trained = AgentCore(params())
+    run(trained, 3)
+    path = save_checkpoint(trained, tmp_path / 'trained.pt')
+    evaluator = AgentCore(params(evaluation_only=True, resume_from=str(path), case=5,
+                                 evaluation_episodes=2))
+    load_into(evaluator, path, resume=False)   # another case, same robot dof: allowed
+    assert evaluator.phase == 'evaluation' and evaluator.episode == 3
+    run(evaluator, 5)
+    assert evaluator.phase == 'done' and len(evaluator.evaluation_results) == 2
+    assert all(result.evaluation for result in evaluator.evaluation_results)
+    assert evaluator.ppo.updates == trained.ppo.updates   # nothing learned in evaluation
+
+
+@pytest.mark.parametrize('other, reason', [
+    ({'hidden_size': 32}, "hidden_size is 64 in the checkpoint but 32 here"),
+    ({'observe_rates': False}, 'observation_size is 7 in the checkpoint but 4 here'),
+    ({'case': 4}, "the policy drives 'translation' but the robot drives 'rotation'"),
+    ({'case': 5}, 'it belongs to case 3, not case 5'),
+])
+def test_incompatible_checkpoint_fails_clearly(tmp_path, other, reason):
+    path = save_checkpoint(AgentCore(params()), tmp_path / 'c.pt')
+    with pytest.raises(CheckpointError) as error:
+        load_into(AgentCore(params(**other)), path)
+    assert 'is incompatible' in str(error.value) and reason in str(error.value)
+
+
+def test_foreign_damaged_missing_and_old_files_fail_clearly(tmp_path):
+    core = AgentCore(params())
+    with pytest.raises(CheckpointError, match='does not exist'):
+        load_into(core, tmp_path / 'nothing.pt')
+    damaged = tmp_path / 'damaged.pt'
+    damaged.write_bytes(b'not a checkpoint at all')
+    with pytest.raises(CheckpointError, match='cannot be read'):
+        load_into(core, damaged)
+    foreign = tmp_path / 'foreign.pt'
+    torch.save({'model': 1}, foreign)
+    with pytest.raises(CheckpointError, match='is not an hrc agent checkpoint'):
+        load_into(core, foreign)
+    old = make_checkpoint(core)
+    old['format_version'] = 0
+    torch.save(old, tmp_path / 'old.pt')
+    with pytest.raises(CheckpointError, match='format version 0; this agent reads version 1'):
+        load_into(core, tmp_path / 'old.pt')
+
+
+def test_no_checkpoint_during_an_episode():
+    core = AgentCore(params())
+    core.start_episode()
+    with pytest.raises(RuntimeError, match='between episodes'):
+        make_checkpoint(core)
