@@ -1,5 +1,8 @@
-"""Checkpoints: identical outputs after a round trip, resumed sessions continue exactly,
-evaluation-only loading, and clear errors for incompatible or foreign files."""
+"""Checkpoints: round trip, exact resume, evaluation-only loading, clear errors.
+
+Identical policy outputs after a round trip, resumed sessions continue exactly, a policy loads
+for evaluation alone, incompatible or foreign files fail with a clear reason.
+"""
 
 import numpy as np
 import pytest
@@ -82,7 +85,7 @@ def test_policy_loads_for_evaluation_alone(tmp_path):
 
 
 @pytest.mark.parametrize('other, reason', [
-    ({'hidden_size': 32}, "hidden_size is 64 in the checkpoint but 32 here"),
+    ({'hidden_size': 32}, 'hidden_size is 64 in the checkpoint but 32 here'),
     ({'observe_rates': False}, 'observation_size is 7 in the checkpoint but 4 here'),
     ({'case': 4}, "the policy drives 'translation' but the robot drives 'rotation'"),
     ({'case': 5}, 'it belongs to case 3, not case 5'),

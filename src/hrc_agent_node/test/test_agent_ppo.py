@@ -1,6 +1,5 @@
 """PPO core: GAE against hand-computed values (truncation bootstrapped), reward scaling, update."""
 
-import types
 
 import numpy as np
 import pytest
