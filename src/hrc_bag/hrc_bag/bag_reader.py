@@ -1,0 +1,269 @@
+"""Read hrc bags: single MCAP files or session folders, finished or cut short (pure, no rclpy).
+
+A finished file (footer, summary, indexes) is read through its chunk index. A file whose writer
+was killed (no summary, no footer) is scanned record by record from the start; the scan stops at
+the first incomplete record, so everything up to the last complete chunk is returned and the file
+is reported as incomplete. Decoding uses the ``ros2msg`` schemas stored in the files
+(mcap-ros2-support), so no ROS installation is needed to analyse bags.
+"""
+
+from dataclasses import dataclass, field
+import io
+import pathlib
+import struct
+import typing
+
+from mcap.exceptions import McapError
+from mcap.reader import SeekingReader
+from mcap.records import Channel, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+import yaml
+
+MCAP_MAGIC = b'\x89MCAP0\r\n'
+METADATA_FILE = 'metadata.yaml'
+
+# What a truncated record may raise while being parsed or decompressed.
+_TRUNCATION_ERRORS = (McapError, EOFError, ValueError, struct.error, MemoryError)
+try:  # zstandard raises its own error on a cut compressed frame
+    import zstandard
+    _TRUNCATION_ERRORS += (zstandard.ZstdError,)
+except ImportError:  # pragma: no cover - zstandard is a dependency of the writer
+    pass
+
+
+@dataclass(frozen=True)
+class BagMessage:
+    """One recorded message: raw CDR bytes plus where and when it was recorded."""
+
+    topic: str
+    type_name: str              # e.g. hrc_msgs/msg/TaskState (the schema name)
+    data: bytes                 # CDR serialized message, as published
+    log_time: int               # ns since the epoch, when the recorder received it
+    publish_time: int           # ns since the epoch, the publisher's source timestamp
+    sequence: int
+    channel_metadata: typing.Mapping = field(default_factory=dict, compare=False)
+    schema_text: str = field(default='', compare=False, repr=False)
+
+
+@dataclass
+class FileScan:
+    """What a scan of one file found."""
+
+    path: pathlib.Path
+    complete: bool              # the file has its footer (it was closed properly)
+    messages: list              # BagMessage, in log-time order
+    metadata: dict              # MCAP metadata records: name -> dict (the last one of a name)
+    error: str = ''             # why a scan stopped early (incomplete files)
+
+
+def is_complete(path) -> bool:
+    """Return True when the file ends with an MCAP footer and magic (it was closed)."""
+    path = pathlib.Path(path)
+    try:
+        with open(path, 'rb') as stream:
+            stream.seek(0, io.SEEK_END)
+            if stream.tell() < 2 * len(MCAP_MAGIC) + 29:
+                return False
+            stream.seek(-len(MCAP_MAGIC), io.SEEK_END)
+            return stream.read() == MCAP_MAGIC
+    except OSError:
+        return False
+
+
+class _MessageFactory:
+    """Build BagMessages, converting each schema and channel once per file."""
+
+    def __init__(self):
+        self._schema_texts = {}
+        self._channel_metadata = {}
+
+    def __call__(self, schema, channel, message) -> BagMessage:
+        key = None if schema is None else (schema.id, schema.name)
+        text = self._schema_texts.get(key)
+        if text is None:
+            text = '' if schema is None else bytes(schema.data).decode()
+            self._schema_texts[key] = text
+        metadata = self._channel_metadata.get(channel.id)
+        if metadata is None:
+            metadata = self._channel_metadata[channel.id] = dict(channel.metadata)
+        return BagMessage(
+            topic=channel.topic,
+            type_name=schema.name if schema is not None else '',
+            data=bytes(message.data),
+            log_time=message.log_time,
+            publish_time=message.publish_time,
+            sequence=message.sequence,
+            channel_metadata=metadata,
+            schema_text=text)
+
+
+def _wanted(topic, topics) -> bool:
+    return topics is None or topic in topics
+
+
+def _scan_stream(path, topics) -> FileScan:
+    """Read a file record by record; stop quietly at a truncated record."""
+    schemas, channels, messages, metadata = {}, {}, [], {}
+    make_message = _MessageFactory()
+    complete = False
+    error = ''
+    with open(path, 'rb') as stream:
+        try:
+            for record in StreamReader(stream).records:
+                if isinstance(record, Schema):
+                    schemas[record.id] = record
+                elif isinstance(record, Channel):
+                    channels[record.id] = record
+                elif isinstance(record, Metadata):
+                    metadata[record.name] = dict(record.metadata)
+                elif isinstance(record, Message):
+                    channel = channels.get(record.channel_id)
+                    if channel is None or not _wanted(channel.topic, topics):
+                        continue
+                    messages.append(make_message(schemas.get(channel.schema_id), channel,
+                                                 record))
+            complete = True
+        except _TRUNCATION_ERRORS as exception:
+            error = f'{type(exception).__name__}: {exception}'.rstrip(': ')
+    messages.sort(key=lambda message: message.log_time)
+    return FileScan(pathlib.Path(path), complete, messages, metadata, error)
+
+
+def scan_file(path, topics=None) -> FileScan:
+    """Return every message (optionally of some ``topics``) and metadata record of a file."""
+    path = pathlib.Path(path)
+    topics = None if topics is None else set(topics)
+    if not is_complete(path):
+        return _scan_stream(path, topics)
+    with open(path, 'rb') as stream:
+        reader = SeekingReader(stream)
+        try:
+            summary = reader.get_summary()
+        except _TRUNCATION_ERRORS:
+            summary = None
+        if summary is None:
+            return _scan_stream(path, topics)
+        make_message = _MessageFactory()
+        messages = [make_message(schema, channel, message)
+                    for schema, channel, message in reader.iter_messages(
+                        topics=None if topics is None else sorted(topics),
+                        log_time_order=True)]
+        metadata = {record.name: dict(record.metadata) for record in reader.iter_metadata()}
+    return FileScan(path, True, messages, metadata)
+
+
+def read_metadata(path) -> dict:
+    """Return the MCAP metadata records of a file (name -> dict), complete or not."""
+    return scan_file(path, topics=()).metadata
+
+
+def read_bag_metadata_yaml(folder) -> dict:
+    """Return ``rosbag2_bagfile_information`` of a session folder's metadata.yaml (or {})."""
+    path = pathlib.Path(folder) / METADATA_FILE
+    if not path.is_file():
+        return {}
+    document = yaml.safe_load(path.read_text()) or {}
+    return document.get('rosbag2_bagfile_information', {}) or {}
+
+
+def is_session_folder(path) -> bool:
+    """Return True for a folder that holds a metadata.yaml or MCAP files."""
+    path = pathlib.Path(path)
+    return path.is_dir() and ((path / METADATA_FILE).is_file() or any(path.glob('*.mcap')))
+
+
+def session_files(path) -> list:
+    """Return the MCAP files of a session folder in recording order (or ``[path]``).
+
+    The files listed by metadata.yaml come first, in its order; files it does not list (an
+    episode that was open when the recorder died) follow, sorted by name.
+    """
+    path = pathlib.Path(path)
+    if path.is_file():
+        return [path]
+    if not path.is_dir():
+        raise FileNotFoundError(f'no bag at {path}')
+    listed = [path / pathlib.PurePath(name).name
+              for name in read_bag_metadata_yaml(path).get('relative_file_paths', []) or []]
+    listed = [file for file in listed if file.is_file()]
+    unlisted = sorted(set(path.glob('*.mcap')) - set(listed))
+    return listed + unlisted
+
+
+def iter_messages(path, topics=None) -> typing.Iterator[BagMessage]:
+    """Yield the messages of a file or session folder, file after file, in log-time order."""
+    for file in session_files(path):
+        yield from scan_file(file, topics).messages
+
+
+class MessageDecoder:
+    """Decode BagMessage CDR data into Python objects using the schemas stored in the bag."""
+
+    def __init__(self):
+        from mcap_ros2.decoder import DecoderFactory
+        self._factory = DecoderFactory()
+        self._decoders = {}
+
+    def decode(self, message: BagMessage):
+        """Return the decoded message (attributes named as the .msg fields)."""
+        key = (message.type_name, message.schema_text)
+        decoder = self._decoders.get(key)
+        if decoder is None:
+            # the factory caches decoders by schema id: one id per distinct schema
+            schema = Schema(id=len(self._decoders) + 1, name=message.type_name,
+                            encoding='ros2msg',
+                            data=message.schema_text.encode())
+            decoder = self._factory.decoder_for('cdr', schema)
+            if decoder is None:
+                raise ValueError(f'cannot decode {message.type_name} on {message.topic}')
+            self._decoders[key] = decoder
+        return decoder(message.data)
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    """A recorded topic: its type and the channel metadata (offered QoS, type hash)."""
+
+    topic: str
+    type_name: str
+    channel_metadata: typing.Mapping
+
+
+def file_topics(path) -> dict:
+    """Return {topic: TopicInfo} of one file (from its summary, or a scan if unfinished)."""
+    path = pathlib.Path(path)
+    summary = None
+    if is_complete(path):
+        with open(path, 'rb') as stream:
+            try:
+                summary = SeekingReader(stream).get_summary()
+            except _TRUNCATION_ERRORS:
+                summary = None
+    if summary is not None:
+        schemas, channels = summary.schemas, summary.channels
+    else:
+        schemas, channels = {}, {}
+        with open(path, 'rb') as stream:
+            try:
+                for record in StreamReader(stream).records:
+                    if isinstance(record, Schema):
+                        schemas[record.id] = record
+                    elif isinstance(record, Channel):
+                        channels[record.id] = record
+            except _TRUNCATION_ERRORS:
+                pass
+    topics = {}
+    for channel in channels.values():
+        schema = schemas.get(channel.schema_id)
+        topics.setdefault(channel.topic, TopicInfo(
+            channel.topic, schema.name if schema is not None else '', dict(channel.metadata)))
+    return topics
+
+
+def bag_topics(path) -> dict:
+    """Return {topic: TopicInfo} over every file of a file or session folder."""
+    topics = {}
+    for file in session_files(path):
+        for topic, info in file_topics(file).items():
+            topics.setdefault(topic, info)
+    return topics

@@ -1,0 +1,195 @@
+"""The recorder node: one rosbag2-compatible MCAP file per episode of an hrc session.
+
+Subscribes (raw CDR, no deserialization except the three topics that mark episode boundaries)
+to the configured topics and hands every message to :class:`hrc_bag.recording.EpisodeRecorder`,
+which owns the files. The /hrc topics are subscribed at start with their contract QoS (so the
+first state of a session is not missed); other topics once a publisher reveals their type, with
+a QoS adapted to the publishers' offers (as rosbag2 does). Each channel carries the publishers'
+``offered_qos_profiles`` and ``topic_type_hash``.
+
+Exit codes: 0 after Ctrl-C/SIGTERM (files closed), 2 for bad parameters, 3 when a bag cannot be
+written (disk full, permissions): the session must stop, nothing is dropped silently.
+"""
+
+import importlib
+import sys
+import time
+
+from hrc_common import qos as hrc_qos
+from hrc_common import topics as hrc_topics
+from hrc_common.nodes import run_node
+from hrc_common.params import as_dict, declare_parameters, ParameterError
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+import yaml
+
+from hrc_bag.qos_yaml import profile_to_dict
+from hrc_bag.recording import (boundary_event, BOUNDARY_TYPES, EpisodeRecorder, RawMessage,
+                               RecorderParams, RecordingError, TopicDescription)
+
+EXECUTABLE = 'recorder_node'
+SUMMARY = ('Record the hrc topics into one rosbag2-compatible MCAP file per episode under '
+           '<output_dir>/<session_id>/, with a metadata.yaml that ros2 bag play and rosbags '
+           'read. Exit code 3 when the bags cannot be written.')
+EXIT_RECORDING_FAILED = 3
+
+# Types of the hrc graph's topics (by default name), so they are subscribed before anyone
+# publishes; and the QoS contract their publishers offer.
+KNOWN_TOPICS = {
+    hrc_topics.STATE: ('hrc_msgs/msg/TaskState', hrc_qos.STATE_QOS),
+    hrc_topics.ROBOT_CMD_WRENCH: ('geometry_msgs/msg/WrenchStamped', hrc_qos.COMMAND_QOS),
+    hrc_topics.HUMAN_CMD_WRENCH: ('geometry_msgs/msg/WrenchStamped', hrc_qos.COMMAND_QOS),
+    hrc_topics.HUMAN_ACTION: ('hrc_msgs/msg/HumanAction', hrc_qos.HUMAN_ACTION_QOS),
+    hrc_topics.SESSION: ('hrc_msgs/msg/SessionStatus', hrc_qos.SESSION_QOS),
+    hrc_topics.EPISODE: ('hrc_msgs/msg/EpisodeSummary', hrc_qos.EPISODE_QOS),
+    hrc_topics.AGENT_STEP: ('hrc_msgs/msg/AgentStep', hrc_qos.AGENT_STEP_QOS),
+}
+
+
+def message_class(type_name: str):
+    """Import the Python class of ``pkg/msg/Type``."""
+    package, kind, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
+
+
+def recording_qos(reliable: bool, transient_local: bool, depth: int) -> QoSProfile:
+    """Return the QoS of a recording subscription (no deadline: it would only add events)."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if transient_local
+                    else DurabilityPolicy.VOLATILE))
+
+
+class RecorderNode(Node):
+
+    def __init__(self):
+        super().__init__('recorder')
+        self.params = declare_parameters(self, RecorderParams)
+        config, config_text = self._load_session_config(self.params.session_config)
+        self._subscriptions_by_topic = {}
+        self._waiting = []                  # topics whose type is not known yet
+        self.core = EpisodeRecorder(
+            self.params, self._describe_topic, session_config=config,
+            session_config_text=config_text, logger=self.get_logger(),
+            recorder_parameters=as_dict(self.params))
+        for topic in self.params.topics:
+            known = KNOWN_TOPICS.get(topic)
+            if known is None:
+                self._waiting.append(topic)
+                continue
+            type_name, contract = known
+            self._subscribe(topic, type_name, recording_qos(
+                contract.reliability == ReliabilityPolicy.RELIABLE,
+                contract.durability == DurabilityPolicy.TRANSIENT_LOCAL,
+                self.params.subscription_depth))
+        if self._waiting:
+            self.get_logger().info(f'waiting for publishers to learn the types of '
+                                   f'{self._waiting}')
+            self._discovery_timer = self.create_timer(self.params.discovery_period,
+                                                      self._discover)
+        self._tick_timer = self.create_timer(min(0.1, self.params.flush_period / 2),
+                                             self.core.tick)
+
+    @staticmethod
+    def _load_session_config(path: str) -> tuple:
+        if not path:
+            return {}, ''
+        try:
+            with open(path) as stream:
+                text = stream.read()
+            config = yaml.safe_load(text) or {}
+        except (OSError, yaml.YAMLError) as error:
+            raise ParameterError(f'session_config: cannot read {path}: {error}')
+        if not isinstance(config, dict):
+            raise ParameterError(f'session_config: {path} is not a YAML mapping')
+        return config, text
+
+    def _subscribe(self, topic: str, type_name: str, qos: QoSProfile) -> None:
+        message_type = message_class(type_name)
+        # only the messages that mark episode boundaries are deserialized
+        marks_boundaries = type_name in BOUNDARY_TYPES
+        resolved = self.resolve_topic_name(topic)
+
+        def on_message(data, info):
+            log_time = info.get('received_timestamp') or time.time_ns()
+            message = RawMessage(resolved, type_name, data, log_time,
+                                 info.get('source_timestamp') or log_time,
+                                 info.get('publication_sequence_number') or 0)
+            event = (boundary_event(type_name, deserialize_message(data, message_type))
+                     if marks_boundaries else None)
+            self.core.record(message, event)
+
+        self._subscriptions_by_topic[topic] = self.create_subscription(
+            message_type, topic, on_message, qos, raw=True)
+        self.get_logger().info(
+            f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
+            f'{qos.durability.name.lower()})')
+
+    def _discover(self) -> None:
+        """Subscribe to the waiting topics whose publishers have shown up."""
+        types = dict(self.get_topic_names_and_types())
+        for topic in list(self._waiting):
+            resolved = self.resolve_topic_name(topic)
+            names = types.get(resolved)
+            if not names:
+                continue
+            if len(names) > 1:
+                self.get_logger().warning(f'{resolved} has several types {names}: recording '
+                                          f'{names[0]}')
+            publishers = self.get_publishers_info_by_topic(resolved)
+            if not publishers:
+                continue
+            # as rosbag2: reliable / transient_local only if every publisher offers it
+            reliable = all(info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+                           for info in publishers)
+            transient_local = all(
+                info.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL
+                for info in publishers)
+            try:
+                self._subscribe(topic, names[0], recording_qos(
+                    reliable, transient_local, self.params.subscription_depth))
+            except (ImportError, AttributeError, ValueError) as error:
+                self.get_logger().error(f'cannot record {resolved}: type {names[0]} is not '
+                                        f'installed ({error})')
+            self._waiting.remove(topic)
+        if not self._waiting:
+            self._discovery_timer.cancel()
+
+    def _describe_topic(self, topic: str, type_name: str) -> TopicDescription:
+        """Return the offered QoS profiles and type hash of the topic's publishers now.
+
+        None when the graph cannot be asked (at shutdown the context is gone): the recorder
+        then uses what it learnt earlier about the topic.
+        """
+        try:
+            publishers = self.get_publishers_info_by_topic(topic)
+        except Exception as error:  # RCLError/InvalidHandle once the context is shut down
+            self.get_logger().debug(f'no graph information on {topic}: {error}')
+            return None
+        profiles = tuple(profile_to_dict(info.qos_profile) for info in publishers)
+        hashes = [str(info.topic_type_hash) for info in publishers
+                  if info.topic_type == type_name]
+        return TopicDescription(type_name, profiles, hashes[0] if hashes else '')
+
+    def close(self) -> None:
+        """Close the open episode file (called on shutdown)."""
+        try:
+            self.core.close()
+        except RecordingError as error:
+            self.get_logger().error(f'recording stopped: {error}')
+
+
+def main(args=None):
+    """Run the recorder node; exit 3 when bags cannot be written."""
+    try:
+        return run_node(RecorderNode, EXECUTABLE, SUMMARY, RecorderParams, args)
+    except RecordingError as error:
+        print(f'[ERROR] [recorder] recording stopped, the session must stop: {error}',
+              file=sys.stderr, flush=True)
+        return EXIT_RECORDING_FAILED
+
+
+if __name__ == '__main__':
+    sys.exit(main())

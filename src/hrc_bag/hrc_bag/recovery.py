@@ -1,0 +1,82 @@
+"""Finish an MCAP file whose writer was killed (pure, no rclpy).
+
+A killed recorder leaves its open episode file without summary, indexes and footer; readers
+that need the index (rosbags, ``ros2 bag play``) refuse it. :func:`recover_file` scans it up to
+its last complete record and writes it again, finished, with the same schemas, channels
+(metadata included), messages and metadata records; the original is replaced only once the new
+file is complete, so a recovery that is itself interrupted loses nothing.
+"""
+
+import os
+import pathlib
+
+from mcap.records import Channel, Message, Metadata, Schema
+from mcap.stream_reader import StreamReader
+import yaml
+
+from hrc_bag.bag_reader import _TRUNCATION_ERRORS
+from hrc_bag.recording import (EpisodeFile, FileInfo, RawMessage, RecordingError,
+                               ROSBAG2_RECORD, TopicDescription, describe_error)
+
+
+def _scan_records(path):
+    """Return (schemas, channels, messages, metadata) read before the file's first cut."""
+    schemas, channels, messages, metadata = {}, {}, [], {}
+    with open(path, 'rb') as stream:
+        try:
+            for record in StreamReader(stream).records:
+                if isinstance(record, Schema):
+                    schemas[record.id] = record
+                elif isinstance(record, Channel):
+                    channels[record.id] = record
+                elif isinstance(record, Metadata):
+                    metadata[record.name] = dict(record.metadata)
+                elif isinstance(record, Message):
+                    messages.append(record)
+        except _TRUNCATION_ERRORS:
+            pass
+    return schemas, channels, messages, metadata
+
+
+def _description(channel, schemas) -> TopicDescription:
+    schema = schemas.get(channel.schema_id)
+    profiles = yaml.safe_load(channel.metadata.get('offered_qos_profiles', '') or '') or []
+    return TopicDescription(
+        type_name=schema.name if schema is not None else '',
+        offered_qos_profiles=tuple(profiles),
+        type_description_hash=channel.metadata.get('topic_type_hash', ''),
+        message_definition=bytes(schema.data).decode() if schema is not None else '')
+
+
+def recover_file(path, compression: str = 'zstd') -> FileInfo:
+    """Rewrite an unfinished MCAP file as a finished one in place; return its info."""
+    path = pathlib.Path(path)
+    try:
+        schemas, channels, messages, metadata = _scan_records(path)
+    except OSError as error:
+        raise RecordingError(f'cannot read {path}: {describe_error(error)}') from error
+    metadata.pop(ROSBAG2_RECORD, None)
+    temporary = path.with_name(f'.{path.name}.recovering')
+    if temporary.exists():
+        temporary.unlink()
+    output = EpisodeFile(temporary, compression, metadata=metadata)
+    descriptions = {}
+    for message in sorted(messages, key=lambda message: message.log_time):
+        channel = channels.get(message.channel_id)
+        if channel is None:
+            continue
+        description = descriptions.get(channel.id)
+        if description is None:
+            description = descriptions[channel.id] = _description(channel, schemas)
+        if not description.type_name:
+            continue
+        output.write(RawMessage(channel.topic, description.type_name, bytes(message.data),
+                                message.log_time, message.publish_time, message.sequence),
+                     description)
+    info = output.close()
+    try:
+        os.replace(temporary, path)
+    except OSError as error:
+        raise RecordingError(f'cannot replace {path}: {describe_error(error)}') from error
+    info.name = path.name
+    return info

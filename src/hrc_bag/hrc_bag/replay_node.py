@@ -1,0 +1,147 @@
+"""The replay node: republish a recorded episode or session with its original timing.
+
+Publishes the recorded CDR bytes unchanged (no deserialization) with the QoS the original
+publishers offered, at the recorded relative times scaled by ``rate``; optionally loops,
+selects topics, skips ``start_offset`` seconds, and publishes ``/clock`` with the recording
+time. None of the original publishers need to run. Exits 0 at the end (unless ``loop``).
+"""
+
+import sys
+import threading
+import time
+
+from hrc_common.nodes import run_node
+from hrc_common.params import declare_parameters
+from hrc_common.topics import CLOCK
+from rclpy.duration import Duration
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+
+from hrc_bag import bag_reader
+from hrc_bag.recorder_node import message_class
+from hrc_bag.replay import bag_start, playlist, publisher_qos, ReplayParams, Timeline
+
+EXECUTABLE = 'replay_node'
+SUMMARY = ('Replay an episode file (.mcap) or a session folder recorded by recorder_node: the '
+           'recorded messages are republished unchanged with their original relative timing '
+           '(rate, loop, topic selection, start offset, /clock).')
+
+# As rclcpp::ClockQoS: the newest time only, best effort.
+CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                       reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def qos_profile(recorded) -> QoSProfile:
+    """Return the rclpy QoSProfile of a :class:`hrc_bag.replay.PublisherQos`."""
+    profile = QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=recorded.depth,
+        reliability=(ReliabilityPolicy.RELIABLE if recorded.reliable
+                     else ReliabilityPolicy.BEST_EFFORT),
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if recorded.transient_local
+                    else DurabilityPolicy.VOLATILE))
+    if recorded.deadline_ns:
+        profile.deadline = Duration(nanoseconds=recorded.deadline_ns)
+    if recorded.lifespan_ns:
+        profile.lifespan = Duration(nanoseconds=recorded.lifespan_ns)
+    if recorded.liveliness_lease_ns:
+        profile.liveliness_lease_duration = Duration(nanoseconds=recorded.liveliness_lease_ns)
+    return profile
+
+
+class ReplayNode(Node):
+
+    def __init__(self):
+        super().__init__('replay')
+        self.params = declare_parameters(self, ReplayParams)
+        self._publishers_by_topic = {}
+        self._skip = set()
+        topics = bag_reader.bag_topics(self.params.path)
+        for topic, info in sorted(topics.items()):
+            if not self.params.selected(topic):
+                continue
+            if self.params.clock and topic == CLOCK:
+                self._skip.add(topic)
+                self.get_logger().info('the recorded /clock is not replayed: /clock is '
+                                       'published from the recording time')
+                continue
+            try:
+                message_type = message_class(info.type_name)
+            except (ImportError, AttributeError, ValueError) as error:
+                self.get_logger().error(f'{topic} not replayed: type {info.type_name!r} is '
+                                        f'not installed ({error})')
+                self._skip.add(topic)
+                continue
+            qos = qos_profile(publisher_qos(info.channel_metadata))
+            self._publishers_by_topic[topic] = self.create_publisher(message_type, topic, qos)
+        missing = [topic for topic in self.params.topics
+                   if topic != '*' and topic not in topics]
+        if missing:
+            self.get_logger().warning(f'not in the recording: {missing}')
+        self._start = bag_start(self.params.path)
+        self._timeline = None
+        self._playback_started = None
+        self._stop = threading.Event()
+        self._done = threading.Event()
+        self.published = 0
+        if self.params.clock:
+            self._clock_publisher = self.create_publisher(Clock, CLOCK, CLOCK_QOS)
+            self.create_timer(1.0 / self.params.clock_rate, self._publish_clock)
+        self.create_timer(0.05, self._check_done)
+        self.get_logger().info(
+            f'replaying {sorted(self._publishers_by_topic)} from {self.params.path} at rate '
+            f'{self.params.rate}' + (', looping' if self.params.loop else ''))
+        self._thread = threading.Thread(target=self._play, name='playback', daemon=True)
+        self._thread.start()
+
+    def _play(self) -> None:
+        if self._stop.wait(self.params.start_delay):
+            return
+        if self._start is None:
+            self.get_logger().warning(f'{self.params.path} holds no messages')
+            self._done.set()
+            return
+        while not self._stop.is_set():
+            self._timeline = Timeline(self._start, self.params.rate, self.params.start_offset)
+            self._playback_started = time.monotonic()
+            for message in playlist(self.params.path, self.params, self._skip):
+                publisher = self._publishers_by_topic.get(message.topic)
+                if publisher is None:
+                    continue
+                wait = self._timeline.due(message.log_time) - (time.monotonic()
+                                                               - self._playback_started)
+                if wait > 0 and self._stop.wait(wait):
+                    return
+                publisher.publish(message.data)
+                self.published += 1
+            if not self.params.loop:
+                break
+        self._done.set()
+
+    def _publish_clock(self) -> None:
+        if self._timeline is None or self._done.is_set():
+            return
+        elapsed = time.monotonic() - self._playback_started
+        nanoseconds = self._timeline.recording_time(elapsed)
+        message = Clock()
+        message.clock.sec, message.clock.nanosec = divmod(nanoseconds, 1_000_000_000)
+        self._clock_publisher.publish(message)
+
+    def _check_done(self) -> None:
+        if self._done.is_set():
+            self.get_logger().info(f'replay finished: {self.published} messages published')
+            self.context.try_shutdown()
+
+    def close(self) -> None:
+        """Stop the playback thread."""
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+
+
+def main(args=None):
+    """Run the replay node."""
+    return run_node(ReplayNode, EXECUTABLE, SUMMARY, ReplayParams, args)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

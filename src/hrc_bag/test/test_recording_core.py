@@ -1,0 +1,255 @@
+"""The episode recorder core without ROS: boundaries, file format, metadata.yaml, recovery."""
+
+import dataclasses
+import pathlib
+import shutil
+
+from hrc_common.params import load_yaml, validate
+from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
+from mcap.reader import make_reader
+import pytest
+from rclpy.serialization import deserialize_message, serialize_message
+from rosbags.rosbag2 import Reader
+import yaml
+
+from hrc_bag import bag_reader
+from hrc_bag.recording import (boundary_event, EpisodeRecorder, RawMessage, RecorderParams,
+                               RecordingError, SESSION_RECORD, TopicDescription)
+from hrc_bag.synthetic import record_in_process, strategy_plan, type_name_of
+
+PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
+PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
+           'durability': 'volatile', 'deadline': {'sec': 1, 'nsec': 0},
+           'lifespan': {'sec': 9223372036, 'nsec': 854775807}, 'liveliness': 'automatic',
+           'liveliness_lease_duration': {'sec': 9223372036, 'nsec': 854775807},
+           'avoid_ros_namespace_conventions': False}
+
+
+def test_params_yaml_mirrors_the_dataclass_defaults():
+    assert load_yaml(RecorderParams, PARAMS_DIR / 'recorder.yaml', 'recorder') == \
+        RecorderParams()
+    document = yaml.safe_load((PARAMS_DIR / 'recorder.yaml').read_text())
+    assert set(document['recorder']['ros__parameters']) == {
+        field.name for field in dataclasses.fields(RecorderParams)}
+
+
+@pytest.mark.parametrize('changes, reason', [
+    ({'session_id': '../escape'}, 'session_id'),
+    ({'compression': 'gzip'}, 'compression'),
+    ({'flush_period': 0.0}, 'flush_period'),
+    ({'topics': []}, 'topics'),
+    ({'topics': ['/a', '/a']}, 'topics'),
+])
+def test_bad_parameters_are_rejected_with_a_reason(changes, reason):
+    reasons = validate(dataclasses.replace(RecorderParams(), **changes))
+    assert reasons and all(reason in text for text in reasons), reasons
+
+
+class FakeClock:
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+class Feeder:
+    """Feed messages into a recorder as the node would, with increasing log times."""
+
+    def __init__(self, recorder):
+        self.recorder = recorder
+        self.log_time = 1_000_000_000
+
+    def send(self, topic, message):
+        self.log_time += 1_000_000
+        type_name = type_name_of(message)
+        self.recorder.record(RawMessage(topic, type_name, serialize_message(message),
+                                        self.log_time, self.log_time - 500),
+                             boundary_event(type_name, message))
+
+
+def make_recorder(tmp_path, clock, **changes):
+    params = dataclasses.replace(RecorderParams(output_dir=str(tmp_path), session_id='s',
+                                                close_grace=0.5, summary_timeout=3.0),
+                                 **changes)
+    return EpisodeRecorder(params, lambda topic, type_name: TopicDescription(
+        type_name, (PROFILE,), 'RIHS01_' + '0' * 64), clock=clock)
+
+
+def file_topics(path):
+    return [message.topic for message in bag_reader.scan_file(path).messages]
+
+
+def test_boundaries_grace_timeout_and_end_file(tmp_path):
+    clock = FakeClock()
+    recorder = make_recorder(tmp_path, clock)
+    feed = Feeder(recorder)
+    feed.send('/hrc/session', SessionStatus(session_id='s', episode=0))      # before episode 0
+    for step in range(3):
+        feed.send('/hrc/state', TaskState(episode=0, step=step, truncated=step == 2))
+    feed.send('/hrc/episode', EpisodeSummary(episode=0))
+    clock.now += 0.4                                                         # within the grace
+    feed.send('/hrc/agent/step', SessionStatus())                            # late, episode 0
+    clock.now += 0.2
+    recorder.tick()                                                          # grace over
+    assert [info.name for info in recorder.closed_files] == ['s_ep0000.mcap']
+    feed.send('/hrc/session', SessionStatus(session_id='s', episode=1, phase=1))  # between
+    # episode 1 has no summary: closes summary_timeout after its final state
+    feed.send('/hrc/state', TaskState(episode=1, step=0))
+    feed.send('/hrc/state', TaskState(episode=1, step=1, terminated=True))
+    clock.now += 2.9
+    recorder.tick()
+    assert len(recorder.closed_files) == 1
+    clock.now += 0.2
+    recorder.tick()
+    assert len(recorder.closed_files) == 2
+    # episode 2 is interrupted by a state of episode 3 (no final state, no summary)
+    feed.send('/hrc/state', TaskState(episode=2, step=0))
+    feed.send('/hrc/state', TaskState(episode=3, step=0))
+    feed.send('/hrc/session', SessionStatus(session_id='s', phase=SessionStatus.PHASE_DONE))
+    clock.now += 0.6
+    recorder.tick()                                      # the session finished: file closes
+    feed.send('/hrc/session', SessionStatus(session_id='s', phase=SessionStatus.PHASE_DONE))
+    recorder.close()
+
+    folder = tmp_path / 's'
+    assert file_topics(folder / 's_ep0000.mcap') == [
+        '/hrc/session', '/hrc/state', '/hrc/state', '/hrc/state', '/hrc/episode',
+        '/hrc/agent/step']
+    assert file_topics(folder / 's_ep0001.mcap') == ['/hrc/session', '/hrc/state',
+                                                     '/hrc/state']
+    assert file_topics(folder / 's_ep0002.mcap') == ['/hrc/state']
+    assert file_topics(folder / 's_ep0003.mcap') == ['/hrc/state', '/hrc/session']
+    assert file_topics(folder / 's_end.mcap') == ['/hrc/session']
+    listed = bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths']
+    assert listed == ['s_ep0000.mcap', 's_ep0001.mcap', 's_ep0002.mcap', 's_ep0003.mcap',
+                      's_end.mcap']
+
+
+@pytest.fixture(scope='module')
+def recorded(tmp_path_factory):
+    """A synthetic session of 4 episodes recorded in-process (no DDS)."""
+    folder = tmp_path_factory.mktemp('bags')
+    plan = strategy_plan('responsibility_guided', 1, 2, 1)
+    session = record_in_process(folder, 'core', 2, 'responsibility_guided', 3, plan, steps=6)
+    return folder / 'core', session
+
+
+def test_rosbags_reads_the_session_folder_with_exact_counts_and_values(recorded,
+                                                                       rosbags_typestore):
+    folder, session = recorded
+    assert bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths'] == [
+        'core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap', 'core_ep0003.mcap',
+        'core_end.mcap']
+    with Reader(folder) as reader:
+        assert reader.ros_distro == 'jazzy' and reader.duration > 0
+        counts = {connection.topic: connection.msgcount for connection in reader.connections}
+        assert counts == {topic: len(messages)
+                          for topic, messages in session.published.by_topic.items()}
+        assert reader.message_count == session.published.count()
+        received = {}
+        for connection, _, raw in reader.messages():
+            received.setdefault(connection.topic, []).append(raw)
+            if connection.topic == '/hrc/state':
+                decoded = rosbags_typestore.deserialize_cdr(raw, connection.msgtype)
+                assert decoded.header.frame_id == 'world'
+        for topic, messages in session.published.by_topic.items():
+            # (serializing again is not byte-stable: rclpy leaves CDR padding uninitialized)
+            assert [deserialize_message(raw, type(messages[0])) for raw in received[topic]] \
+                == messages
+        qos = {connection.topic: connection.ext.offered_qos_profiles[0]
+               for connection in reader.connections}
+        assert qos['/hrc/session'].durability.name == 'TRANSIENT_LOCAL'
+        assert qos['/hrc/robot/cmd_wrench'].deadline.sec == 1
+
+
+def test_each_episode_file_plays_alone_and_carries_the_session_config(recorded):
+    folder, session = recorded
+    files = sorted(folder.glob('*_ep*.mcap'))
+    assert len(files) == 4
+    for index, path in enumerate(files):
+        with Reader(path) as reader:
+            assert reader.message_count > 0
+        metadata = bag_reader.read_metadata(path)
+        record = metadata[SESSION_RECORD]
+        assert record['episode'] == str(index)
+        assert record['case_id'] == '2' and record['strategy'] == 'responsibility_guided'
+        assert yaml.safe_load(record['session_config'])['seeds'] == {'session': 3}
+        rosbag2 = yaml.safe_load(metadata['rosbag2']['serialized_metadata'])
+        assert rosbag2['version'] == 9 and rosbag2['relative_file_paths'] == [path.name]
+
+
+def test_mcap_layout_is_the_rosbag2_profile(recorded):
+    folder, session = recorded
+    with open(folder / 'core_ep0001.mcap', 'rb') as stream:
+        reader = make_reader(stream)
+        assert reader.get_header().profile == 'ros2'
+        summary = reader.get_summary()
+        assert summary.statistics.message_count == sum(
+            summary.statistics.channel_message_counts.values()) > 0
+        assert summary.chunk_indexes and all(index.message_index_offsets
+                                             for index in summary.chunk_indexes)
+        assert {schema.encoding for schema in summary.schemas.values()} == {'ros2msg'}
+        assert {channel.message_encoding for channel in summary.channels.values()} == {'cdr'}
+        for channel in summary.channels.values():
+            assert set(channel.metadata) == {'offered_qos_profiles', 'topic_type_hash'}
+            assert yaml.safe_load(channel.metadata['offered_qos_profiles'])[0]['reliability'] \
+                == 'reliable'
+        assert {chunk.compression for chunk in summary.chunk_indexes} == {'zstd'}
+
+
+def test_a_file_cut_anywhere_reads_up_to_its_last_complete_chunk(recorded, tmp_path):
+    folder, session = recorded
+    source = folder / 'core_ep0002.mcap'
+    complete = bag_reader.scan_file(source)
+    data = source.read_bytes()
+    previous = 0
+    for cut in range(0, len(data), max(1, len(data) // 40)):
+        path = tmp_path / 'cut.mcap'
+        path.write_bytes(data[:cut])
+        scan = bag_reader.scan_file(path)
+        assert not scan.complete
+        assert scan.messages == complete.messages[:len(scan.messages)]
+        assert len(scan.messages) >= previous
+        previous = len(scan.messages)
+
+
+def test_a_later_recorder_finishes_a_left_open_file_and_continues(recorded, tmp_path):
+    folder, session = recorded
+    copy = tmp_path / 'core'
+    shutil.copytree(folder, copy)
+    # as if the recorder had been killed during episode 3: drop it from metadata.yaml, cut it
+    document = yaml.safe_load((copy / 'metadata.yaml').read_text())
+    information = document['rosbag2_bagfile_information']
+    information['relative_file_paths'] = information['relative_file_paths'][:3]
+    information['files'] = information['files'][:3]
+    (copy / 'metadata.yaml').write_text(yaml.safe_dump(document))
+    (copy / 'core_end.mcap').unlink()
+    path = copy / 'core_ep0003.mcap'
+    expected = bag_reader.scan_file(path).messages
+    data = path.read_bytes()
+    path.write_bytes(data[:len(data) - 700])         # cuts into the summary section
+    assert not bag_reader.is_complete(path)
+    kept = bag_reader.scan_file(path).messages
+    assert 0 < len(kept) <= len(expected)
+
+    recorder = make_recorder(tmp_path, FakeClock(), session_id='core')
+    assert recorder.index.listed('core_ep0003.mcap')
+    assert bag_reader.is_complete(path)
+    assert bag_reader.scan_file(path).messages == kept
+    feed = Feeder(recorder)
+    feed.send('/hrc/state', TaskState(episode=4, step=0))
+    recorder.close()
+    assert bag_reader.read_bag_metadata_yaml(copy)['relative_file_paths'] == [
+        'core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap', 'core_ep0003.mcap',
+        'core_ep0004.mcap']
+    with Reader(copy) as reader:
+        assert sum(1 for _ in reader.messages()) == reader.message_count == (
+            sum(len(bag_reader.scan_file(file).messages) for file in copy.glob('*.mcap')))
+
+
+def test_an_unwritable_output_dir_is_a_recording_error(tmp_path):
+    blocker = tmp_path / 'file'
+    blocker.write_text('not a folder')
+    with pytest.raises(RecordingError, match='cannot create the session folder'):
+        make_recorder(blocker, FakeClock())
