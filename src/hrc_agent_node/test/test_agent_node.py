@@ -1,0 +1,230 @@
+"""The agent node over DDS, in its own process, driven by a small fake sim in the test process.
+
+The fake sim steps the real physics core (2 s episodes = 10 steps) in lockstep on the robot's
+command, serves /hrc/sim/reset, and plays a human that publishes its action for each state
+(sometimes before, sometimes after the state, so the agent's wait-for-stamp is exercised).
+"""
+
+import pathlib
+import time
+
+import pytest
+import yaml
+
+from geometry_msgs.msg import WrenchStamped
+from hrc_agent_node.config import repository_params_dir
+from hrc_common import qos, topics
+from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
+from hrc_msgs.srv import ResetEpisode
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+PHYSICS = PhysicsParams(episode_duration=2.0)   # 10 control steps per episode
+STEPS = PHYSICS.steps_per_episode
+
+
+def human_command(episode, step):
+    """Return the fake human's command for a step (distinct values, to check what is seen)."""
+    return round(0.1 * ((episode * 3 + step) % 9) - 0.4, 3)
+
+
+class FakeSim:
+    """Lockstep on the robot's command; publishes the human's action for every state."""
+
+    def __init__(self, context, human_answers=True):
+        import rclpy
+
+        self.node = rclpy.create_node('fake_sim', context=context)
+        self.sim = SliderPendulumBall(PHYSICS)
+        self.human_answers = human_answers
+        self.state_pub = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
+        self.human_pub = self.node.create_publisher(HumanAction, topics.HUMAN_ACTION,
+                                                    qos.HUMAN_ACTION_QOS)
+        self.node.create_service(ResetEpisode, topics.RESET_SERVICE, self.on_reset)
+        self.node.create_subscription(WrenchStamped, topics.ROBOT_CMD_WRENCH, self.on_wrench,
+                                      qos.COMMAND_QOS)
+        self.sessions, self.episodes, self.steps = [], [], []
+        self.node.create_subscription(SessionStatus, topics.SESSION, self.sessions.append,
+                                      qos.SESSION_QOS)
+        self.node.create_subscription(EpisodeSummary, topics.EPISODE, self.episodes.append,
+                                      qos.EPISODE_QOS)
+        self.node.create_subscription(AgentStep, topics.AGENT_STEP, self.steps.append,
+                                      qos.AGENT_STEP_QOS)
+        self.sim_time_ns = 0
+        self.episode = None
+        self.current = None          # the TaskState waiting for its command
+        self.published = []          # every TaskState published
+        self.answers = []            # (episode, step) of every command matched to a state
+        self.stale = []              # commands whose stamp matched no waiting state
+        self.off_axis = []
+        self.resets = []
+        self.late_human = []         # human actions to publish after the state
+
+    def on_reset(self, request, response):
+        self.resets.append((request.episode, request.seed))
+        self.episode = request.episode
+        self.publish(self.sim.reset(request.seed))
+        response.success = True
+        response.message = 'reset'
+        response.state = self.current
+        return response
+
+    def on_wrench(self, msg):
+        if self.current is None or msg.header.stamp != self.current.header.stamp:
+            self.stale.append(msg)
+            return
+        wrench = msg.wrench
+        if (wrench.force.x, wrench.force.y, wrench.torque.x, wrench.torque.y,
+                wrench.torque.z) != (0.0,) * 5:
+            self.off_axis.append(msg)
+        self.answers.append((self.current.episode, self.current.step))
+        self.current = None
+        self.publish(self.sim.step(wrench.force.z, 0.0))
+
+    def publish(self, physics_state):
+        msg = TaskState()
+        self.sim_time_ns += int(PHYSICS.control_period * 1e9)
+        msg.header.stamp.sec = self.sim_time_ns // 10**9
+        msg.header.stamp.nanosec = self.sim_time_ns % 10**9
+        msg.header.frame_id = 'world'
+        msg.episode = self.episode
+        for name in ('step', 'slider_position', 'slider_velocity', 'pendulum_angle',
+                     'pendulum_angular_velocity', 'ball_position', 'ball_velocity',
+                     'terminated', 'truncated'):
+            setattr(msg, name, getattr(physics_state, name))
+        final = physics_state.truncated or physics_state.terminated
+        human = HumanAction()
+        human.header.stamp = msg.header.stamp
+        human.episode, human.step = msg.episode, msg.step
+        human.command = human_command(msg.episode, msg.step)
+        human.dof = HumanAction.DOF_ROTATION
+        human.source = HumanAction.SOURCE_SIMULATED
+        human.engaged = True
+        early = msg.step % 2 == 0
+        if self.human_answers and not final and early:
+            self.human_pub.publish(human)
+        self.current = None if final else msg
+        self.published.append(msg)
+        self.state_pub.publish(msg)
+        if self.human_answers and not final and not early:
+            self.late_human.append((time.monotonic() + 0.05, human))
+
+    def spin(self, executor):
+        executor.spin_once(timeout_sec=0.01)
+        now = time.monotonic()
+        while self.late_human and self.late_human[0][0] <= now:
+            self.human_pub.publish(self.late_human.pop(0)[1])
+
+
+def run_until_exit(fake, process, rclpy_context, timeout):
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(fake.node)
+    deadline = time.monotonic() + timeout
+    while process.process.poll() is None and time.monotonic() < deadline:
+        fake.spin(executor)
+    for _ in range(50):   # collect what is still in flight
+        fake.spin(executor)
+    executor.shutdown()
+    return process.process.poll()
+
+
+@pytest.fixture
+def easy_tree(tmp_path):
+    """Write the repository's tree with tolerances every policy meets (steps advance fast)."""
+    with open(pathlib.Path(repository_params_dir()) / 'task_tree.yaml') as stream:
+        document = yaml.safe_load(stream)
+    for subtask in document['subtasks']:
+        subtask['tolerance'] = 100.0
+    path = tmp_path / 'easy_tree.yaml'
+    path.write_text(yaml.safe_dump(document))
+    return path
+
+
+def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_context,
+                                                            easy_tree, tmp_path):
+    fake = FakeSim(rclpy_context)
+    agent = start_node('hrc_agent_node', 'agent_node', parameters={
+        'case': 1, 'seed': 7, 'session_id': 'dds_test', 'task_tree_file': str(easy_tree),
+        'convergence_window': 2, 'max_training_episodes': 10, 'evaluation_episodes': 1,
+        'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': str(tmp_path / 'ckpt'),
+        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})
+    code = run_until_exit(fake, agent, rclpy_context, timeout=90)
+    fake.node.destroy_node()
+    assert code == 0, agent.output
+
+    # 4 training episodes (2 per training step, window 2) and 1 evaluation episode.
+    assert [episode for episode, _ in fake.resets] == [0, 1, 2, 3, 4]
+    assert len({seed for _, seed in fake.resets}) == 5
+    expected = [(episode, step) for episode in range(5) for step in range(STEPS)]
+    assert fake.answers == expected, 'every non-final state answered exactly once, in order'
+    assert fake.stale == [] and fake.off_axis == []
+
+    summaries = fake.episodes
+    assert [(s.episode, s.training_step, s.human_involved, s.evaluation) for s in summaries] == \
+        [(0, 0, False, False), (1, 0, False, False), (2, 1, True, False), (3, 1, True, False),
+         (4, 1, True, True)]
+    assert all(s.steps == STEPS and s.truncated and s.session_id == 'dds_test'
+               for s in summaries)
+    assert summaries[1].converged and summaries[3].converged
+    assert summaries[0].human_effort == 0.0 and summaries[2].human_effort > 0.0
+
+    # One AgentStep per step: the observed human action is 0 alone, the human's when joined.
+    assert [(m.episode, m.step) for m in fake.steps] == expected
+    for message in fake.steps:
+        seen = human_command(message.episode, message.step) if message.episode >= 2 else 0.0
+        assert message.observation_human_action == pytest.approx(seen)
+        assert message.reward == pytest.approx(sum(message.reward_components))
+        assert message.deterministic == (message.episode == 4)
+        assert -1.0 <= message.action <= 1.0
+        assert message.wrench == pytest.approx(message.action * PHYSICS.max_force)
+    assert list(fake.steps[0].subtask_ids) == ['slider', 'pendulum']
+    assert list(fake.steps[-1].subtask_ids) == ['ball', 'slider', 'pendulum']
+    stamps = {(s.episode, s.step): s.header.stamp for s in fake.published}
+    assert all(m.header.stamp == stamps[(m.episode, m.step)] for m in fake.steps)
+
+    # Session transitions: alone -> updating -> human joins -> evaluation -> done.
+    phases = [(m.phase, m.training_step, m.human_involved) for m in fake.sessions]
+    training, updating = SessionStatus.PHASE_TRAINING, SessionStatus.PHASE_UPDATING
+    evaluation, done = SessionStatus.PHASE_EVALUATION, SessionStatus.PHASE_DONE
+    assert phases[0] == (training, 0, False)
+    # Step 1 converged after episode 1 (2 x 10 samples >= horizon 16): the update is announced
+    # with the next step's setting, before any episode of it.
+    assert (updating, 1, True) in phases
+    assert phases.index((updating, 1, True)) < phases.index((training, 1, True))
+    assert (evaluation, 1, True) in phases
+    assert phases[-1] == (done, 1, True)
+    last = fake.sessions[-1]
+    assert (last.total_episodes, last.human_involved_episodes) == (4, 2)
+    assert (last.robot_dof, last.human_dof) == (SessionStatus.DOF_TRANSLATION,
+                                                SessionStatus.DOF_ROTATION)
+    assert last.strategy == 'responsibility_guided' and last.case_id == 1
+    assert (tmp_path / 'ckpt' / 'dds_test' / 'final.pt').is_file()
+    assert (tmp_path / 'ckpt' / 'dds_test' / 'latest.pt').is_file()
+
+
+def test_missing_human_action_times_out_and_is_reported(start_node, rclpy_context):
+    fake = FakeSim(rclpy_context, human_answers=False)
+    agent = start_node('hrc_agent_node', 'agent_node', parameters={
+        'case': 5, 'max_training_episodes': 1, 'evaluation_episodes': 0,
+        'human_action_timeout': 0.05, 'checkpoint_dir': '',
+        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})
+    code = run_until_exit(fake, agent, rclpy_context, timeout=60)
+    fake.node.destroy_node()
+    assert code == 0, agent.output
+    assert fake.answers == [(0, step) for step in range(STEPS)]
+    assert all(message.observation_human_action == 0.0 for message in fake.steps)
+    assert 'no human action for episode 0 step 0 within 0.05 s' in agent.output
+
+
+@pytest.mark.parametrize('parameters, reason', [
+    ({'case': 9}, 'case'),
+    ({'preset': 'fancy'}, "unknown reward preset 'fancy'"),
+    ({'minibatch_size': 1024}, 'minibatch_size: 1024 exceeds horizon 512'),
+    ({'resume_from': '/nonexistent/latest.pt'}, 'does not exist'),
+    ({'evaluation_only': True}, 'evaluation_only: needs resume_from'),
+])
+def test_bad_parameters_exit_2_with_the_reason(start_node, parameters, reason):
+    agent = start_node('hrc_agent_node', 'agent_node', parameters=parameters)
+    assert agent.wait(timeout=60) == 2, agent.output
+    assert reason in agent.output
