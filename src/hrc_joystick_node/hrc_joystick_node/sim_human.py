@@ -49,8 +49,9 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    the lapse rate and the delay by ``fatigue_per_minute`` per minute (a vigilance decrement).
 
 Determinism: every random draw comes from a numpy Generator seeded with ``(seed, episode)`` at
-each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the episode index and
-the sequence of states, whatever ran before.
+each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the episode index,
+the practice and time on task so far (``practiced_episodes``, ``steps_on_task``) and the
+sequence of states.
 
 Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 --------------------------------------------------------------------------
@@ -97,62 +98,66 @@ HISTORY_LENGTH = 64
 
 @dataclass
 class HumanProfile:
-    """The parameters of one simulated person (see the module docstring for the model)."""
+    """The parameters of one simulated person (see the module docstring for the model).
+
+    The defaults are the ``skilled`` profile of ``params/sim_human.yaml`` (a test keeps them
+    equal); a profile in the YAML file may leave out the fields it does not change.
+    """
 
     description: str = param('', 'who this profile models')
     # perception
-    slider_noise: float = param(0.002, 'std of the perceived slider height, per step (m)',
+    slider_noise: float = param(0.0015, 'std of the perceived slider height, per step (m)',
                                 low=0.0, high=0.1)
-    pendulum_noise: float = param(0.03, 'std of the perceived beam angle, per step (rad)',
+    pendulum_noise: float = param(0.02, 'std of the perceived beam angle, per step (rad)',
                                   low=0.0, high=1.0)
-    ball_noise: float = param(0.005, 'std of the perceived ball position, per step (m)',
+    ball_noise: float = param(0.004, 'std of the perceived ball position, per step (m)',
                               low=0.0, high=0.25)
-    slider_bias: float = param(0.002, 'std of the per-episode misjudged middle of the rod (m)',
+    slider_bias: float = param(0.0015, 'std of the per-episode misjudged middle of the rod (m)',
                                low=0.0, high=0.1)
-    pendulum_bias: float = param(0.02, 'std of the per-episode misjudged horizontal (rad)',
+    pendulum_bias: float = param(0.015, 'std of the per-episode misjudged horizontal (rad)',
                                  low=0.0, high=1.0)
     ball_bias: float = param(0.003, 'std of the per-episode misjudged middle of the beam (m)',
                              low=0.0, high=0.25)
-    velocity_noise: float = param(0.15, 'Weber fraction of perceived speeds (relative std)',
+    velocity_noise: float = param(0.12, 'Weber fraction of perceived speeds (relative std)',
                                   low=0.0, high=2.0)
     # timing
-    reaction_delay: float = param(0.25, 'delay from seeing to acting (s)', low=0.0, high=2.0)
+    reaction_delay: float = param(0.22, 'delay from seeing to acting (s)', low=0.0, high=2.0)
     prediction: float = param(0.5, 'share of the delay compensated by extrapolation',
                               low=0.0, high=1.0)
     # control
-    slider_full_scale: float = param(0.03, 'slider error at which the stick is pushed fully (m)',
+    slider_full_scale: float = param(0.1, 'slider error at which the stick is pushed fully (m)',
                                      low=1e-4, high=1.0)
-    pendulum_full_scale: float = param(0.3, 'beam angle error at which the stick is pushed '
+    pendulum_full_scale: float = param(0.5, 'beam angle error at which the stick is pushed '
                                        'fully (rad)', low=1e-3, high=10.0)
-    lead_time: float = param(0.3, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
+    lead_time: float = param(0.1, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
     integral_time: float = param(
-        0.0, 'integral time of the level-2 hold (s): a person who sees the slider or the beam '
+        1.5, 'integral time of the level-2 hold (s): a person who sees the slider or the beam '
         'stay off pushes harder against a steady load; 0 = no integral', low=0.0, high=1000.0)
-    ball_tilt: float = param(2.0, 'target beam angle per ball offset (rad/m)', low=0.0,
+    ball_tilt: float = param(0.5, 'target beam angle per ball offset (rad/m)', low=0.0,
                              high=100.0)
-    ball_lead: float = param(0.5, 'look-ahead on the ball (s)', low=0.0, high=5.0)
+    ball_lead: float = param(0.6, 'look-ahead on the ball (s)', low=0.0, high=5.0)
     max_tilt: float = param(0.2, 'largest beam angle asked for to move the ball (rad)',
                             low=0.0, high=1.5)
-    coupling_full_scale: float = param(0.3, 'translation actor: beam angle error that makes it '
+    coupling_full_scale: float = param(3.0, 'translation actor: beam angle error that makes it '
                                        'push fully to nudge the beam through the coupling (rad)',
                                        low=1e-3, high=100.0)
     # motor execution
-    max_rate: float = param(6.0, 'fastest stick movement (full scale per s)', low=0.1,
+    max_rate: float = param(8.0, 'fastest stick movement (full scale per s)', low=0.1,
                             high=1000.0)
-    neuromuscular_time: float = param(0.1, 'time constant of the arm following the intent (s)',
+    neuromuscular_time: float = param(0.08, 'time constant of the arm following the intent (s)',
                                       low=0.0, high=2.0)
-    motor_noise: float = param(0.1, 'motor noise std per unit of command (relative)', low=0.0,
+    motor_noise: float = param(0.08, 'motor noise std per unit of command (relative)', low=0.0,
                                high=2.0)
     motor_noise_floor: float = param(0.01, 'motor noise std at rest (normalized command)',
                                      low=0.0, high=1.0)
-    lapse_probability: float = param(0.02, 'chance per step that the stick is held unchanged',
+    lapse_probability: float = param(0.01, 'chance per step that the stick is held unchanged',
                                      low=0.0, high=1.0)
     # learning and fatigue
-    untrained_factor: float = param(1.5, 'noises, biases and lapses of the first episode, '
+    untrained_factor: float = param(1.2, 'noises, biases and lapses of the first episode, '
                                     'relative to the trained person', low=1.0, high=20.0)
-    learning_episodes: float = param(8.0, 'time constant of the learning curve (episodes)',
+    learning_episodes: float = param(4.0, 'time constant of the learning curve (episodes)',
                                      low=0.1, high=10000.0)
-    fatigue_per_minute: float = param(0.02, 'growth of motor noise, lapses and delay per '
+    fatigue_per_minute: float = param(0.01, 'growth of motor noise, lapses and delay per '
                                       'minute on task (relative)', low=0.0, high=10.0)
 
 

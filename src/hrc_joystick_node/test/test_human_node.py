@@ -1,0 +1,355 @@
+"""The human node in its own process over DDS: lockstep answers, session, /joy, device, auto."""
+
+import os
+import time
+
+from geometry_msgs.msg import WrenchStamped
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from sensor_msgs.msg import Joy
+
+from hrc_common import qos, topics
+from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
+from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
+from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
+
+WAIT = 15.0  # s: generous bound for anything over DDS on a busy 2-core machine
+
+
+class Harness:
+    """The test's side of the graph: a fake sim (states), a session, /joy, and listeners."""
+
+    def __init__(self, context):
+        import rclpy
+
+        self.node = rclpy.create_node('human_node_test', context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.states = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
+        self.session = self.node.create_publisher(SessionStatus, topics.SESSION,
+                                                  qos.SESSION_QOS)
+        self.joy = None  # created by publish_joy(): in auto mode a publisher alone counts
+        self.actions, self.wrenches = {}, {}
+        self.action_log = []
+        self.node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
+                                      qos.HUMAN_ACTION_QOS)
+        self.node.create_subscription(WrenchStamped, topics.HUMAN_CMD_WRENCH,
+                                      self._on_wrench, qos.COMMAND_QOS)
+        self.joy_message = None
+        self._joy_timer = None
+
+    def _on_action(self, message):
+        self.action_log.append(message)
+        self.actions[stamp_key(message.header.stamp)] = message
+
+    def _on_wrench(self, message):
+        self.wrenches[stamp_key(message.header.stamp)] = message
+
+    def spin_until(self, condition, timeout=WAIT) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if condition():
+                return True
+            self.executor.spin_once(timeout_sec=0.02)
+        return condition()
+
+    def wait_for_human_node(self, process):
+        connected = self.spin_until(
+            lambda: (self.states.get_subscription_count() > 0
+                     and self.node.count_publishers(topics.HUMAN_ACTION) > 0
+                     and self.node.count_publishers(topics.HUMAN_CMD_WRENCH) > 0))
+        assert connected, f'the human node did not come up:\n{process.output}'
+
+    def step(self, state, process, timeout=WAIT):
+        """Publish a state and return (HumanAction, WrenchStamped) answering it."""
+        key = stamp_key(state.header.stamp)
+        self.states.publish(state)
+        answered = self.spin_until(lambda: key in self.actions and key in self.wrenches,
+                                   timeout)
+        assert answered, f'no answer to step {state.step}:\n{process.output}'
+        return self.actions[key], self.wrenches[key]
+
+    def publish_joy(self, axes, buttons, rate=20.0):
+        """Publish /joy continuously (as a joy node with autorepeat) until stop_joy()."""
+        self.joy_message = Joy(axes=[float(a) for a in axes], buttons=list(buttons))
+        if self.joy is None:
+            self.joy = self.node.create_publisher(Joy, topics.JOY, qos.JOY_QOS)
+        if self._joy_timer is None:
+            self._joy_timer = self.node.create_timer(1.0 / rate,
+                                                     lambda: self.joy.publish(self.joy_message))
+
+    def stop_joy(self):
+        """Stop publishing; the publisher stays (a joy node that fell silent)."""
+        if self._joy_timer is not None:
+            self.node.destroy_timer(self._joy_timer)
+            self._joy_timer = None
+
+    def close(self):
+        self.node.destroy_node()
+
+
+def stamp_key(stamp):
+    return (stamp.sec, stamp.nanosec)
+
+
+def task_state(episode, step, physics_state=None, truncated=False, **values):
+    """Return a TaskState stamped with a unique simulation time for (episode, step)."""
+    message = TaskState(episode=episode, step=step, truncated=truncated)
+    if physics_state is not None:
+        for name in ('slider_position', 'slider_velocity', 'pendulum_angle',
+                     'pendulum_angular_velocity', 'ball_position', 'ball_velocity'):
+            setattr(message, name, float(getattr(physics_state, name)))
+    for name, value in values.items():
+        setattr(message, name, value)
+    nanoseconds = (episode * 100_000 + step * 200) * 1_000_000
+    message.header.stamp.sec, message.header.stamp.nanosec = divmod(nanoseconds, 10 ** 9)
+    message.header.frame_id = 'world'
+    return message
+
+
+@pytest.fixture
+def harness(rclpy_context):
+    harness = Harness(rclpy_context)
+    yield harness
+    harness.close()
+
+
+def make_session(human_dof, involved, subtasks, training_step=0):
+    return SessionStatus(session_id='test', case_id=4, strategy='level_guided',
+                         training_step=training_step, training_step_count=2,
+                         human_dof=human_dof, robot_dof=1 - human_dof,
+                         human_involved=involved, human_subtasks=subtasks)
+
+
+def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_node, harness):
+    from hrc_sim_node.physics import SliderPendulumBall
+
+    process = start_node('hrc_joystick_node', 'human_node',
+                         parameters={'input': 'sim', 'profile': 'paper', 'seed': 3})
+    harness.wait_for_human_node(process)
+    reference = SimulatedHuman(load_profile('paper'), 'rotation', seed=3)
+    reference.reset(0)
+    with SliderPendulumBall() as physics:
+        physics_state = physics.reset(seed=11)
+        for step in range(25):  # lockstep: the next state only after the answer
+            state = task_state(0, step, physics_state)
+            action, wrench = harness.step(state, process)
+            expected = reference.act(physics_state, ['pendulum'])
+            assert (action.episode, action.step) == (0, step)
+            assert action.header.stamp == state.header.stamp == wrench.header.stamp
+            assert action.command == expected, 'the node is the pure simulated human'
+            assert action.dof == HumanAction.DOF_ROTATION
+            assert action.source == HumanAction.SOURCE_SIMULATED
+            assert action.source_detail == 'paper' and action.engaged
+            assert wrench.wrench.torque.x == pytest.approx(0.5 * expected)  # max_torque 0.5
+            assert (wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z,
+                    wrench.wrench.torque.y, wrench.wrench.torque.z) == (0, 0, 0, 0, 0)
+            physics_state = physics.step_normalized(0.0, action.command)
+
+    # The same state again (a republished sample) gets the same answer, the model untouched.
+    repeated = len(harness.action_log)
+    harness.states.publish(state)
+    assert harness.spin_until(lambda: len(harness.action_log) > repeated)
+    first_answer = harness.actions[stamp_key(state.header.stamp)]
+    assert harness.action_log[-1].command == first_answer.command
+
+    # The last state of an episode needs no answer; the next episode's first state does.
+    # Answers come in order from one publisher, so an answer to the last state would show up
+    # before the answer to the next one.
+    before = len(harness.action_log)
+    harness.states.publish(task_state(0, 25, truncated=True))
+    action, _ = harness.step(task_state(1, 0, pendulum_angle=0.1), process)
+    assert [(a.episode, a.step) for a in harness.action_log[before:]] == [(1, 0)]
+    assert len({(a.episode, a.step) for a in harness.action_log}) == 25 + 1
+
+
+def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node, harness):
+    process = start_node('hrc_joystick_node', 'human_node',
+                         parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1,
+                                     'max_force': 4.0})
+    harness.wait_for_human_node(process)
+    # Until a session arrives: the parameters (rotation, involved).
+    action, wrench = harness.step(task_state(0, 0, pendulum_angle=0.3), process)
+    assert action.dof == HumanAction.DOF_ROTATION and action.engaged
+    assert action.command < 0 and wrench.wrench.torque.x < 0, 'pushes the raised beam down'
+
+    harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, True, ['T2_1']))
+    assert harness.spin_until(lambda: 'human drives translation' in process.output), \
+        process.output
+    action, wrench = harness.step(task_state(0, 1, slider_position=0.05), process)
+    assert action.dof == HumanAction.DOF_TRANSLATION and action.engaged
+    assert action.command < 0, 'pushes the high slider down'
+    assert wrench.wrench.force.z == pytest.approx(4.0 * action.command)
+    assert wrench.wrench.torque.x == 0.0
+
+    harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
+    assert harness.spin_until(lambda: 'not involved' in process.output), process.output
+    for step in range(2, 5):  # still answered every step, so the lockstep sim can advance
+        action, wrench = harness.step(task_state(0, step, slider_position=0.05), process)
+        assert (action.command, action.engaged) == (0.0, False)
+        assert action.source == HumanAction.SOURCE_NONE
+        assert wrench.wrench.force.z == 0.0
+
+
+def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness):
+    process = start_node('hrc_joystick_node', 'human_node', parameters={
+        'input': 'joy', 'on_input_lost': 'zero', 'joy_timeout': 0.5, 'axis': 1,
+        'deadzone': 0.1, 'invert': True, 'enable_button': 2, 'input_check_period': 0.05})
+    harness.wait_for_human_node(process)
+    harness.publish_joy([0.3, 0.55], [0, 0, 1])
+    step = 0
+
+    def answer():
+        nonlocal step
+        action, wrench = harness.step(task_state(0, step), process)
+        step += 1
+        return action, wrench
+
+    def answer_until(condition):
+        deadline = time.monotonic() + WAIT
+        while time.monotonic() < deadline:
+            action, wrench = answer()
+            if condition(action):
+                return action, wrench
+            harness.spin_until(lambda: False, timeout=0.05)
+        raise AssertionError(f'condition not met; last {action}:\n{process.output}')
+
+    action, wrench = answer_until(lambda a: a.source == HumanAction.SOURCE_JOY and a.engaged
+                                  and a.command != 0.0)
+    # axis 1 = 0.55 -> deadzone 0.1 rescaled: 0.5 -> inverted: -0.5; rotation: torque.x
+    assert action.command == pytest.approx(-0.5)
+    assert wrench.wrench.torque.x == pytest.approx(-0.25)
+    assert action.source_detail == '/joy'
+
+    harness.publish_joy([0.3, 0.55], [0, 0, 0])  # deadman released
+    action, _ = answer_until(lambda a: not a.engaged)
+    assert action.command == 0.0 and action.source == HumanAction.SOURCE_JOY
+    assert 'enable button released' in action.source_detail
+
+    harness.stop_joy()  # the joy node falls silent: past the deadline, zero is held
+    action, _ = answer_until(lambda a: a.source == HumanAction.SOURCE_NONE)
+    assert (action.command, action.engaged) == (0.0, False)
+    assert 'silent' in action.source_detail
+    assert '/joy input lost' in process.output
+
+    harness.publish_joy([0.0, -1.0], [0, 0, 1])  # back
+    action, _ = answer_until(lambda a: a.source == HumanAction.SOURCE_JOY and a.engaged)
+    assert action.command == pytest.approx(1.0)
+
+
+def js(event_type, number, value, init=False):
+    return pack_event(0, value, event_type | (JS_EVENT_INIT if init else 0), number)
+
+
+def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, harness,
+                                                                  tmp_path):
+    fifo = str(tmp_path / 'js0')
+    os.mkfifo(fifo)
+    writer = os.open(fifo, os.O_RDWR)  # the joystick "plugged in" (O_RDWR never blocks)
+    os.write(writer, js(JS_EVENT_AXIS, 0, 0, init=True) + js(JS_EVENT_AXIS, 1, 0, init=True)
+             + js(JS_EVENT_BUTTON, 0, 1, init=True))
+    process = start_node('hrc_joystick_node', 'human_node', parameters={
+        'input': 'device', 'device': fifo, 'on_input_lost': 'sim', 'reopen_period': 0.2,
+        'enable_button': 0, 'deadzone': 0.0, 'profile': 'skilled', 'dof': 'translation',
+        'input_check_period': 0.05})
+    try:
+        harness.wait_for_human_node(process)
+        step = 0
+
+        def answer(**values):
+            nonlocal step
+            action, _ = harness.step(task_state(0, step, **values), process)
+            step += 1
+            return action
+
+        action = answer()
+        assert action.source == HumanAction.SOURCE_DEVICE, process.output
+        assert action.source_detail == fifo and action.command == 0.0 and action.engaged
+
+        # Stick pushed up (kernel: negative), sent in two pieces with garbage in between:
+        # sampled when the state arrives, so the next answer has it.
+        record = js(JS_EVENT_AXIS, 1, -16384)
+        os.write(writer, b'\xff\xff\xff' + record[:5])
+        os.write(writer, record[5:])
+        action = answer()
+        assert action.command == pytest.approx(16384 / 32767)
+        assert action.dof == HumanAction.DOF_TRANSLATION
+        assert harness.spin_until(lambda: 'skipped 3 byte(s)' in process.output), \
+            process.output
+
+        os.write(writer, js(JS_EVENT_BUTTON, 0, 0))  # deadman released
+        action = answer()
+        assert (action.command, action.engaged) == (0.0, False)
+
+        os.close(writer)  # unplugged: the simulated human takes over at once
+        writer = None
+        action = answer(slider_position=0.05)
+        assert action.source == HumanAction.SOURCE_SIMULATED, process.output
+        assert action.engaged and action.command < 0.0
+        assert 'vanished' in process.output
+
+        writer = os.open(fifo, os.O_RDWR)  # plugged in again
+        os.write(writer, js(JS_EVENT_AXIS, 1, 32767, init=True)
+                 + js(JS_EVENT_BUTTON, 0, 1, init=True))
+        deadline = time.monotonic() + WAIT
+        while action.source != HumanAction.SOURCE_DEVICE and time.monotonic() < deadline:
+            harness.spin_until(lambda: False, timeout=0.1)
+            action = answer()
+        assert action.source == HumanAction.SOURCE_DEVICE, process.output
+        assert action.command == -1.0, 'the INIT state of the reopened device'
+        assert 'reappeared' in process.output
+    finally:
+        if writer is not None:
+            os.close(writer)
+
+
+def test_auto_selects_device_then_joy_then_simulated_human(start_node, harness, tmp_path):
+    fifo = str(tmp_path / 'js0')
+    os.mkfifo(fifo)  # exists, but nobody writes: not a present device
+    process = start_node('hrc_joystick_node', 'human_node', parameters={
+        'input': 'auto', 'device': fifo, 'reopen_period': 0.2, 'joy_timeout': 0.5,
+        'on_input_lost': 'zero', 'input_check_period': 0.05})
+    harness.wait_for_human_node(process)
+    step = 0
+
+    def answer_until(source, command=None):
+        nonlocal step
+        deadline = time.monotonic() + WAIT
+        while time.monotonic() < deadline:
+            action, _ = harness.step(task_state(0, step, pendulum_angle=0.2), process)
+            step += 1
+            if action.source == source and (command is None
+                                             or action.command == pytest.approx(command)):
+                return action
+            harness.spin_until(lambda: False, timeout=0.05)
+        raise AssertionError(f'never switched to source {source} ({command}): last {action}'
+                             f'\n{process.output}')
+
+    answer_until(HumanAction.SOURCE_SIMULATED)
+    assert 'auto, no input yet' in process.output, 'the log says why'
+
+    harness.publish_joy([0.0, 0.5], [])
+    answer_until(HumanAction.SOURCE_JOY, (0.5 - 0.05) / 0.95)  # deadzone 0.05 rescaled
+
+    writer = os.open(fifo, os.O_RDWR)
+    try:
+        os.write(writer, js(JS_EVENT_AXIS, 1, 32767, init=True))
+        answer_until(HumanAction.SOURCE_DEVICE, -1.0)
+        assert 'auto: the device opened' in process.output
+    finally:
+        os.close(writer)
+    answer_until(HumanAction.SOURCE_JOY)  # device gone, /joy still there
+
+    harness.stop_joy()  # a real input was lost: the policy (zero), not the simulated human
+    action = answer_until(HumanAction.SOURCE_NONE)
+    assert (action.command, action.engaged) == (0.0, False)
+
+
+@pytest.mark.parametrize('parameters, reason', [
+    ({'input': 'keyboard'}, "input: 'keyboard' is not one of"),
+    ({'profile': 'expert'}, "profile: 'expert' is not in"),
+])
+def test_bad_parameters_exit_2_with_the_reason(start_node, parameters, reason):
+    process = start_node('hrc_joystick_node', 'human_node', parameters=parameters)
+    assert process.wait(timeout=30) == 2
+    assert reason in process.output

@@ -1,0 +1,52 @@
+"""params/human.yaml and params/sim_human.yaml mirror the code; bad values are refused."""
+
+from dataclasses import fields
+import pathlib
+
+import pytest
+import yaml
+
+from hrc_common.params import as_dict, default_of, load_yaml, ParameterError, with_overrides
+from hrc_joystick_node.human_node import HumanParams
+from hrc_joystick_node.sim_human import HumanProfile, load_profiles
+
+PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
+
+
+def test_human_yaml_mirrors_the_defaults():
+    document = yaml.safe_load((PARAMS / 'human.yaml').read_text())
+    values = document['human']['ros__parameters']
+    assert sorted(values) == sorted(f.name for f in fields(HumanParams)), \
+        'every parameter in the YAML, and nothing else'
+    assert as_dict(load_yaml(HumanParams, PARAMS / 'human.yaml', 'human')) == \
+        as_dict(HumanParams())
+
+
+def test_scaling_and_period_agree_with_the_sim():
+    from hrc_sim_node.physics import PhysicsParams
+
+    physics, human = PhysicsParams(), HumanParams()
+    assert human.max_force == physics.max_force
+    assert human.max_torque == physics.max_torque
+    assert human.control_period == physics.control_period
+
+
+def test_the_default_profile_exists_and_the_dataclass_defaults_are_the_skilled_profile():
+    profiles = load_profiles(PARAMS / 'sim_human.yaml')
+    assert HumanParams().profile in profiles
+    skilled = as_dict(profiles['skilled'])
+    defaults = {f.name: default_of(f) for f in fields(HumanProfile)}
+    del skilled['description'], defaults['description']
+    assert skilled == defaults
+
+
+@pytest.mark.parametrize('overrides, reason', [
+    ({'input': 'keyboard'}, "input: 'keyboard' is not one of"),
+    ({'deadzone': 0.95}, 'deadzone: 0.95 is above the maximum'),
+    ({'axis': -1}, 'axis: -1 is below the minimum'),
+    ({'dof': 'both'}, "dof: 'both' is not one of"),
+    ({'on_input_lost': 'panic'}, 'on_input_lost'),
+])
+def test_bad_values_are_refused_with_a_reason(overrides, reason):
+    with pytest.raises(ParameterError, match=reason):
+        with_overrides(HumanParams(), **overrides)
