@@ -1,5 +1,7 @@
 """Fixtures shared by every test: a private ROS domain per test and node processes."""
 
+import pathlib
+
 import pytest
 
 from hrc_common.testing import next_domain_id, NodeProcess, ros_environment
@@ -65,3 +67,18 @@ def pytest_runtest_makereport(item, call):
     report = yield
     setattr(item, 'rep_' + report.when, report)
     return report
+
+
+@pytest.fixture(scope='session')
+def rosbags_typestore():
+    """Return a rosbags typestore of ROS 2 Jazzy plus the installed hrc_msgs types."""
+    from ament_index_python.packages import get_package_share_directory
+    from rosbags.typesys import get_types_from_msg, get_typestore, Stores
+
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    types = {}
+    folder = pathlib.Path(get_package_share_directory('hrc_msgs')) / 'msg'
+    for path in sorted(folder.glob('*.msg')):
+        types.update(get_types_from_msg(path.read_text(), f'hrc_msgs/msg/{path.stem}'))
+    typestore.register(types)
+    return typestore
