@@ -17,16 +17,17 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
-import yaml
+
+from hrc_bag.qos_yaml import load_yaml
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 METADATA_FILE = 'metadata.yaml'
 
 # What a truncated record may raise while being parsed or decompressed.
-_TRUNCATION_ERRORS = (McapError, EOFError, ValueError, struct.error, MemoryError)
+TRUNCATION_ERRORS = (McapError, EOFError, ValueError, struct.error, MemoryError)
 try:  # zstandard raises its own error on a cut compressed frame
     import zstandard
-    _TRUNCATION_ERRORS += (zstandard.ZstdError,)
+    TRUNCATION_ERRORS += (zstandard.ZstdError,)
 except ImportError:  # pragma: no cover - zstandard is a dependency of the writer
     pass
 
@@ -123,7 +124,7 @@ def _scan_stream(path, topics) -> FileScan:
                     messages.append(make_message(schemas.get(channel.schema_id), channel,
                                                  record))
             complete = True
-        except _TRUNCATION_ERRORS as exception:
+        except TRUNCATION_ERRORS as exception:
             error = f'{type(exception).__name__}: {exception}'.rstrip(': ')
     messages.sort(key=lambda message: message.log_time)
     return FileScan(pathlib.Path(path), complete, messages, metadata, error)
@@ -139,7 +140,7 @@ def scan_file(path, topics=None) -> FileScan:
         reader = SeekingReader(stream)
         try:
             summary = reader.get_summary()
-        except _TRUNCATION_ERRORS:
+        except TRUNCATION_ERRORS:
             summary = None
         if summary is None:
             return _scan_stream(path, topics)
@@ -162,7 +163,7 @@ def read_bag_metadata_yaml(folder) -> dict:
     path = pathlib.Path(folder) / METADATA_FILE
     if not path.is_file():
         return {}
-    document = yaml.safe_load(path.read_text()) or {}
+    document = load_yaml(path.read_text()) or {}
     return document.get('rosbag2_bagfile_information', {}) or {}
 
 
@@ -237,7 +238,7 @@ def file_topics(path) -> dict:
         with open(path, 'rb') as stream:
             try:
                 summary = SeekingReader(stream).get_summary()
-            except _TRUNCATION_ERRORS:
+            except TRUNCATION_ERRORS:
                 summary = None
     if summary is not None:
         schemas, channels = summary.schemas, summary.channels
@@ -250,7 +251,7 @@ def file_topics(path) -> dict:
                         schemas[record.id] = record
                     elif isinstance(record, Channel):
                         channels[record.id] = record
-            except _TRUNCATION_ERRORS:
+            except TRUNCATION_ERRORS:
                 pass
     topics = {}
     for channel in channels.values():

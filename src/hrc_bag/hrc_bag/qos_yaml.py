@@ -20,11 +20,26 @@ seconds and nanoseconds.
 
 import yaml
 
+# libyaml's parser and emitter when PyYAML has them (the pure-Python ones cost ms per file)
+_LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+_DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
+
 NANOSECONDS = 1_000_000_000
 # RMW_DURATION_INFINITE: what rmw reports for "no deadline / lifespan / lease".
 INFINITE_NS = 2**63 - 1
 # Durations this long or longer mean "infinite" (older rmw wrote other sentinel values).
 INFINITE_THRESHOLD_NS = 0x7FFFFFFF * NANOSECONDS
+
+
+def load_yaml(text: str):
+    """Parse YAML (safe types only)."""
+    return yaml.load(text, Loader=_LOADER)
+
+
+def dump_yaml(document) -> str:
+    """Return block-style YAML (safe types only) in the key order given."""
+    return yaml.dump(document, Dumper=_DUMPER, default_flow_style=False, sort_keys=False,
+                     allow_unicode=True)
 
 
 def _policy_name(value) -> str:
@@ -59,15 +74,14 @@ def dump_profiles(profiles: list) -> str:
     """Return the YAML string of a list of profile mappings (MCAP channel metadata form)."""
     if not profiles:
         return ''
-    return yaml.dump(list(profiles), Dumper=getattr(yaml, 'CSafeDumper', yaml.SafeDumper),
-                     default_flow_style=False, sort_keys=False)
+    return dump_yaml(list(profiles))
 
 
 def load_profiles(text) -> list:
     """Return the list of profile mappings from a YAML string (or an already parsed list)."""
     if not text:
         return []
-    profiles = yaml.safe_load(text) if isinstance(text, str) else text
+    profiles = load_yaml(text) if isinstance(text, str) else text
     if not isinstance(profiles, list):
         raise ValueError(f'offered_qos_profiles is not a list: {profiles!r}')
     return profiles

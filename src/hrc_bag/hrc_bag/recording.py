@@ -47,7 +47,7 @@ from mcap.writer import CompressionType, IndexType, Writer
 import yaml
 
 from hrc_bag import msgdefs
-from hrc_bag.qos_yaml import dump_profiles
+from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
 
 BAG_VERSION = 9                 # rosbag2 metadata version written (ROS 2 Jazzy)
 STORAGE_IDENTIFIER = 'mcap'
@@ -255,16 +255,6 @@ def bag_metadata(files: list, entries: list, custom_data: dict) -> dict:
     }
 
 
-# libyaml's emitter when PyYAML has it: the pure-Python one costs ms per metadata.yaml
-_DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
-
-
-def dump_yaml(document) -> str:
-    """Return block-style YAML in the field order given."""
-    return yaml.dump(document, Dumper=_DUMPER, default_flow_style=False, sort_keys=False,
-                     allow_unicode=True)
-
-
 def write_atomically(path: pathlib.Path, text: str) -> None:
     """Write ``text`` to a temporary file, fsync it, and rename it over ``path``."""
     temporary = path.with_name(f'.{path.name}.tmp')
@@ -394,13 +384,13 @@ class SessionIndex:
 
     def _load(self) -> None:
         """Continue a session an earlier recorder started (its closed files stay listed)."""
-        document = yaml.safe_load(self.path.read_text()) or {}
+        document = load_yaml(self.path.read_text()) or {}
         information = document.get('rosbag2_bagfile_information', {}) or {}
         for entry in information.get('topics_with_message_count', []) or []:
             metadata = entry['topic_metadata']
             profiles = metadata.get('offered_qos_profiles') or []
             if isinstance(profiles, str):
-                profiles = yaml.safe_load(profiles) or []
+                profiles = load_yaml(profiles) or []
             description = TopicDescription(metadata['type'], tuple(profiles),
                                            metadata.get('type_description_hash', ''))
             self._count(metadata['name'], description, int(entry['message_count']))

@@ -12,11 +12,11 @@ import pathlib
 
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
-import yaml
 
-from hrc_bag.bag_reader import _TRUNCATION_ERRORS
-from hrc_bag.recording import (EpisodeFile, FileInfo, RawMessage, RecordingError,
-                               ROSBAG2_RECORD, TopicDescription, describe_error)
+from hrc_bag.bag_reader import TRUNCATION_ERRORS
+from hrc_bag.qos_yaml import load_yaml
+from hrc_bag.recording import (describe_error, EpisodeFile, FileInfo, RawMessage,
+                               RecordingError, ROSBAG2_RECORD, TopicDescription)
 
 
 def _scan_records(path):
@@ -33,14 +33,14 @@ def _scan_records(path):
                     metadata[record.name] = dict(record.metadata)
                 elif isinstance(record, Message):
                     messages.append(record)
-        except _TRUNCATION_ERRORS:
+        except TRUNCATION_ERRORS:
             pass
     return schemas, channels, messages, metadata
 
 
 def _description(channel, schemas) -> TopicDescription:
     schema = schemas.get(channel.schema_id)
-    profiles = yaml.safe_load(channel.metadata.get('offered_qos_profiles', '') or '') or []
+    profiles = load_yaml(channel.metadata.get('offered_qos_profiles', '') or '') or []
     return TopicDescription(
         type_name=schema.name if schema is not None else '',
         offered_qos_profiles=tuple(profiles),

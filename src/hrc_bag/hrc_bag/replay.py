@@ -34,6 +34,9 @@ class ReplayParams:
     start_delay: float = param(1.0, 'wall seconds between creating the publishers and the '
                                'first message (lets subscribers discover them)', low=0.0,
                                high=600.0)
+    wait_for_subscribers: int = param(0, 'after start_delay, wait until every replayed topic '
+                                      'has this many subscriptions (0 = do not wait)', low=0,
+                                      high=1000)
     clock: bool = param(False, 'publish /clock with the recording time (a recorded /clock is '
                         'then not replayed)')
     clock_rate: float = param(40.0, '/clock publication rate (Hz)', low=1.0, high=1000.0)

@@ -97,6 +97,8 @@ class ReplayNode(Node):
     def _play(self) -> None:
         if self._stop.wait(self.params.start_delay):
             return
+        if self.params.wait_for_subscribers and not self._wait_for_subscribers():
+            return
         if self._start is None:
             self.get_logger().warning(f'{self.params.path} holds no messages')
             self._done.set()
@@ -117,6 +119,21 @@ class ReplayNode(Node):
             if not self.params.loop:
                 break
         self._done.set()
+
+    def _wait_for_subscribers(self) -> bool:
+        """Wait until each publisher has enough subscriptions; False when stopped first."""
+        wanted = self.params.wait_for_subscribers
+        logged = False
+        while not self._stop.is_set():
+            missing = sorted(topic for topic, publisher in self._publishers_by_topic.items()
+                             if publisher.get_subscription_count() < wanted)
+            if not missing:
+                return True
+            if not logged:
+                self.get_logger().info(f'waiting for {wanted} subscription(s) on {missing}')
+                logged = True
+            self._stop.wait(0.05)
+        return False
 
     def _publish_clock(self) -> None:
         if self._timeline is None or self._done.is_set():

@@ -3,7 +3,8 @@
 Input: session folders written by the recorder (one per case and seed). Per session the report
 reads the EpisodeSummary messages (``/hrc/episode``), the SessionStatus messages
 (``/hrc/session``) and the ``hrc_session`` metadata record (the session configuration), and for
-Fig. 6 the AgentStep and HumanAction messages of one evaluation episode.
+Fig. 6 the AgentStep and HumanAction messages of one evaluation episode. Topics are recognized
+by their type, whatever their (remapped) names.
 
 Metrics (per session, then mean and spread over the sessions of a case, i.e. over seeds):
 
@@ -26,12 +27,14 @@ import typing
 import yaml
 
 from hrc_bag import bag_reader
+from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.recording import SESSION_RECORD
 
-EPISODE_TOPIC = '/hrc/episode'
-SESSION_TOPIC = '/hrc/session'
-AGENT_STEP_TOPIC = '/hrc/agent/step'
-HUMAN_ACTION_TOPIC = '/hrc/human/action'
+# Topics are found by type, so remapped recordings are analysed too.
+EPISODE_TYPE = 'hrc_msgs/msg/EpisodeSummary'
+SESSION_TYPE = 'hrc_msgs/msg/SessionStatus'
+AGENT_STEP_TYPE = 'hrc_msgs/msg/AgentStep'
+HUMAN_ACTION_TYPE = 'hrc_msgs/msg/HumanAction'
 
 DOF_NAMES = {0: 'translation', 1: 'rotation'}
 STRATEGY_TITLES = {
@@ -98,10 +101,15 @@ def find_sessions(paths) -> list:
     return found
 
 
+def topics_of_type(topics: dict, type_name: str) -> list:
+    """Return the names of the topics (bag_reader.TopicInfo by name) of ``type_name``."""
+    return sorted(name for name, info in topics.items() if info.type_name == type_name)
+
+
 def _config_of(metadata: dict) -> dict:
     record = metadata.get(SESSION_RECORD, {})
     try:
-        config = yaml.safe_load(record.get('session_config', '') or '') or {}
+        config = load_yaml(record.get('session_config', '') or '') or {}
     except yaml.YAMLError:
         config = {}
     if not isinstance(config, dict):
@@ -124,8 +132,11 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
     config, record = {}, {}
     complete = True
     files_by_episode = {}
+    topics = bag_reader.bag_topics(path)
+    episode_topics = topics_of_type(topics, EPISODE_TYPE)
+    wanted = episode_topics + topics_of_type(topics, SESSION_TYPE)
     for file in bag_reader.session_files(path):
-        scan = bag_reader.scan_file(file, topics=(EPISODE_TOPIC, SESSION_TOPIC))
+        scan = bag_reader.scan_file(file, topics=wanted)
         complete = complete and scan.complete
         if not record and SESSION_RECORD in scan.metadata:
             record = scan.metadata[SESSION_RECORD]
@@ -135,7 +146,7 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
             files_by_episode.setdefault(int(episode), []).append(file)
         for message in scan.messages:
             decoded = decoder.decode(message)
-            if message.topic == EPISODE_TOPIC:
+            if message.topic in episode_topics:
                 # a late recorder gets earlier summaries again (transient local): keep one
                 summaries[decoded.episode] = decoded
             else:
@@ -399,14 +410,17 @@ def action_trace(session: Session, seconds: float = 4.0, start: float = 0.0,
     decoder = decoder or bag_reader.MessageDecoder()
     files = session.files_by_episode.get(episode) or bag_reader.session_files(session.path)
     robot, human = {}, {}
+    topics = bag_reader.bag_topics(session.path)
+    agent_topics = topics_of_type(topics, AGENT_STEP_TYPE)
+    human_topics = topics_of_type(topics, HUMAN_ACTION_TYPE)
     for file in files:
-        scan = bag_reader.scan_file(file, topics=(AGENT_STEP_TOPIC, HUMAN_ACTION_TOPIC))
+        scan = bag_reader.scan_file(file, topics=agent_topics + human_topics)
         for message in scan.messages:
             decoded = decoder.decode(message)
             if decoded.episode != episode:
                 continue
             stamp = decoded.header.stamp.sec + decoded.header.stamp.nanosec * 1e-9
-            if message.topic == AGENT_STEP_TOPIC:
+            if message.topic in agent_topics:
                 robot[decoded.step] = (stamp, decoded.action)
             else:
                 human[decoded.step] = (stamp, decoded.command)

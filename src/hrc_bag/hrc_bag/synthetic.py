@@ -36,7 +36,7 @@ TOPICS = {
 
 @dataclass
 class Published:
-    """Every message published, per topic, in order."""
+    """Every message published, per topic (the name without prefix), in order."""
 
     by_topic: dict = field(default_factory=dict)
 
@@ -61,9 +61,11 @@ class SyntheticSession:
 
     def __init__(self, node: typing.Optional[Node] = None, session_id: str = 'synthetic',
                  case_id: int = 1, strategy: str = 'responsibility_guided', seed: int = 0,
-                 robot_dof: int = 0, sink: typing.Optional[typing.Callable] = None):
+                 robot_dof: int = 0, sink: typing.Optional[typing.Callable] = None,
+                 prefix: str = ''):
         self.node = node
         self.sink = sink
+        self.prefix = prefix            # publish on <prefix>/hrc/... (tests isolate themselves)
         self.session_id = session_id
         self.case_id = case_id
         self.strategy = strategy
@@ -76,7 +78,8 @@ class SyntheticSession:
         self.publishers = {}
         if node is not None:
             for topic, (message_type, qos) in TOPICS.items():
-                self.publishers[topic] = node.create_publisher(message_type, topic, qos)
+                self.publishers[topic] = node.create_publisher(message_type, prefix + topic,
+                                                               qos)
 
     def wait_for_subscribers(self, count: int = 1, timeout: float = 20.0, topics=None,
                              settle: float = 1.0) -> bool:

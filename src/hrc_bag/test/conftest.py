@@ -1,8 +1,37 @@
 """Fixtures of the hrc_bag tests: a synthetic publisher node and the hrc types for rosbags."""
 
+import itertools
+import os
 import pathlib
 
+from hrc_bag.recording import DEFAULT_TOPICS
 import pytest
+
+_PREFIXES = itertools.count()
+
+
+class Isolation:
+    """A topic prefix of the test's own, and the remap arguments that move nodes onto it.
+
+    Test runs of other packages may share a ROS domain id with this test on a busy machine; a
+    prefix keeps their /hrc traffic out of this test's recordings and listeners.
+    """
+
+    def __init__(self):
+        self.prefix = f'/t{os.getpid()}_{next(_PREFIXES)}'
+        self.ros_args = []
+        for topic in DEFAULT_TOPICS + ['/clock']:
+            self.ros_args += ['-r', f'{topic}:={self.prefix}{topic}']
+
+    def name(self, topic: str) -> str:
+        """Return the prefixed name of ``topic``."""
+        return self.prefix + topic
+
+
+@pytest.fixture
+def isolation():
+    """Give the test its own topic prefix (see Isolation)."""
+    return Isolation()
 
 
 @pytest.fixture

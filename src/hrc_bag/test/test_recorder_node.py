@@ -25,11 +25,12 @@ from hrc_bag.synthetic import SyntheticSession
 EXIT_RECORDING_FAILED = 3
 
 
-def start_recorder(start_node, output_dir, session_id, **parameters):
+def start_recorder(start_node, isolation, output_dir, session_id, **parameters):
     values = {'output_dir': str(output_dir), 'session_id': session_id, 'flush_period': 0.2,
               'close_grace': 0.2}
     values.update(parameters)
-    return start_node('hrc_bag', 'recorder_node', parameters=values)
+    return start_node('hrc_bag', 'recorder_node', parameters=values,
+                      ros_args=isolation.ros_args)
 
 
 def listed_files(folder) -> list:
@@ -50,7 +51,7 @@ def by_topic(messages) -> dict:
     return result
 
 
-def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
+def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, isolation,
                                               rosbags_typestore):
     config = {'session_id': 'rt', 'case': 3, 'strategy': 'level_guided',
               'roles': {'robot': 'translation', 'human': 'rotation'},
@@ -58,9 +59,10 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
               'parameters': {'sim': {'max_force': 10.0}, 'agent': {'horizon': 512}}}
     config_path = tmp_path / 'session.yaml'
     config_path.write_text(yaml.safe_dump(config))
-    recorder = start_recorder(start_node, tmp_path / 'bags', 'rt',
+    recorder = start_recorder(start_node, isolation, tmp_path / 'bags', 'rt',
                               session_config=str(config_path))
-    session = SyntheticSession(test_node, 'rt', case_id=3, strategy='level_guided', seed=5)
+    session = SyntheticSession(test_node, 'rt', case_id=3, strategy='level_guided', seed=5,
+                               prefix=isolation.prefix)
     assert session.wait_for_subscribers(), recorder.output
     folder = tmp_path / 'bags' / 'rt'
     session.publish_status(0, human_involved=True)
@@ -78,7 +80,9 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
     time.sleep(1.0)                                     # reliable delivery of the last status
     assert recorder.stop() == 0, recorder.output
 
-    published = session.published.by_topic
+    # recorded names carry the test's prefix (the recorder was remapped onto it)
+    published = {isolation.name(topic): messages
+                 for topic, messages in session.published.by_topic.items()}
     assert listed_files(folder) == ['rt_ep0000.mcap', 'rt_ep0001.mcap', 'rt_ep0002.mcap',
                                     'rt_end.mcap']
     # 1. rosbags on the session folder: exact counts and values per topic
@@ -96,12 +100,14 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
             qos = connection.ext.offered_qos_profiles[0]
             assert qos.reliability.name == 'RELIABLE'
             expected_durability = ('TRANSIENT_LOCAL' if connection.topic in
-                                   ('/hrc/session', '/hrc/episode') else 'VOLATILE')
+                                   (isolation.name('/hrc/session'),
+                                    isolation.name('/hrc/episode')) else 'VOLATILE')
             assert qos.durability.name == expected_durability
-        state = rosbags_typestore.deserialize_cdr(received['/hrc/state'][3],
-                                                  'hrc_msgs/msg/TaskState')
+        states = received[isolation.name('/hrc/state')]
+        state = rosbags_typestore.deserialize_cdr(states[3], 'hrc_msgs/msg/TaskState')
         assert (state.episode, state.step) == (0, 3)
-        assert state.slider_position == published['/hrc/state'][3].slider_position
+        assert state.slider_position == published[isolation.name('/hrc/state')][3] \
+            .slider_position
     for topic, messages in published.items():
         assert [deserialize_message(raw, type(messages[0])) for raw in received[topic]] \
             == messages, topic
@@ -117,7 +123,7 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
             decoded = list(reader.iter_decoded_messages())
             assert statistics.message_count == len(decoded)
             summaries += [message for _, channel, _, message in decoded
-                          if channel.topic == '/hrc/episode']
+                          if channel.topic == isolation.name('/hrc/episode')]
             record = {metadata.name: metadata.metadata
                       for metadata in reader.iter_metadata()}[SESSION_RECORD]
             assert yaml.safe_load(record['session_config']) == config
@@ -125,20 +131,20 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path,
             assert yaml.safe_load(record['recorder_parameters'])['flush_period'] == 0.2
     assert [(summary.episode, summary.evaluation, summary.total_error) for summary in summaries] \
         == [(summary.episode, summary.evaluation, summary.total_error)
-            for summary in published['/hrc/episode']]
+            for summary in published[isolation.name('/hrc/episode')]]
     # the status announcing episode 1 arrived between episodes: it opens episode 1's file
     first = by_topic(bag_reader.scan_file(folder / 'rt_ep0001.mcap').messages)
     assert [deserialize_message(message.data, SessionStatus).episode
-            for message in first['/hrc/session']] == [1]
+            for message in first[isolation.name('/hrc/session')]] == [1]
     end = bag_reader.scan_file(folder / 'rt_end.mcap').messages
     assert [deserialize_message(message.data, SessionStatus).phase for message in end] == [
         SessionStatus.PHASE_DONE]
 
 
 def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
-        start_node, test_node, tmp_path):
-    recorder = start_recorder(start_node, tmp_path, 'kill')
-    session = SyntheticSession(test_node, 'kill', case_id=1, seed=2)
+        start_node, test_node, tmp_path, isolation):
+    recorder = start_recorder(start_node, isolation, tmp_path, 'kill')
+    session = SyntheticSession(test_node, 'kill', case_id=1, seed=2, prefix=isolation.prefix)
     assert session.wait_for_subscribers(), recorder.output
     folder = tmp_path / 'kill'
     session.publish_status(0)
@@ -172,16 +178,17 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
     assert (tmp_path / 'report' / 'table2.md').is_file()
 
     # a new recorder of the same session finishes the open file and lists it
-    again = start_recorder(start_node, tmp_path, 'kill')
+    again = start_recorder(start_node, isolation, tmp_path, 'kill')
     assert wait_for(lambda: 'kill_ep0001.mcap' in listed_files(folder), 20.0), again.output
     assert again.stop() == 0, again.output
     with Reader(folder) as reader:
         assert sum(1 for _ in reader.messages()) == session.published.count()
 
 
-def _run_recorder(env, output_dir, command_prefix=(), preexec_fn=None, timeout=60):
+def _run_recorder(env, output_dir, command_prefix=(), preexec_fn=None, ros_args=()):
     command = [*command_prefix, str(executable_path('hrc_bag', 'recorder_node')),
-               '--ros-args', '-p', f'output_dir:={output_dir}', '-p', 'session_id:=denied']
+               '--ros-args', '-p', f'output_dir:={output_dir}', '-p', 'session_id:=denied',
+               *ros_args]
     return subprocess.Popen(command, env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True, preexec_fn=preexec_fn,
                             start_new_session=True)
@@ -221,7 +228,7 @@ def _limit_file_size():
 
 
 def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test_node,
-                                                                    tmp_path):
+                                                                    tmp_path, isolation):
     """A tmpfs of 100 kB when this machine may mount one (ENOSPC), else a file size limit."""
     mount_point = tmp_path / 'small_disk'
     mount_point.mkdir()
@@ -229,8 +236,9 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
                               str(mount_point)], capture_output=True).returncode == 0
     try:
         process = _run_recorder(ros_env, mount_point,
-                                preexec_fn=None if mounted else _limit_file_size)
-        session = SyntheticSession(test_node, 'denied', seed=4)
+                                preexec_fn=None if mounted else _limit_file_size,
+                                ros_args=isolation.ros_args)
+        session = SyntheticSession(test_node, 'denied', seed=4, prefix=isolation.prefix)
         assert session.wait_for_subscribers(), 'the recorder did not subscribe'
         session.publish_status(0)
         session.publish_episode(0, steps=8, step_period=0.01)
@@ -250,8 +258,8 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
             subprocess.run(['umount', '-l', str(mount_point)], check=False)
 
 
-def test_bad_parameters_exit_2_with_the_reason(start_node, tmp_path):
-    recorder = start_recorder(start_node, tmp_path, 'bad/name')
+def test_bad_parameters_exit_2_with_the_reason(start_node, tmp_path, isolation):
+    recorder = start_recorder(start_node, isolation, tmp_path, 'bad/name')
     assert recorder.wait(timeout=60) == 2
     assert "session_id: 'bad/name' must be" in recorder.output
     assert not any(tmp_path.iterdir())

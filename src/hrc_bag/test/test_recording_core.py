@@ -128,7 +128,7 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
 
 @pytest.fixture(scope='module')
 def recorded(tmp_path_factory):
-    """A synthetic session of 4 episodes recorded in-process (no DDS)."""
+    """Record a synthetic session of 4 episodes in-process (no DDS)."""
     folder = tmp_path_factory.mktemp('bags')
     plan = strategy_plan('responsibility_guided', 1, 2, 1)
     session = record_in_process(folder, 'core', 2, 'responsibility_guided', 3, plan, steps=6)

@@ -1,0 +1,180 @@
+"""The replay node over DDS: same bytes, original timing, selection, offset, /clock, loop."""
+
+import dataclasses
+import pathlib
+import time
+
+from hrc_common.params import default_of, load_yaml, ParameterError
+from hrc_common.testing import wait_for
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+import yaml
+
+from hrc_bag import bag_reader
+from hrc_bag.recorder_node import message_class
+from hrc_bag.replay import bag_start, publisher_qos, ReplayParams, Timeline
+from hrc_bag.synthetic import record_in_process, strategy_plan
+
+PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
+
+
+def test_params_yaml_mirrors_the_dataclass_defaults():
+    # (the default path is empty, which is refused: a bag must be given)
+    document = yaml.safe_load((PARAMS_DIR / 'replay.yaml').read_text())
+    assert document['replay']['ros__parameters'] == {
+        field.name: default_of(field) for field in dataclasses.fields(ReplayParams)}
+    with pytest.raises(ParameterError, match='path: give an episode file'):
+        load_yaml(ReplayParams, PARAMS_DIR / 'replay.yaml', 'replay')
+
+
+def test_timeline_scales_recording_time_by_the_rate():
+    timeline = Timeline(bag_start=10_000_000_000, rate=2.0, start_offset=1.0)
+    assert timeline.due(11_000_000_000) == 0.0
+    assert timeline.due(13_000_000_000) == 1.0
+    assert timeline.recording_time(1.0) == 13_000_000_000
+
+
+def test_recorded_qos_is_offered_again():
+    deadline = {'sec': 1, 'nsec': 0}
+    infinite = {'sec': 9223372036, 'nsec': 854775807}
+    profile = yaml.safe_dump([{'history': 'unknown', 'depth': 0, 'reliability': 'reliable',
+                               'durability': 'transient_local', 'deadline': deadline,
+                               'lifespan': infinite, 'liveliness': 'automatic',
+                               'liveliness_lease_duration': infinite,
+                               'avoid_ros_namespace_conventions': False}])
+    qos = publisher_qos({'offered_qos_profiles': profile})
+    assert (qos.reliable, qos.transient_local, qos.depth) == (True, True, 10)
+    assert (qos.deadline_ns, qos.lifespan_ns) == (1_000_000_000, 0)
+    assert publisher_qos({}).reliable
+
+
+@pytest.fixture(scope='module')
+def session_folder(tmp_path_factory):
+    """Record two episodes of 6 steps (2.4 s of recording time) in-process."""
+    folder = tmp_path_factory.mktemp('replay')
+    record_in_process(folder, 'rp', 5, 'learn_together', 1,
+                      strategy_plan('learn_together', 1, 1, 0), steps=6)
+    return folder / 'rp'
+
+
+def same_cdr(received: bytes, recorded: bytes) -> bool:
+    """Return True when ``received`` is ``recorded`` plus at most the 4-byte alignment padding.
+
+    The bag was written in-process from rclpy.serialization (unpadded); on the wire the
+    middleware pads a sample with zeros to a multiple of 4 bytes.
+    """
+    padding = received[len(recorded):]
+    return (received[:len(recorded)] == recorded and padding == bytes(len(padding))
+            and len(padding) < 4)
+
+
+def same_sequence(received: list, recorded: list) -> bool:
+    """Return True when two lists of CDR samples are equal (up to the alignment padding)."""
+    return len(received) == len(recorded) and all(
+        same_cdr(got, want) for got, want in zip(received, recorded))
+
+
+class Listener:
+    """Raw subscriptions to the recorded topics; remembers bytes and arrival times."""
+
+    def __init__(self, node, topics, prefix, clock=False):
+        self.received = []                              # (topic, bytes, monotonic time)
+        self.clock = []
+        for topic, info in topics.items():
+            durability = (DurabilityPolicy.TRANSIENT_LOCAL
+                          if publisher_qos(info.channel_metadata).transient_local
+                          else DurabilityPolicy.VOLATILE)
+            qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=durability)
+            node.create_subscription(message_class(info.type_name), prefix + topic,
+                                     self._callback(topic), qos, raw=True)
+        if clock:
+            node.create_subscription(Clock, prefix + '/clock', self.clock.append,
+                                     QoSProfile(depth=100,
+                                                reliability=ReliabilityPolicy.BEST_EFFORT))
+        self.executor = SingleThreadedExecutor(context=node.context)
+        self.executor.add_node(node)
+
+    def _callback(self, topic):
+        def on_message(data):
+            self.received.append((topic, data, time.monotonic()))
+        return on_message
+
+    def spin_until(self, condition, timeout):
+        return wait_for(condition, timeout,
+                        spin=lambda: self.executor.spin_once(timeout_sec=0.01))
+
+    def of(self, topic):
+        return [data for name, data, _ in self.received if name == topic]
+
+
+def test_a_session_is_replayed_with_the_same_bytes_and_timing(start_node, test_node,
+                                                              session_folder, isolation):
+    recorded = list(bag_reader.iter_messages(session_folder))
+    topics = bag_reader.bag_topics(session_folder)
+    listener = Listener(test_node, topics, isolation.prefix)
+    rate = 2.0
+    replay = start_node('hrc_bag', 'replay_node',
+                        parameters={'path': str(session_folder), 'rate': rate,
+                                    'start_delay': 0.5, 'wait_for_subscribers': 1},
+                        ros_args=isolation.ros_args)
+    assert listener.spin_until(lambda: replay.process.poll() is not None, 60.0), replay.output
+    assert replay.wait(timeout=10) == 0, replay.output
+    listener.spin_until(lambda: len(listener.received) >= len(recorded), 5.0)
+
+    for topic in topics:
+        assert same_sequence(listener.of(topic), [message.data for message in recorded
+                                                  if message.topic == topic]), topic
+    assert len(listener.received) == len(recorded)
+    # timing: arrival offsets against the recorded offsets scaled by the rate
+    first_arrival = min(arrival for _, _, arrival in listener.received)
+    arrivals = {}
+    for topic, _, arrival in listener.received:
+        arrivals.setdefault(topic, []).append(arrival - first_arrival)
+    errors = []
+    for topic, times in arrivals.items():
+        expected = [(message.log_time - recorded[0].log_time) / 1e9 / rate
+                    for message in recorded if message.topic == topic]
+        errors += [got - want for got, want in zip(times, expected)]
+    span = (recorded[-1].log_time - recorded[0].log_time) / 1e9 / rate
+    assert span > 1.0
+    assert max(abs(error) for error in errors) < 0.3, errors
+    assert 'replay finished' in replay.output
+
+
+def test_one_file_with_topic_selection_offset_clock_and_loop(start_node, test_node,
+                                                            session_folder, isolation):
+    episode_file = session_folder / 'rp_ep0001.mcap'
+    offset = 0.5
+    threshold = bag_start(episode_file) + int(offset * 1e9)
+    expected = [message.data for message in bag_reader.scan_file(episode_file).messages
+                if message.topic == '/hrc/state' and message.log_time >= threshold]
+    assert 0 < len(expected) < 6
+    topics = bag_reader.bag_topics(episode_file)
+    listener = Listener(test_node, topics, isolation.prefix, clock=True)
+    replay = start_node('hrc_bag', 'replay_node',
+                        parameters={'path': str(episode_file), 'rate': 4.0, 'loop': True,
+                                    'topics': ['/hrc/state'], 'start_offset': offset,
+                                    'clock': True, 'clock_rate': 50.0, 'start_delay': 0.5,
+                                    'wait_for_subscribers': 1},
+                        ros_args=isolation.ros_args)
+    assert listener.spin_until(lambda: len(listener.received) >= 2 * len(expected) + 1,
+                               60.0), replay.output
+    assert replay.stop() == 0, replay.output
+    states = listener.of('/hrc/state')
+    assert {topic for topic, _, _ in listener.received} == {'/hrc/state'}
+    assert same_sequence(states[:len(expected)], expected)
+    assert same_sequence(states[len(expected):2 * len(expected)], expected)      # looped
+    times = [message.clock.sec * 10**9 + message.clock.nanosec for message in listener.clock]
+    assert times, 'no /clock received'
+    end = max(message.log_time for message in bag_reader.scan_file(episode_file).messages)
+    assert all(threshold <= value <= end + 10**9 for value in times)
+
+
+def test_a_missing_bag_is_a_parameter_error(start_node, tmp_path):
+    replay = start_node('hrc_bag', 'replay_node',
+                        parameters={'path': str(tmp_path / 'nothing')})
+    assert replay.wait(timeout=60) == 2
+    assert 'does not exist' in replay.output

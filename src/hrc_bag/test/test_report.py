@@ -1,0 +1,140 @@
+"""The report on recorded sessions: Table II values, CSV, valid PNG figures, the CLI."""
+
+import csv
+import io
+import math
+import struct
+import subprocess
+
+from hrc_common.testing import executable_path
+import numpy
+import pytest
+
+from hrc_bag import report
+from hrc_bag.synthetic import record_in_process, strategy_plan
+
+CASES = {1: 'responsibility_guided', 2: 'responsibility_guided', 4: 'level_guided',
+         5: 'learn_together'}
+SEEDS = (1, 2)
+
+
+@pytest.fixture(scope='module')
+def bags(tmp_path_factory):
+    """Record 4 cases x 2 seeds (training episodes vary with the seed) in-process."""
+    folder = tmp_path_factory.mktemp('report_bags')
+    published = {}
+    for case, strategy in CASES.items():
+        for seed in SEEDS:
+            plan = strategy_plan(strategy, 1 + seed, 2, 2)
+            session = record_in_process(folder, f'case{case}_seed{seed}', case, strategy, seed,
+                                        plan, steps=21)
+            published[(case, seed)] = session.published.by_topic['/hrc/episode']
+    return folder, published
+
+
+@pytest.fixture(scope='module')
+def written(bags, tmp_path_factory):
+    """Run the report once on every session; return (result, output folder)."""
+    out = tmp_path_factory.mktemp('report')
+    return report.write_report([bags[0]], out), out
+
+
+def expected_values(summaries) -> dict:
+    training = [summary for summary in summaries if not summary.evaluation]
+    evaluation = [summary for summary in summaries if summary.evaluation]
+    involved = sum(summary.human_involved for summary in training)
+    values = {'human_involved_episodes': involved, 'total_episodes': len(training),
+              'percentage': 100.0 * involved / len(training)}
+    for key in ('slider_error', 'pendulum_error', 'ball_error', 'total_error', 'human_effort',
+                'robot_effort'):
+        values[key] = numpy.mean([getattr(summary, key) for summary in evaluation])
+    return values
+
+
+def png_size(path) -> tuple:
+    data = path.read_bytes()
+    assert data[:8] == b'\x89PNG\r\n\x1a\n', f'{path} is not a PNG'
+    assert data[12:16] == b'IHDR' and data[-8:-4] == b'IEND'
+    return struct.unpack('>II', data[16:24])
+
+
+def test_table2_values_are_the_mean_and_spread_over_seeds(bags, written):
+    folder, published = bags
+    result, _ = written
+    rows = {row.case_id: row for row in result['rows']}
+    assert sorted(rows) == sorted(CASES)
+    for case in CASES:
+        per_seed = [expected_values(published[(case, seed)]) for seed in SEEDS]
+        for key, _, _ in report.METRICS:
+            mean, spread, count = rows[case].values[key]
+            values = [entry[key] for entry in per_seed]
+            assert count == 2
+            assert mean == pytest.approx(numpy.mean(values), rel=1e-12), (case, key)
+            assert spread == pytest.approx(numpy.std(values, ddof=1), rel=1e-9, abs=1e-15)
+    # responsibility-guided: the human joins in step 2 only; the others: always involved
+    assert rows[1].values['human_involved_episodes'][0] == 2.0
+    assert rows[1].values['total_episodes'][0] == 4.5
+    assert rows[4].values['percentage'][0] == 100.0
+    assert [row.case_id for row in result['rows']] == [1, 2, 4, 5]
+    assert (rows[1].robot_dof, rows[2].robot_dof) == ('translation', 'rotation')
+
+
+def test_markdown_csv_and_figures_are_written(bags, written):
+    folder, published = bags
+    _, tmp_path = written
+    markdown = (tmp_path / 'table2.md').read_text()
+    lines = [line for line in markdown.splitlines() if line.startswith('| ')]
+    assert len(lines) == 1 + len(CASES)
+    assert 'Human-involved episodes' in lines[0] and 'Robot effort' in lines[0]
+    case4 = next(line for line in lines if '| Case 4 |' in line)
+    assert 'Learn human first' in case4 and '100% ± 0%' in case4
+    with open(tmp_path / 'table2.csv') as stream:
+        table = list(csv.DictReader(stream))
+    assert [int(row['case_id']) for row in table] == [1, 2, 4, 5]
+    expected = numpy.mean([expected_values(published[(2, seed)])['ball_error']
+                           for seed in SEEDS])
+    assert float(table[1]['ball_error_mean']) == pytest.approx(expected)
+    sessions = list(csv.DictReader(io.StringIO((tmp_path / 'sessions.csv').read_text())))
+    assert len(sessions) == len(CASES) * len(SEEDS)
+    assert {row['seed'] for row in sessions} == {'1', '2'}
+    for name, minimum in (('fig5_training.png', (1000, 400)), ('fig6_actions.png', (900, 400)),
+                          ('fig7_three_factor.png', (500, 500))):
+        width, height = png_size(tmp_path / name)
+        assert width >= minimum[0] and height >= minimum[1], name
+        assert (tmp_path / name).stat().st_size > 20_000, name   # not an empty canvas
+
+
+def test_figure_data(bags):
+    folder, published = bags
+    sessions = [report.load_session(path) for path in report.find_sessions([folder])]
+    case1 = next(session for session in sessions if session.session_id == 'case1_seed2')
+    curve = report.training_curve(case1)
+    assert len(curve['returns']) == 5
+    assert curve['human_joins'] == [4] and curve['reward_changes'] == [4]
+    trace = report.action_trace(case1, seconds=2.0)
+    assert trace['episode'] == 5                                 # first evaluation episode
+    assert [time for time, _ in trace['robot']] == pytest.approx(
+        [0.2 * step for step in range(10)])
+    factors = {entry['strategy']: entry for entry in report.three_factors(report.table2(
+        sessions))}
+    assert factors['responsibility_guided']['human_involved_episodes'][0] == 2.0
+    assert factors['learn_together']['total_episodes'][0] == 4.5
+    assert report.factor_score(0.0, 10.0) == 1.0
+    assert report.factor_score(10.0, 10.0) == pytest.approx(0.2)
+    assert math.isnan(report.factor_score(math.nan, 1.0))
+
+
+def test_cli_writes_the_report_and_refuses_an_empty_folder(bags, tmp_path):
+    folder, _ = bags
+    command = [str(executable_path('hrc_bag', 'hrc_report'))]
+    done = subprocess.run(command + [str(folder / 'case5_seed1'), '--out', str(tmp_path / 'a')],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert '| Learn together (baseline) | Case 5 |' in done.stdout
+    assert (tmp_path / 'a' / 'fig7_three_factor.png').is_file()
+    empty = tmp_path / 'empty'
+    empty.mkdir()
+    done = subprocess.run(command + [str(empty), '--out', str(tmp_path / 'b')],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1
+    assert 'no session with episode summaries' in done.stderr
