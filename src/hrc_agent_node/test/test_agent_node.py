@@ -20,6 +20,7 @@ from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 PHYSICS = PhysicsParams(episode_duration=2.0)   # 10 control steps per episode
 STEPS = PHYSICS.steps_per_episode
+AGENT_YAML = pathlib.Path(repository_params_dir()) / 'agent.yaml'
 
 
 def human_command(episode, step):
@@ -205,7 +206,7 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
 
 def test_missing_human_action_times_out_and_is_reported(start_node, rclpy_context):
     fake = FakeSim(rclpy_context, human_answers=False)
-    agent = start_node('hrc_agent_node', 'agent_node', parameters={
+    agent = start_node('hrc_agent_node', 'agent_node', params_file=AGENT_YAML, parameters={
         'case': 5, 'max_training_episodes': 1, 'evaluation_episodes': 0,
         'human_action_timeout': 0.05, 'checkpoint_dir': '',
         'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})

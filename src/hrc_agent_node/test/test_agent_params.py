@@ -1,0 +1,83 @@
+"""params/agent.yaml mirrors AgentParams; bad values are refused with reasons; core wiring."""
+
+from dataclasses import fields
+import math
+import types
+
+import pytest
+import yaml
+
+from hrc_agent_node.agent_core import AgentCore, derive_seed
+from hrc_agent_node.config import AgentParams, repository_params_dir
+from hrc_common.params import checked, load_yaml, ParameterError, with_overrides
+
+AGENT_YAML = f'{repository_params_dir()}/agent.yaml'
+
+
+def test_yaml_mirrors_the_dataclass():
+    with open(AGENT_YAML) as stream:
+        values = yaml.safe_load(stream)['agent']['ros__parameters']
+    assert set(values) == {f.name for f in fields(AgentParams)}
+    assert load_yaml(AgentParams, AGENT_YAML, 'agent') == AgentParams()
+
+
+def test_table_one_defaults():
+    p = AgentParams()
+    assert (p.gamma, p.horizon, p.entropy_coef, p.clip_coef, p.gae_lambda, p.minibatch_size,
+            p.learning_rate, p.epochs) == (0.995, 512, 0.02, 0.05, 0.95, 64, 0.001, 3)
+    assert p.preset == 'paper'
+
+
+@pytest.mark.parametrize('overrides, reason', [
+    ({'case': 7}, 'case: 7 is above the maximum 6'),
+    ({'gamma': 1.5}, 'gamma: 1.5 is above the maximum 1.0'),
+    ({'mode': 'turbo'}, "mode: 'turbo' is not one of"),
+    ({'minibatch_size': 600}, 'minibatch_size: 600 exceeds horizon 512'),
+    ({'evaluation_only': True}, 'evaluation_only: needs resume_from'),
+    ({'evaluation_only': True, 'resume_from': 'x.pt', 'evaluation_episodes': 0},
+     'needs evaluation_episodes of at least 1'),
+])
+def test_bad_values_are_refused_with_reason(overrides, reason):
+    with pytest.raises(ParameterError) as error:
+        checked(AgentParams(**overrides))
+    assert reason in str(error.value)
+
+
+def test_episode_seeds_are_derived_and_distinct():
+    seeds = [derive_seed(3, episode) for episode in range(100)]
+    assert len(set(seeds)) == 100 and all(0 <= seed < 2**31 for seed in seeds)
+    assert seeds == [derive_seed(3, episode) for episode in range(100)]
+    assert seeds != [derive_seed(4, episode) for episode in range(100)]
+
+
+def fake_state(step, final=False, slider=0.01, angle=-0.2, ball=0.1):
+    return types.SimpleNamespace(step=step, slider_position=slider, slider_velocity=0.0,
+                                 pendulum_angle=angle, pendulum_angular_velocity=0.0,
+                                 ball_position=ball, ball_velocity=0.0, truncated=final,
+                                 terminated=False)
+
+
+def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
+    core = AgentCore(with_overrides(AgentParams(), case=2, preset='tuned', checkpoint_dir=''))
+    assert core.robot_dof == 'rotation' and not core.human_involved
+    core.start_episode()
+    first = core.act(fake_state(0), human_action=0.7)
+    assert first.previous is None
+    assert first.record.observed_human_action == 0.0   # the human is not involved in step 1
+    assert first.wrench == pytest.approx(first.action * core.params.max_torque)
+    second = core.act(fake_state(1, angle=0.05), human_action=0.7)
+    record = second.previous
+    assert record.step == 0 and record.subtask_ids == ('slider', 'pendulum')
+    slider, pendulum = core.tree.shapes['slider'], core.tree.shapes['pendulum']
+    assert record.reward_components == pytest.approx(
+        (slider.value(0.01), pendulum.value(0.05)))     # from state 1, the state reached
+    assert record.reward == pytest.approx(sum(record.reward_components))
+    with pytest.raises(ValueError, match='step 1 again'):
+        core.act(fake_state(1), 0.0)
+    result = core.end_episode(fake_state(2, final=True, angle=-0.3))
+    assert result.steps == 2 and result.last_record.step == 1
+    assert result.episode_return == pytest.approx(record.reward + result.last_record.reward)
+    assert result.errors['pendulum'] == pytest.approx((0.05 + 0.3) / 2)
+    assert result.human_effort == 0.0 and not math.isnan(result.robot_effort)
+    assert core.total_episodes == 1 and core.human_involved_episodes == 0
+    assert core.episode == 1 and not core.in_episode
