@@ -229,3 +229,37 @@ def test_bad_parameters_exit_2_with_the_reason(start_node, parameters, reason):
     agent = start_node('hrc_agent_node', 'agent_node', parameters=parameters)
     assert agent.wait(timeout=60) == 2, agent.output
     assert reason in agent.output
+
+
+def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
+    """With the sim node (lockstep on the robot alone): every step answered, roles adopted."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    node = rclpy.create_node('observer', context=rclpy_context)
+    states, sessions = [], []
+    node.create_subscription(TaskState, topics.STATE, states.append, qos.STATE_QOS)
+    node.create_subscription(SessionStatus, topics.SESSION, sessions.append, qos.SESSION_QOS)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    start_node('hrc_sim_node', 'sim_node', parameters={
+        'mode': 'lockstep', 'expected_actors': ['robot'], 'episode_duration': 2.0,
+        'lockstep_timeout': 10.0, 'marker_rate': 0.0})
+    agent = start_node('hrc_agent_node', 'agent_node', parameters={
+        'case': 2, 'seed': 1, 'max_training_episodes': 2, 'evaluation_episodes': 1,
+        'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': ''})
+    deadline = time.monotonic() + 90
+    while agent.process.poll() is None and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+    for _ in range(20):
+        executor.spin_once(timeout_sec=0.02)
+    executor.shutdown()
+    node.destroy_node()
+    assert agent.process.poll() == 0, agent.output
+    assert [(s.episode, s.step) for s in states] == \
+        [(episode, step) for episode in range(3) for step in range(STEPS + 1)]
+    assert not any(s.robot_command_missing for s in states)
+    # The sim took the roles from /hrc/session: the robot turns the pendulum, nobody pushes.
+    assert any(s.applied_torque != 0.0 for s in states)
+    assert all(s.applied_force == 0.0 for s in states)
+    assert sessions[-1].phase == SessionStatus.PHASE_DONE
