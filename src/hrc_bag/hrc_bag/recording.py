@@ -441,6 +441,8 @@ def session_summary(config: dict, status: typing.Optional[dict]) -> dict:
     """Return case, strategy, roles and seed of a session from its config, else its status."""
     status = status or {}
     roles = config.get('roles')
+    if roles is None and ('robot_dof' in config or 'human_dof' in config):
+        roles = {'robot': config.get('robot_dof'), 'human': config.get('human_dof')}
     if roles is None and status:
         dof = {0: 'translation', 1: 'rotation'}
         roles = {'robot': dof.get(status.get('robot_dof')),
@@ -593,8 +595,8 @@ class EpisodeRecorder:
             'strategy': str(summary['strategy']),
             'roles': dump_yaml(summary['roles']),
             'seeds': dump_yaml(summary['seeds']),
-            'package_version': str(self.session_config.get('package_version',
-                                                           package_version())),
+            'package_version': str(self.session_config.get(
+                'package_version', self.session_config.get('version', package_version()))),
             'recorder_version': package_version(),
             'session_config': self._session_config_text or dump_yaml(self.session_config),
             'recorder_parameters': dump_yaml(self._recorder_parameters),

@@ -158,7 +158,8 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
             next(iter(summaries.values())).case_id if summaries else 0)
     strategy = config.get('strategy') or (last.strategy if last is not None else '')
     roles = config.get('roles') if isinstance(config.get('roles'), dict) else {}
-    robot_dof = roles.get('robot') or (DOF_NAMES.get(last.robot_dof, '') if last else '')
+    robot_dof = (roles.get('robot') or config.get('robot_dof')
+                 or (DOF_NAMES.get(last.robot_dof, '') if last else ''))
     session_id = (record.get('session_id') or (last.session_id if last else '')
                   or path.name)
     return Session(path=path, session_id=session_id, case_id=int(case_id or 0),
@@ -349,6 +350,7 @@ def _mean_curve(curves) -> tuple:
 def figure_training_curves(rows, path) -> None:
     """Write Fig. 5: training curves per case, marks where the human joins / reward changes."""
     pyplot = _pyplot()
+    from matplotlib.ticker import MaxNLocator
     panels = [('translation', '(a) robot: translation, human: rotation'),
               ('rotation', '(b) robot: rotation, human: translation')]
     figure, axes = pyplot.subplots(1, 2, figsize=(13, 4.8), sharey=True)
@@ -379,9 +381,13 @@ def figure_training_curves(rows, path) -> None:
                                  linewidth=0.8)
         axis.set_title(title)
         axis.set_xlabel('training episode')
+        axis.xaxis.set_major_locator(MaxNLocator(integer=True))
         axis.grid(alpha=0.3)
-        if members:
+        if axis.get_lines():
             axis.legend(loc='lower right')
+        else:
+            axis.text(0.5, 0.5, 'no session of these cases', transform=axis.transAxes,
+                      ha='center', va='center', color='gray')
     axes[0].set_ylabel('episode return (robot reward)')
     figure.suptitle('Fig. 5: training; arrows: the human joins; dashed: the reward changes '
                     '(new training step)')
@@ -440,16 +446,20 @@ def figure_actions(rows, path, seconds: float = 4.0, start: float = 0.0) -> None
     pyplot = _pyplot()
     columns = max(1, min(3, len(rows)))
     lines = max(1, math.ceil(len(rows) / columns))
-    figure, axes = pyplot.subplots(lines, columns, figsize=(4.6 * columns, 3.2 * lines),
+    figure, axes = pyplot.subplots(lines, columns,
+                                   figsize=(max(4.6 * columns, 7.5), 3.2 * lines + 0.6),
                                    squeeze=False, sharey=True)
+    # the first session of each case (lowest seed) gives the trace
+    traces = [action_trace(sorted(row.sessions, key=lambda member: member.seed)[0], seconds,
+                           start) for row in rows]
+    # one symmetric scale for all cases, so that their action sizes compare
+    largest = max([abs(value) for trace in traces for key in ('robot', 'human')
+                   for _, value in trace.get(key, [])] + [0.1])
     for index, axis in enumerate(axes.flat):
         if index >= len(rows):
             axis.set_visible(False)
             continue
-        row = rows[index]
-        # the first session of the case (lowest seed) gives the trace
-        session = sorted(row.sessions, key=lambda member: member.seed)[0]
-        trace = action_trace(session, seconds, start)
+        row, trace = rows[index], traces[index]
         human_dof = {'translation': 'rotation', 'rotation': 'translation'}.get(row.robot_dof,
                                                                               '?')
         if trace:
@@ -463,7 +473,7 @@ def figure_actions(rows, path, seconds: float = 4.0, start: float = 0.0) -> None
         else:
             axis.set_title(f'case {row.case_id}: no evaluation episode')
         axis.set_xlim(start, start + seconds)
-        axis.set_ylim(-1.05, 1.05)
+        axis.set_ylim(-1.1 * largest, 1.1 * largest)
         axis.set_xlabel('time in episode (s)')
         axis.grid(alpha=0.3)
         if axis.get_lines():
