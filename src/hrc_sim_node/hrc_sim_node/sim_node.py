@@ -45,7 +45,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 LOCKSTEP = 'lockstep'
 REALTIME = 'realtime'
-# Throttle (s) of the warnings about bad commands: a broken sender at 500 Hz would flood.
+# Throttle (s) of each kind of warning about commands: a broken sender at 500 Hz would flood.
 WARN_THROTTLE_S = 2.0
 # /clock: reliable, so best-effort (rclpy's TimeSource) and reliable subscribers both match.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
@@ -137,6 +137,7 @@ class SimNode(Node):
         self._answers = {}              # actor -> Command answering the awaited state
         self._latest = {}               # realtime: actor -> (Command, monotonic receipt time)
         self._exiting = False
+        self._warned = {}               # kind -> (monotonic time of the last warning, suppressed)
 
         self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
         self._clock_pub = (self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS)
@@ -180,6 +181,18 @@ class SimNode(Node):
             self.start_episode(0, seed=-1)
         else:
             self.get_logger().info(f'waiting for {topics.RESET_SERVICE} to start an episode')
+
+    def _warn(self, kind: str, message: str):
+        """Log a warning, at most once per WARN_THROTTLE_S for each kind (actor and event)."""
+        now = time.monotonic()
+        last, suppressed = self._warned.get(kind, (None, 0))
+        if last is not None and now - last < WARN_THROTTLE_S:
+            self._warned[kind] = (last, suppressed + 1)
+            return
+        if suppressed:
+            message += f' ({suppressed} more like this in the last {now - last:.1f} s)'
+        self.get_logger().warning(message)
+        self._warned[kind] = (now, 0)
 
     # -- parameters ----------------------------------------------------------------------------
     def declare_parameter(self, name, value=None, descriptor=None, ignore_override=False):
@@ -260,9 +273,8 @@ class SimNode(Node):
             if actor == HUMAN and not self.human_involved:
                 if command.value != 0.0:
                     self._counters['human_not_involved'] += 1
-                    self.get_logger().warning(
-                        f'human command {command.value:+.3g} ignored: the session says the '
-                        f'human is not involved now', throttle_duration_sec=WARN_THROTTLE_S)
+                    self._warn('human_not_involved', f'human command {command.value:+.3g} '
+                               f'ignored: the session says the human is not involved now')
                 continue
             wrench[self.dof_of[actor]] += command.value
         for actor, is_missing in missing.items():
@@ -304,10 +316,9 @@ class SimNode(Node):
             return
         missing = {actor: actor not in self._answers for actor in self.params.expected_actors}
         absent = [actor for actor, is_missing in missing.items() if is_missing]
-        self.get_logger().warning(
-            f'step {self._state.step}: no command from {", ".join(absent)} within '
-            f'lockstep_timeout {self.params.lockstep_timeout} s: counted as zero',
-            throttle_duration_sec=WARN_THROTTLE_S)
+        self._warn('lockstep_timeout', f'step {self._state.step}: no command from '
+                   f'{", ".join(absent)} within lockstep_timeout '
+                   f'{self.params.lockstep_timeout} s: counted as zero')
         self._advance(self._answers, missing)
 
     def _on_realtime_tick(self):
@@ -324,10 +335,9 @@ class SimNode(Node):
                 missing[actor] = not (fresh and command.accepted)
         absent = [actor for actor, is_missing in missing.items() if is_missing]
         if absent:
-            self.get_logger().warning(
-                f'step {self._state.step}: no fresh command from {", ".join(absent)} '
-                f'(command_timeout {self.params.command_timeout} s): counted as zero',
-                throttle_duration_sec=WARN_THROTTLE_S)
+            self._warn('command_timeout', f'step {self._state.step}: no fresh command from '
+                       f'{", ".join(absent)} (command_timeout '
+                       f'{self.params.command_timeout} s): counted as zero')
         self._advance(commands, missing)
 
     # -- inputs --------------------------------------------------------------------------------
@@ -335,37 +345,35 @@ class SimNode(Node):
         if not self._active:
             self._counters[actor + '_between_episodes'] += 1
             return
+        lockstep = self.params.mode == LOCKSTEP
+        stamp = (message.header.stamp.sec, message.header.stamp.nanosec)
+        if lockstep and stamp != self._awaited:
+            self._counters[actor + '_stale'] += 1
+            self.get_logger().debug(f'{actor} command stamped {stamp} does not answer the '
+                                    f'current state {self._awaited}: ignored')
+            return
         dof = self.dof_of[actor]
         limit = limit_for(dof, self.params.max_force, self.params.max_torque)
         command = read_command(message.wrench, dof, limit)
         step = self._state.step
-        logger = self.get_logger()
         if not command.accepted:
             self._counters[actor + '_refused'] += 1
-            logger.warning(f'refused {actor} command at step {step}: {command.refused}; the '
-                           f'step counts it as missing (zero)',
-                           throttle_duration_sec=WARN_THROTTLE_S)
+            self._warn(actor + '_refused', f'refused {actor} command at step {step}: '
+                       f'{command.refused}; the step counts it as missing (zero)')
         else:
             if command.clamped:
                 self._counters[actor + '_clamped'] += 1
-                logger.warning(f'clamped {actor} {dof} command {command.requested:+.4g} to '
-                               f'{command.value:+.4g} {unit_of(dof)} (limit {limit:g})',
-                               throttle_duration_sec=WARN_THROTTLE_S)
+                self._warn(actor + '_clamped', f'clamped {actor} {dof} command '
+                           f'{command.requested:+.4g} to {command.value:+.4g} {unit_of(dof)} '
+                           f'(limit {limit:g})')
             if command.off_axis:
                 self._counters[actor + '_off_axis'] += 1
                 components = ', '.join(f'{name}={value:+.4g}'
                                        for name, value in sorted(command.off_axis.items()))
-                logger.warning(f'ignored off-axis components of the {actor} command ({actor} '
-                               f'drives {dof} only): {components}',
-                               throttle_duration_sec=WARN_THROTTLE_S)
-        if self.params.mode == REALTIME:
+                self._warn(actor + '_off_axis', f'ignored off-axis components of the {actor} '
+                           f'command ({actor} drives {dof} only): {components}')
+        if not lockstep:
             self._latest[actor] = (command, time.monotonic())
-            return
-        stamp = (message.header.stamp.sec, message.header.stamp.nanosec)
-        if stamp != self._awaited:
-            self._counters[actor + '_stale'] += 1
-            logger.debug(f'{actor} command stamped {stamp} does not answer the current state '
-                         f'{self._awaited}: ignored')
             return
         self._answers[actor] = command
         if all(expected in self._answers for expected in self.params.expected_actors):
@@ -376,9 +384,8 @@ class SimNode(Node):
 
     def _on_deadline_missed(self, actor: str, event):
         if self._active and self.params.mode == REALTIME:
-            self.get_logger().warning(
-                f'{actor} commands stopped for over {qos.COMMAND_DEADLINE_S} s '
-                f'({event.total_count} deadline misses)', throttle_duration_sec=WARN_THROTTLE_S)
+            self._warn(actor + '_deadline', f'{actor} commands stopped for over '
+                       f'{qos.COMMAND_DEADLINE_S} s ({event.total_count} deadline misses)')
 
     def _on_session(self, message: SessionStatus):
         robot, human = DOF_NAME.get(message.robot_dof), DOF_NAME.get(message.human_dof)

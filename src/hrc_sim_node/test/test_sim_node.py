@@ -1,0 +1,279 @@
+"""Tests of the sim node in its own process over DDS (fixtures: start_node, sim_client)."""
+
+from dataclasses import fields
+import math
+import pathlib
+import statistics
+
+from hrc_common.params import as_dict, load_yaml
+from hrc_common.testing import wait_for
+from hrc_msgs.msg import SessionStatus
+from hrc_sim_node.physics import body_poses, PhysicsParams, SliderPendulumBall
+from hrc_sim_node.sim_node import SimParams
+import pytest
+import yaml
+
+PARAMS_FILE = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim.yaml'
+# Lockstep tests wait for commands much longer than they need, so a slow machine never makes
+# the sim time out on its own: holding means the sim got no complete answer.
+PATIENT = {'lockstep_timeout': 60.0, 'marker_rate': 0.0}
+
+
+def seconds(stamp) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def printed(process, text: str, timeout: float = 10.0) -> bool:
+    """Wait until the node process has printed ``text``."""
+    return wait_for(lambda: text in process.output, timeout, interval=0.05)
+
+
+def start_sim(start_node, sim_client, **parameters):
+    process = start_node('hrc_sim_node', 'sim_node', parameters=parameters)
+    sim_client.connect()
+    return process
+
+
+def test_params_yaml_mirrors_the_dataclass_defaults():
+    assert as_dict(load_yaml(SimParams, PARAMS_FILE, 'sim')) == as_dict(SimParams())
+    document = yaml.safe_load(PARAMS_FILE.read_text())
+    assert set(document['sim']['ros__parameters']) == {f.name for f in fields(SimParams)}
+    physics_names = {f.name for f in fields(PhysicsParams)}
+    assert physics_names <= {f.name for f in fields(SimParams)}
+
+
+def test_lockstep_advances_once_per_answered_step_and_holds_otherwise(start_node, sim_client):
+    start_sim(start_node, sim_client, **PATIENT)
+    response = sim_client.reset(seed=3, episode=4)
+    assert response.success
+    assert response.state.step == 0 and response.state.episode == 4
+    state = sim_client.next_state(0)
+    assert state.header.stamp == response.state.header.stamp
+
+    # Only the robot answers: the sim holds.
+    sim_client.answer('robot', state)
+    sim_client.spin(0.5)
+    assert len(sim_client.states) == 1
+    # The human answers too: exactly one step.
+    sim_client.answer('human', state)
+    state = sim_client.next_state(1)
+    assert state.step == 1
+    # Commands carrying another state's stamp (stale) do not answer the current state.
+    sim_client.answer('robot', sim_client.states[0])
+    sim_client.answer('human', sim_client.states[0])
+    sim_client.spin(0.5)
+    assert len(sim_client.states) == 2
+
+    # The robot drives translation (force.z), the human rotation (torque.x) by default; the
+    # node must give exactly the physics core's trajectory for those commands.
+    commands = [(1.0, 0.2), (-0.5, 0.1), (2.0, -0.3), (0.0, 0.0), (0.7, 0.5)]
+    for index, (force, torque) in enumerate(commands):
+        sim_client.answer('robot', state, force_z=force)
+        sim_client.answer('human', state, torque_x=torque)
+        state = sim_client.next_state(2 + index)
+        assert state.step == 2 + index
+        assert (state.applied_force, state.applied_torque) == (force, torque)
+        assert not state.robot_command_missing and not state.human_command_missing
+    sim_client.spin(0.3)
+    assert [s.step for s in sim_client.states] == list(range(7))
+    assert all(s.episode == 4 for s in sim_client.states)
+    times = [seconds(s.header.stamp) for s in sim_client.states]
+    assert all(b - a == pytest.approx(0.2) for a, b in zip(times, times[1:]))
+    # /clock carries the simulation time of every state (lockstep).
+    assert sim_client.wait(lambda: len(sim_client.clocks) >= 7)
+    assert [seconds(c.clock) for c in sim_client.clocks][-7:] == pytest.approx(times)
+
+    physics = SliderPendulumBall()
+    expected = [physics.reset(seed=3), physics.step(0.0, 0.0)]
+    expected += [physics.step(force, torque) for force, torque in commands]
+    physics.close()
+    assert len(expected) == len(sim_client.states)
+    for published, reference in zip(sim_client.states, expected):
+        assert published.slider_position == reference.slider_position
+        assert published.pendulum_angle == reference.pendulum_angle
+        assert published.ball_position == reference.ball_position
+
+
+def test_lockstep_timeout_counts_the_missing_command_as_zero(start_node, sim_client):
+    process = start_sim(start_node, sim_client, lockstep_timeout=0.3, marker_rate=0.0)
+    sim_client.reset(seed=1)
+    state = sim_client.next_state(0)
+    sim_client.answer('robot', state, force_z=1.0)
+    state = sim_client.next_state(1)
+    assert state.step == 1
+    assert state.human_command_missing and not state.robot_command_missing
+    assert state.applied_force == 1.0 and state.applied_torque == 0.0
+    assert printed(process, 'no command from human within lockstep_timeout')
+
+
+def test_non_finite_commands_are_refused_and_big_ones_clamped(start_node, sim_client):
+    process = start_sim(start_node, sim_client, **PATIENT)
+    sim_client.reset(seed=2)
+    state = sim_client.next_state(0)
+    sim_client.answer('robot', state, force_z=math.nan)
+    sim_client.answer('human', state, torque_x=0.1)
+    state = sim_client.next_state(1)
+    assert state.robot_command_missing and not state.human_command_missing
+    assert state.applied_force == 0.0 and state.applied_torque == 0.1
+    assert printed(process, 'refused robot command at step 0: non-finite component(s) '
+                            'force.z=nan')
+    # A NaN in an unused component refuses the whole command too.
+    sim_client.answer('robot', state, force_z=1.0)
+    sim_client.answer('human', state, torque_x=0.1, force_y=math.inf)
+    state = sim_client.next_state(2)
+    assert state.human_command_missing and state.applied_torque == 0.0
+    assert state.applied_force == 1.0
+    # Beyond the limits: clamped to max_force = 2 N and max_torque = 0.5 N*m.
+    sim_client.answer('robot', state, force_z=100.0)
+    sim_client.answer('human', state, torque_x=-7.0)
+    state = sim_client.next_state(3)
+    assert state.applied_force == 2.0 and state.applied_torque == -0.5
+    assert not state.robot_command_missing and not state.human_command_missing
+    assert printed(process, 'clamped robot translation command +100 to +2 N')
+    assert printed(process, 'clamped human rotation command -7 to -0.5 N*m')
+
+
+def test_wrong_axis_components_are_ignored_and_reported(start_node, sim_client):
+    process = start_sim(start_node, sim_client, **PATIENT)
+    sim_client.reset(seed=2)
+    state = sim_client.next_state(0)
+    sim_client.answer('robot', state, force_z=0.5, torque_x=0.3, force_y=1.0)
+    sim_client.answer('human', state, torque_x=0.1, force_z=0.7)
+    state = sim_client.next_state(1)
+    assert state.applied_force == 0.5 and state.applied_torque == 0.1
+    assert printed(process, 'ignored off-axis components of the robot command (robot drives '
+                            'translation only): force.y=+1, torque.x=+0.3')
+    assert printed(process, 'ignored off-axis components of the human command (human drives '
+                            'rotation only): force.z=+0.7')
+
+    # The session swaps the roles: now the robot's torque.x and the human's force.z count.
+    session = SessionStatus(session_id='t', robot_dof=SessionStatus.DOF_ROTATION,
+                            human_dof=SessionStatus.DOF_TRANSLATION, human_involved=True)
+    sim_client.session.publish(session)
+    assert printed(process, 'robot drives rotation, human drives translation')
+    sim_client.answer('robot', state, force_z=0.5, torque_x=0.3)
+    sim_client.answer('human', state, force_z=0.7, torque_x=0.1)
+    state = sim_client.next_state(2)
+    assert state.applied_force == 0.7 and state.applied_torque == 0.3
+    # A human not involved now is waited for but not applied.
+    session.human_involved = False
+    sim_client.session.publish(session)
+    assert printed(process, 'human involved: False')
+    sim_client.answer('robot', state, torque_x=0.3)
+    sim_client.answer('human', state, force_z=0.7)
+    state = sim_client.next_state(3)
+    assert state.applied_force == 0.0 and state.applied_torque == 0.3
+    assert printed(process, 'ignored: the session says the human is not involved')
+
+
+def test_realtime_steps_every_control_period_and_reports_silent_actors(start_node,
+                                                                       sim_client):
+    start_sim(start_node, sim_client, mode='realtime', control_period=0.1,
+              command_timeout=1.0, marker_rate=0.0)
+    sim_client.reset(seed=0)
+    sim_client.next_state(0)
+    sim_client.spin(2.0)  # 20 periods; nobody commands
+    silent = list(sim_client.states)
+    assert 8 <= len(silent) <= 30
+    intervals = [b - a for a, b in zip(sim_client.state_times, sim_client.state_times[1:])]
+    assert 0.07 <= statistics.median(intervals) <= 0.2
+    assert all(s.robot_command_missing and s.human_command_missing for s in silent[1:])
+    assert [s.step for s in silent] == list(range(len(silent)))
+
+    # Now both actors command at a higher rate than the sim steps: nothing is missing and
+    # the latest commands are applied.
+    def command_both():
+        latest = sim_client.states[-1]
+        sim_client.answer('robot', latest, force_z=0.4)
+        sim_client.answer('human', latest, torque_x=-0.1)
+
+    before = len(sim_client.states)
+    sim_client.wait(lambda: (command_both(), len(sim_client.states) >= before + 12)[1], 10.0)
+    commanded = sim_client.states[before + 2:]
+    assert len(commanded) >= 8
+    assert all(not s.robot_command_missing and not s.human_command_missing for s in commanded)
+    assert all(s.applied_force == 0.4 and s.applied_torque == -0.1 for s in commanded)
+
+
+def test_episode_ends_by_truncation_then_holds_until_reset(start_node, sim_client):
+    process = start_sim(start_node, sim_client, episode_duration=0.6, **PATIENT)
+    sim_client.reset(seed=4, episode=0)
+    state = sim_client.next_state(0)
+    for index in range(3):
+        sim_client.answer('robot', state)
+        sim_client.answer('human', state)
+        state = sim_client.next_state(index + 1)
+    assert state.step == 3 and state.truncated and not state.terminated
+    assert [s.truncated for s in sim_client.states] == [False, False, False, True]
+    assert printed(process, 'episode 0 truncated after 3 steps')
+    assert printed(process, 'holding until /hrc/sim/reset')
+    sim_client.answer('robot', state)
+    sim_client.answer('human', state)
+    sim_client.spin(0.5)
+    assert len(sim_client.states) == 4
+
+    response = sim_client.reset(seed=4, episode=1)
+    first = sim_client.next_state(4)
+    assert first.episode == 1 and first.step == 0 and not first.truncated
+    assert seconds(first.header.stamp) > seconds(state.header.stamp)  # stamps stay unique
+    # The same seed gives the same initial state; -1 continues the sim's own sequence.
+    assert response.state.slider_position == sim_client.states[0].slider_position
+    assert response.state.ball_position == sim_client.states[0].ball_position
+    other = sim_client.reset(seed=-1, episode=2)
+    assert other.state.ball_position != response.state.ball_position
+
+
+def test_free_run_with_no_expected_actors_runs_one_episode_and_exits(start_node):
+    # The main job's standalone run: the repository's YAML plus overrides on the command line
+    # (an empty list given with -p overrides the file's list).
+    process = start_node('hrc_sim_node', 'sim_node', params_file=PARAMS_FILE, parameters={
+        'expected_actors': [], 'start_on_launch': True, 'max_episodes': 1})
+    assert process.wait(timeout=60) == 0, process.output
+    assert 'expected actors: none (free run)' in process.output
+    assert 'episode 0 truncated after 200 steps (40.0 s sim)' in process.output
+    assert 'missing commands robot 0, human 0' in process.output
+
+
+def test_auto_reset_runs_episodes_back_to_back(start_node, tmp_path):
+    # The empty actor list from a YAML file this time (rcl reads it as an untyped value).
+    params_file = tmp_path / 'free.yaml'
+    params_file.write_text('sim:\n  ros__parameters:\n    expected_actors: []\n')
+    process = start_node('hrc_sim_node', 'sim_node', params_file=params_file, parameters={
+        'start_on_launch': True, 'auto_reset': True, 'max_episodes': 3,
+        'episode_duration': 1.0})
+    assert process.wait(timeout=60) == 0, process.output
+    assert 'expected actors: none (free run)' in process.output
+    for episode in range(3):
+        assert f'episode {episode} truncated after 5 steps' in process.output
+    assert 'episode 3' not in process.output
+
+
+@pytest.mark.parametrize('parameters, reasons', [
+    ({'mode': 'bogus'}, ["mode: 'bogus' is not one of ['lockstep', 'realtime']"]),
+    ({'control_period': -1.0}, ['control_period', 'out of range']),
+    ({'expected_actors': ['robot', 'alien']}, ["expected_actors: ['alien'] not among"]),
+    ({'episode_duration': 40.1}, ['not a multiple of control_period']),
+])
+def test_bad_parameters_are_rejected_with_the_reason(start_node, parameters, reasons):
+    process = start_node('hrc_sim_node', 'sim_node', parameters=parameters)
+    assert process.wait(timeout=30) == 2, process.output
+    for reason in reasons:
+        assert reason in process.output
+
+
+def test_markers_and_camera_image_when_enabled(start_node, sim_client):
+    start_sim(start_node, sim_client, camera_rate=5.0, image_width=64, image_height=48,
+              marker_rate=10.0, lockstep_timeout=60.0)
+    state = sim_client.reset(seed=6).state
+    assert sim_client.wait(lambda: sim_client.images and sim_client.markers, 15.0)
+    image = sim_client.images[-1]
+    assert (image.width, image.height, image.encoding, image.step) == (64, 48, 'rgb8', 192)
+    assert len(image.data) == 64 * 48 * 3
+    assert len(set(bytes(image.data))) > 3  # a picture, not a blank frame
+    markers = sim_client.markers[-1].markers
+    assert [m.id for m in markers] == [0, 1, 2, 3]
+    assert all(m.header.frame_id == 'world' for m in markers)
+    poses = body_poses(state, PhysicsParams())
+    ball = markers[3].pose.position
+    assert (ball.x, ball.y, ball.z) == pytest.approx(poses['ball'][0])
+    assert markers[1].pose.position.z == pytest.approx(state.slider_position)
