@@ -6,7 +6,8 @@ holds its own level-2 subtask (translation: the slider, rotation: the pendulum) 
 core while the robot does nothing; next to it, zero action on the same initial states. Also:
 the rotation actor asked to hold the ball too (level-guided step 2), and the person after
 practice. Errors are mean |S_x| (m), |P_z| (rad), |B_y| (m) over each episode, averaged over
-the episodes; effort is the variance of the normalized command (the paper's Table II).
+the episodes; effort is the variance of the normalized command in the first episode (the
+paper's Table II measure).
 
 Usage: ``python src/hrc_joystick_node/bench/sim_human_table.py [--episodes 20] [--seed 0]``
 (run inside the workspace environment: ``source scripts/env.sh``).
@@ -61,7 +62,7 @@ def main():
           f'{args.seed + args.episodes - 1}; robot idle; error = mean |x| over the episode')
     print()
     header = (f'| {"holding":<24} | {"profile":<8} | {"zero action":>11} | {"first episode":>13} '
-              f'| {"after " + str(args.practiced) + " ep.":>12} | {"effort (var)":>12} |')
+              f'| {"after " + str(args.practiced) + " ep.":>12} | {"effort, 1st ep.":>15} |')
     print(header)
     print('|' + '|'.join('-' * (len(cell)) for cell in header.split('|')[1:-1]) + '|')
     for label, dof, subtasks, reported in CASES:
@@ -75,7 +76,7 @@ def main():
             unit = UNITS[reported]
             print(f'| {label:<24} | {name:<8} | {zero_error:>7.4f} {unit:<3} '
                   f'| {first[reported]:>9.4f} {unit:<3} | {trained[reported]:>8.4f} {unit:<3} '
-                  f'| {effort:>12.4f} |')
+                  f'| {effort:>15.4f} |')
     physics.close()
     print(f'\n({time.monotonic() - start:.1f} s)')
 

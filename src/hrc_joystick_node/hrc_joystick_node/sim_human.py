@@ -27,15 +27,21 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    do (the crossover model's lead equalization).
 3. **Control.** A proportional-derivative law on the person's own degree of freedom, written in
    the terms a person would use: the error (``*_full_scale``) at which they push the stick all
-   the way, and how far ahead (``lead_time``) they look. Holding the ball (subtask ``ball``) is
-   a cascade: the ball's offset sets a target beam angle (``ball_tilt``, ``ball_lead``, at most
-   ``max_tilt``; the ball rolls toward the low end, so a ball east of the middle asks for the
-   east end up), which the rotation actor tracks directly. The translation actor has no direct
-   hold on the ball: it can only nudge the beam through the coupling of the physics (speeding
-   the slider up presses the east end down, by about 0.25 rad per m/s of slider speed change),
-   so it adds ``(P_z - target) / coupling_full_scale`` to its slider command: a weak, real
-   authority, as the paper's asymmetric task intends. Subtasks of the other degree of freedom
-   are out of the person's reach and ignored (a command of 0 if nothing else is assigned).
+   the way, and how far ahead (``lead_time``) they look; a practiced person also pushes harder
+   against a steady load (an integral term, ``integral_time``), e.g. the ball resting at an
+   end stop and weighing the beam down. Both plants are velocity-like (heavy damping), so the
+   gains follow the crossover model: a crossover of about 2 rad/s, which the 0.2 s period and
+   the delay still leave stable; a novice's higher gain on the beam overshoots.
+   Holding the ball (subtask ``ball``) is a cascade: the ball's offset sets a target beam
+   angle (``ball_tilt``, ``ball_lead``, at most ``max_tilt``; the ball rolls toward the low
+   end, so a ball east of the middle asks for the east end up), which the rotation actor
+   tracks directly. The translation actor has no direct hold on the ball: it can only nudge
+   the beam through the coupling of the physics (speeding the slider up presses the east end
+   down, by about m_p * d / c_p = 0.25 rad per m/s of slider speed change with the default
+   physics), so it adds ``(P_z - target) / coupling_full_scale`` to its slider command: a
+   weak, real authority, as the paper's asymmetric task intends. Subtasks of the other degree
+   of freedom are out of the person's reach and ignored (a command of 0 if nothing else is
+   assigned).
 4. **Motor execution.** Limited bandwidth: the stick moves at most ``max_rate`` per second and
    follows the intent with a first-order neuromuscular lag (``neuromuscular_time``). Motor
    noise is signal-dependent (standard deviation ``motor_noise * |command|`` plus a floor

@@ -1,7 +1,9 @@
 """The human node in its own process over DDS: lockstep answers, session, /joy, device, auto."""
 
 import os
+import pathlib
 import time
+import uuid
 
 from geometry_msgs.msg import WrenchStamped
 import pytest
@@ -14,29 +16,49 @@ from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 
 WAIT = 15.0  # s: generous bound for anything over DDS on a busy 2-core machine
+PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
 
 
 class Harness:
-    """The test's side of the graph: a fake sim (states), a session, /joy, and listeners."""
+    """The test's side of the graph: a fake sim (states), a session, /joy, and listeners.
+
+    Every topic is remapped under a prefix unique to the test, on both sides: concurrent test
+    runs on this machine may share a ROS domain id, and their sims, agents and benches must not
+    talk to this test's human node (it also shows the node's topics are remappable).
+    """
 
     def __init__(self, context):
         import rclpy
 
+        self.prefix = '/test_' + uuid.uuid4().hex[:12]
         self.node = rclpy.create_node('human_node_test', context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
-        self.states = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
-        self.session = self.node.create_publisher(SessionStatus, topics.SESSION,
+        self.states = self.node.create_publisher(TaskState, self.topic(topics.STATE),
+                                                 qos.STATE_QOS)
+        self.session = self.node.create_publisher(SessionStatus, self.topic(topics.SESSION),
                                                   qos.SESSION_QOS)
         self.joy = None  # created by publish_joy(): in auto mode a publisher alone counts
         self.actions, self.wrenches = {}, {}
         self.action_log = []
-        self.node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
-                                      qos.HUMAN_ACTION_QOS)
-        self.node.create_subscription(WrenchStamped, topics.HUMAN_CMD_WRENCH,
+        self.node.create_subscription(HumanAction, self.topic(topics.HUMAN_ACTION),
+                                      self._on_action, qos.HUMAN_ACTION_QOS)
+        self.node.create_subscription(WrenchStamped, self.topic(topics.HUMAN_CMD_WRENCH),
                                       self._on_wrench, qos.COMMAND_QOS)
         self.joy_message = None
         self._joy_timer = None
+
+    def topic(self, name):
+        """Return the test's name of topic ``name``."""
+        return self.prefix + name
+
+    def start(self, start_node, **kwargs):
+        """Start the human node with every topic remapped under the test's prefix."""
+        remaps = []
+        for name in (topics.STATE, topics.SESSION, topics.JOY, topics.HUMAN_ACTION,
+                     topics.HUMAN_CMD_WRENCH):
+            remaps += ['-r', f'{name}:={self.topic(name)}']
+        return start_node('hrc_joystick_node', 'human_node', ros_args=remaps, **kwargs)
 
     def _on_action(self, message):
         self.action_log.append(message)
@@ -56,8 +78,8 @@ class Harness:
     def wait_for_human_node(self, process):
         connected = self.spin_until(
             lambda: (self.states.get_subscription_count() > 0
-                     and self.node.count_publishers(topics.HUMAN_ACTION) > 0
-                     and self.node.count_publishers(topics.HUMAN_CMD_WRENCH) > 0))
+                     and self.node.count_publishers(self.topic(topics.HUMAN_ACTION)) > 0
+                     and self.node.count_publishers(self.topic(topics.HUMAN_CMD_WRENCH)) > 0))
         assert connected, f'the human node did not come up:\n{process.output}'
 
     def step(self, state, process, timeout=WAIT):
@@ -73,7 +95,7 @@ class Harness:
         """Publish /joy continuously (as a joy node with autorepeat) until stop_joy()."""
         self.joy_message = Joy(axes=[float(a) for a in axes], buttons=list(buttons))
         if self.joy is None:
-            self.joy = self.node.create_publisher(Joy, topics.JOY, qos.JOY_QOS)
+            self.joy = self.node.create_publisher(Joy, self.topic(topics.JOY), qos.JOY_QOS)
         if self._joy_timer is None:
             self._joy_timer = self.node.create_timer(1.0 / rate,
                                                      lambda: self.joy.publish(self.joy_message))
@@ -124,8 +146,8 @@ def make_session(human_dof, involved, subtasks, training_step=0):
 def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_node, harness):
     from hrc_sim_node.physics import SliderPendulumBall
 
-    process = start_node('hrc_joystick_node', 'human_node',
-                         parameters={'input': 'sim', 'profile': 'paper', 'seed': 3})
+    process = harness.start(start_node, parameters={'input': 'sim', 'profile': 'paper',
+                                                    'seed': 3})
     harness.wait_for_human_node(process)
     reference = SimulatedHuman(load_profile('paper'), 'rotation', seed=3)
     reference.reset(0)
@@ -164,7 +186,7 @@ def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_n
 
 
 def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node, harness):
-    process = start_node('hrc_joystick_node', 'human_node',
+    process = harness.start(start_node, params_file=PARAMS / 'human.yaml',
                          parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1,
                                      'max_force': 4.0})
     harness.wait_for_human_node(process)
@@ -192,7 +214,7 @@ def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node
 
 
 def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness):
-    process = start_node('hrc_joystick_node', 'human_node', parameters={
+    process = harness.start(start_node, parameters={
         'input': 'joy', 'on_input_lost': 'zero', 'joy_timeout': 0.5, 'axis': 1,
         'deadzone': 0.1, 'invert': True, 'enable_button': 2, 'input_check_period': 0.05})
     harness.wait_for_human_node(process)
@@ -219,7 +241,7 @@ def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness
     # axis 1 = 0.55 -> deadzone 0.1 rescaled: 0.5 -> inverted: -0.5; rotation: torque.x
     assert action.command == pytest.approx(-0.5)
     assert wrench.wrench.torque.x == pytest.approx(-0.25)
-    assert action.source_detail == '/joy'
+    assert action.source_detail == harness.topic('/joy')
 
     harness.publish_joy([0.3, 0.55], [0, 0, 0])  # deadman released
     action, _ = answer_until(lambda a: not a.engaged)
@@ -248,7 +270,7 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
     writer = os.open(fifo, os.O_RDWR)  # the joystick "plugged in" (O_RDWR never blocks)
     os.write(writer, js(JS_EVENT_AXIS, 0, 0, init=True) + js(JS_EVENT_AXIS, 1, 0, init=True)
              + js(JS_EVENT_BUTTON, 0, 1, init=True))
-    process = start_node('hrc_joystick_node', 'human_node', parameters={
+    process = harness.start(start_node, parameters={
         'input': 'device', 'device': fifo, 'on_input_lost': 'sim', 'reopen_period': 0.2,
         'enable_button': 0, 'deadzone': 0.0, 'profile': 'skilled', 'dof': 'translation',
         'input_check_period': 0.05})
@@ -306,7 +328,7 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
 def test_auto_selects_device_then_joy_then_simulated_human(start_node, harness, tmp_path):
     fifo = str(tmp_path / 'js0')
     os.mkfifo(fifo)  # exists, but nobody writes: not a present device
-    process = start_node('hrc_joystick_node', 'human_node', parameters={
+    process = harness.start(start_node, parameters={
         'input': 'auto', 'device': fifo, 'reopen_period': 0.2, 'joy_timeout': 0.5,
         'on_input_lost': 'zero', 'input_check_period': 0.05})
     harness.wait_for_human_node(process)
