@@ -86,7 +86,7 @@ def test_reset_service_types():
     assert deserialize_message(serialize_message(response), ResetEpisode.Response).success
 
 
-PUBLISHER_SCRIPT = textwrap.dedent('''
+PUBLISHER_SCRIPT = textwrap.dedent("""
     import sys, time, pickle, base64
     import rclpy
     from rclpy.serialization import deserialize_message
@@ -107,7 +107,7 @@ PUBLISHER_SCRIPT = textwrap.dedent('''
         publisher.publish(message)
     time.sleep(3)
     rclpy.shutdown()
-''')
+""")
 
 
 def test_every_message_crosses_processes(rclpy_context, ros_env):
