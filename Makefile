@@ -13,7 +13,7 @@ run: setup
 	@$(ENV) && python scripts/main_job.py $(ARGS)
 
 lint: setup
-	@$(ENV) && ruff check src test scripts conftest.py
+	@$(ENV) && ruff check src test scripts bench conftest.py
 
 # Lint, then every test in one pytest invocation.
 test: lint
