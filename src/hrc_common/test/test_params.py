@@ -72,7 +72,7 @@ def test_load_yaml_reads_the_node_section(tmp_path):
 
 def test_describe_lists_defaults_bounds_and_docs():
     text = describe(ExampleParams)
-    assert "period (default 0.2) [0.01, 1.0]" in text
+    assert 'period (default 0.2) [0.01, 1.0]' in text
     assert 'Control period (s)' in text
     assert '{lockstep, realtime}' in text
 
