@@ -45,11 +45,20 @@ PyBullet (Featherstone multibody, DIRECT mode by default) integrates a chain of 
 * ``roll``: prismatic along the beam, pendulum -> ball, hard limits at the beam's ends (the
   end stops that keep the ball on the pendulum, so no restart is ever needed).
 
+PyBullet's joint limits pass an impact's impulse on to the other bodies; a body that still
+went past its stop within a substep is put back on it with its outward velocity dropped, so
+every reported position lies within its bounds exactly (the stops are inelastic).
+
 The ball is a point mass on a prismatic joint (sliding, not spinning) with viscous rolling
 resistance. A real rolling sphere (contacts and friction) would add the 2/7 share of spin
 inertia but makes contact solving part of every step, slower and sensitive to solver details;
 the prismatic ball is exact, deterministic and fast. Its centre sits ``ball_radius`` above the
 beam's axis, as a ball resting on top of the beam.
+
+Integration: ``substeps`` = 20 steps of 10 ms per control period. Against a 400-substep
+reference, a 12 s closed-loop run deviates by at most 2 mm (slider), 0.012 rad (pendulum) and
+3 mm (ball) with 20 substeps, twice that with 10, half with 40 (first order); 20 keeps the
+core at several thousand control steps per second on one core.
 
 Viscous damping (``slider_damping``, ``pendulum_damping``, ``ball_damping``) acts on each
 joint, applied explicitly at every substep (``params.check`` refuses values that would make
@@ -91,14 +100,23 @@ and the beam would swing down, which a 5 Hz joystick loop cannot catch.
 
 Force and torque limits
 -----------------------
-``max_force`` = 2 N moves the slider at up to 0.2 m/s against ``slider_damping`` = 10 N*s/m
-(the whole rod in 1 s, 0.04 m per control period) and exceeds the largest reaction the pendulum
-puts on the slider (about 1.5 N at full torque, for less than 0.1 s). ``max_torque`` = 0.5 N*m
-turns the beam at up to 1 rad/s against ``pendulum_damping`` = 0.5 N*m*s/rad (0.2 rad per
-control period) and is four times the largest torque of the ball at an end stop (0.12 N*m), so
-the rotation actor can always bring the ball back. Smaller limits leave the actors unable to
-catch the ball; larger ones make one 0.2 s command overshoot (a person's joystick deflection
-maps linearly to the limit).
+The lower bound of each limit is what the actor must overcome; above it, the limit sets how
+hard a full command (a fully deflected joystick, a saturated policy) pushes in 0.2 s.
+
+* ``max_torque`` = 0.5 N*m: four times the largest torque of the ball (0.12 N*m at an end
+  stop), so the rotation actor can always bring the ball back; full command turns the beam at
+  up to 1 rad/s against ``pendulum_damping`` = 0.5 N*m*s/rad (0.2 rad per control period), a
+  rate a person can follow on the screen.
+* ``max_force`` = 2 N: above the largest reaction the turning pendulum puts on the slider
+  (about 1.5 N at full torque, for less than 0.1 s); full command moves the slider at up to
+  0.2 m/s against ``slider_damping`` = 10 N*s/m (the whole rod in 1 s, 0.04 m per period).
+
+Measured (test/test_physics.py and the package README): a cascaded PD controller sampled
+every 0.2 s holds the ball within a few mm on average, and still within about 1 cm when it
+reacts a whole control period late, as a person does; with zero input the ball hits an end
+stop within a few seconds. The same controller does as well with ``max_torque`` anywhere from
+0.15 to 1 N*m: a team that stays near the middle rarely needs the full torque, so the limit is
+chosen for recovery and for the feel of the joystick, not for holding.
 
 Reward
 ------
@@ -342,7 +360,12 @@ class SliderPendulumBall:
     def __init__(self, params: PhysicsParams = None, gui: bool = False):
         import pybullet
 
+        self._client = None
+
         self.params = checked(params if params is not None else PhysicsParams())
+        if gui and not os.environ.get('DISPLAY'):
+            # PyBullet would end the whole process ("cannot connect to X server").
+            raise RuntimeError('the PyBullet GUI needs a display and DISPLAY is not set')
         self._bullet = pybullet
         self._client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
         if self._client < 0:

@@ -28,7 +28,7 @@ from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
 from hrc_common import qos, topics
 from hrc_common.dof import DOF_INDEX, DOF_NAME, DOFS, other_dof, ROTATION, TRANSLATION
 from hrc_common.nodes import run_node
-from hrc_common.params import declare_parameters, param
+from hrc_common.params import declare_parameters, param, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.commands import ACTORS, HUMAN, limit_for, read_command, ROBOT, unit_of
@@ -86,6 +86,8 @@ class SimParams(PhysicsParams):
     image_height: int = param(240, 'height of the rendered image (px)', low=16, high=1080)
     marker_rate: float = param(10.0, 'rate (Hz, wall time) of /hrc/sim/markers; 0 = off',
                                low=0.0, high=60.0)
+    gui: bool = param(False, 'open the PyBullet GUI window (needs a display); default: '
+                      'headless (DIRECT)')
 
     def check(self) -> list:
         """Return the reasons why the fields do not fit together (empty if they do)."""
@@ -122,7 +124,10 @@ class SimNode(Node):
     def __init__(self):
         super().__init__('sim')
         self.params = params = declare_parameters(self, SimParams)
-        self.physics = SliderPendulumBall(physics_params_of(params))
+        try:
+            self.physics = SliderPendulumBall(physics_params_of(params), gui=params.gui)
+        except RuntimeError as error:
+            raise ParameterError(f'SimParams rejected: gui: {error}') from error
         self.dof_of = {ROBOT: params.robot_dof, HUMAN: other_dof(params.robot_dof)}
         self.human_involved = True
         self._period_ns = int(round(params.control_period * NANOSECONDS))

@@ -253,9 +253,12 @@ def test_auto_reset_runs_episodes_back_to_back(start_node, tmp_path):
     ({'control_period': -1.0}, ['control_period', 'out of range']),
     ({'expected_actors': ['robot', 'alien']}, ["expected_actors: ['alien'] not among"]),
     ({'episode_duration': 40.1}, ['not a multiple of control_period']),
+    ({'gui': True}, ['gui: the PyBullet GUI needs a display']),
 ])
-def test_bad_parameters_are_rejected_with_the_reason(start_node, parameters, reasons):
-    process = start_node('hrc_sim_node', 'sim_node', parameters=parameters)
+def test_bad_parameters_are_rejected_with_the_reason(start_node, ros_env, parameters, reasons):
+    # No display here, whatever the machine has: the GUI request must be refused, not crash.
+    env = {name: value for name, value in ros_env.items() if name != 'DISPLAY'}
+    process = start_node('hrc_sim_node', 'sim_node', parameters=parameters, env=env)
     assert process.wait(timeout=30) == 2, process.output
     for reason in reasons:
         assert reason in process.output
