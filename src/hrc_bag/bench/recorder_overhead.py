@@ -172,12 +172,15 @@ def main(argv=None) -> int:
     parser.add_argument('--episodes', type=int, default=5)
     parser.add_argument('--steps', type=int, default=200, help='control steps per episode')
     parser.add_argument('--json', help='also write the results to this file')
+    parser.add_argument('--keep', help='record into this folder (kept) instead of a temporary '
+                        'one')
     parser.add_argument('--actors', action='store_true', help=argparse.SUPPRESS)
     arguments = parser.parse_args(argv)
     if arguments.actors:
         run_actors(0)
         return 0
     with tempfile.TemporaryDirectory(prefix='hrc_bag_bench_') as output_dir:
+        output_dir = arguments.keep or output_dir
         without = measure(arguments.episodes, arguments.steps, False, output_dir)
         with_recorder = measure(arguments.episodes, arguments.steps, True, output_dir)
     results = {'without_recorder': without, 'with_recorder': with_recorder}

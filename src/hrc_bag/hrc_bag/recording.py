@@ -10,30 +10,41 @@ Layout of a session (``<output_dir>/<session_id>/``)::
 
 Episode boundaries (the rule; the node turns messages into the events used here):
 
-* A file opens at the first ``/hrc/state`` (TaskState) whose ``episode`` differs from the open
-  file's episode; an open file of another episode is closed first.
-* A file closes ``close_grace`` seconds after the ``/hrc/episode`` (EpisodeSummary) of its
-  episode arrived (so the last AgentStep/HumanAction, which travel on other topics, still land
-  in it), or ``summary_timeout`` seconds after the final state (``terminated`` or
-  ``truncated``) if no summary comes (a sim without an agent), or ``close_grace`` after a
-  ``/hrc/session`` with phase done/aborted, or at shutdown.
+* A file opens at the first ``/hrc/state`` (TaskState) of an episode not recorded yet.
+* Each message goes to the file of its episode: the ``episode`` field of TaskState,
+  HumanAction, AgentStep, EpisodeSummary; for a command (WrenchStamped) the episode of the
+  state whose stamp it carries (the step protocol). Messages that name no episode
+  (SessionStatus, other topics) go to the newest open file.
+* A file closes ``close_grace`` seconds after the EpisodeSummary of its episode, or after the
+  first state of the next episode (late messages of its episode on other topics still find
+  it), or after a ``/hrc/session`` with phase done/aborted; ``summary_timeout`` seconds after
+  its final state (``terminated`` or ``truncated``) if nothing else closed it (a sim without
+  an agent); or at shutdown. A message of an episode whose file closed already goes to the
+  newest file (with a warning).
 * Messages that arrive while no file is open (between episodes: phase ``updating``, the next
-  training step, the human joining; or before the first episode) are kept in memory and written
-  at the start of the next episode's file with their original timestamps: they are the lead-up
-  to that episode. What is left at shutdown goes to ``<session_id>_end.mcap``.
+  training step, the human joining; or before the first episode), and messages of an episode
+  whose first state has not been handled yet, are kept in memory and written at the start of
+  the next file with their original timestamps. What is left at shutdown goes to
+  ``<session_id>_end.mcap``.
+
+Messages are handled in the order DDS received them (their log time), after ``reorder_window``
+seconds: rclpy's executor takes one message per subscription in turn, so a recorder that lags
+behind gets a topic's messages later than another topic's received after them.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
-exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much of the
-open episode; every closed file is complete (summary, indexes, footer) and fsynced, and
-metadata.yaml lists only closed files. A later recorder of the same session finishes the files a
-killed one left open (``recover``). Write errors (disk full, permissions) raise
-:class:`RecordingError`, which stops the recorder with a clear message.
+exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much (plus
+the ``reorder_window``) of the open episode; every closed file is complete (summary, indexes,
+footer) and fsynced, and metadata.yaml lists only closed files. A later recorder of the same
+session finishes the files a killed one left open (``recover``). Write errors (disk full,
+permissions) raise :class:`RecordingError`, which stops the recorder with a clear message.
 """
 
 import collections
 from dataclasses import dataclass, field
 import datetime
 import errno
+import heapq
+import itertools
 import os
 import pathlib
 import re
@@ -46,7 +57,7 @@ from hrc_common.topics import (AGENT_STEP, EPISODE, HUMAN_ACTION, HUMAN_CMD_WREN
 from mcap.writer import CompressionType, IndexType, Writer
 import yaml
 
-from hrc_bag import msgdefs
+from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
 
 BAG_VERSION = 9                 # rosbag2 metadata version written (ROS 2 Jazzy)
@@ -97,6 +108,10 @@ class RecorderParams:
     summary_timeout: float = param(
         5.0, 'an episode file closes this long (s) after its final state if no EpisodeSummary '
         'comes', low=0.1, high=600.0)
+    reorder_window: float = param(
+        0.5, 'messages are handled in the order DDS received them, after waiting this long (s) '
+        'for those the executor serves late (it serves topics in its own order)', low=0.0,
+        high=10.0)
     max_buffered: int = param(
         100000, 'messages kept in memory between episodes; beyond, the oldest are dropped '
         'with an error log', low=100, high=10_000_000)
@@ -489,13 +504,36 @@ def boundary_event(type_name: str, message):
     return None
 
 
+@dataclass
+class OpenEpisode:
+    """An episode file being written, and when and why it is to be closed."""
+
+    file: EpisodeFile
+    episode: typing.Optional[int]       # None for the end file
+    close_at: typing.Optional[float] = None     # monotonic s
+    reason: str = ''
+
+    def schedule_close(self, close_at: float, reason: str) -> None:
+        """Close at ``close_at`` unless an earlier close is scheduled already."""
+        if self.close_at is None or close_at < self.close_at:
+            self.close_at = close_at
+            self.reason = reason
+
+
 class EpisodeRecorder:
-    """Route received messages into per-episode MCAP files following the boundary rule."""
+    """Route received messages into per-episode MCAP files following the boundary rule.
+
+    A message goes to the file of its episode: the ``episode`` field of TaskState, HumanAction,
+    AgentStep and EpisodeSummary; for commands (WrenchStamped) the episode of the state whose
+    stamp they carry; other messages (SessionStatus, unknown topics) go to the newest open
+    file, or wait for the next one between episodes.
+    """
 
     def __init__(self, params: RecorderParams, describe_topic: typing.Callable,
                  session_config: typing.Optional[dict] = None, session_config_text: str = '',
                  logger=None, clock: typing.Callable = time.monotonic,
-                 recorder_parameters: typing.Optional[dict] = None):
+                 recorder_parameters: typing.Optional[dict] = None,
+                 wall_clock: typing.Callable = time.time_ns):
         self.params = params
         self._describe_topic = describe_topic
         self.session_config = dict(session_config or {})
@@ -503,13 +541,17 @@ class EpisodeRecorder:
         self._recorder_parameters = dict(recorder_parameters or {})
         self._log = logger
         self._clock = clock
+        self._wall_clock = wall_clock       # ns since the epoch, the clock of the log times
+        self._reorder = []                  # heap of (log time, arrival, message, event)
+        self._arrivals = itertools.count()
         self.session_id = params.session_id or str(self.session_config.get('session_id', ''))
         self.folder = None
         self.index = None
-        self.current = None                 # the open EpisodeFile
-        self.current_episode = None
-        self._close_at = None               # monotonic time at which the open file closes
-        self._close_reason = ''
+        self.open_files = {}                # episode -> OpenEpisode
+        self.current = None                 # the newest OpenEpisode (gets episode-less messages)
+        self._closed_episodes = set()
+        self._late = collections.Counter()  # episode -> messages that came after its file closed
+        self._stamp_episodes = collections.OrderedDict()   # state stamp (ns) -> episode
         self._last_flush = clock()
         self._pending = collections.deque()
         self._dropped = 0
@@ -622,7 +664,7 @@ class EpisodeRecorder:
             path = self.folder / f'{stem}_{suffix}.mcap'
         return path
 
-    def _open(self, episode: typing.Optional[int]) -> None:
+    def _open(self, episode: typing.Optional[int]) -> OpenEpisode:
         if self.folder is None:
             self.session_id = self._resolve_session_id()
             self._open_session()
@@ -630,33 +672,35 @@ class EpisodeRecorder:
                 else f'{self.session_id}{END_FILE_SUFFIX}')
         path = self._file_path(stem)
         try:
-            self.current = EpisodeFile(path, self.params.compression, self.params.chunk_size,
-                                       {SESSION_RECORD: self._session_record(episode)})
+            file = EpisodeFile(path, self.params.compression, self.params.chunk_size,
+                               {SESSION_RECORD: self._session_record(episode)})
         except RecordingError as error:
             raise self._fail(str(error), error)
-        self.current_episode = episode
-        self._close_at = None
+        self.current = OpenEpisode(file, episode)
+        self.open_files[episode] = self.current
         self._last_flush = self._clock()
         self._info(f'episode {episode if episode is not None else "(none)"}: recording into '
                    f'{path.name}' + (f' ({len(self._pending)} messages from before it)'
                                      if self._pending else ''))
         while self._pending:
-            self._write(self._pending.popleft())
+            self._write(self.current, self._pending.popleft())
+        return self.current
 
-    def _close(self, reason: str) -> None:
-        current, self.current = self.current, None
-        episode, self.current_episode = self.current_episode, None
-        self._close_at = None
-        if current is None:
-            return
+    def _close(self, episode: OpenEpisode, reason: str) -> None:
+        self.open_files.pop(episode.episode, None)
+        if episode is self.current:
+            self.current = None
+        if episode.episode is not None:
+            self._closed_episodes.add(episode.episode)
         try:
-            info = current.close(self.index.custom_data)
+            info = episode.file.close(self.index.custom_data)
             self.index.add(info)
         except RecordingError as error:
             raise self._fail(str(error), error)
         self.closed_files.append(info)
-        self._info(f'episode {episode if episode is not None else "(none)"}: closed '
-                   f'{info.name} ({info.message_count} messages, {reason})')
+        number = episode.episode if episode.episode is not None else '(none)'
+        self._info(f'episode {number}: closed {info.name} ({info.message_count} messages, '
+                   f'{reason})')
 
     def _description(self, message: RawMessage) -> TopicDescription:
         description = self._describe_topic(message.topic, message.type_name)
@@ -666,9 +710,9 @@ class EpisodeRecorder:
         self._descriptions[message.topic] = description
         return description
 
-    def _write(self, message: RawMessage) -> None:
+    def _write(self, episode: OpenEpisode, message: RawMessage) -> None:
         try:
-            self.current.write(message, self._description(message))
+            episode.file.write(message, self._description(message))
         except RecordingError as error:
             raise self._fail(str(error), error)
         except msgdefs.DefinitionNotFound as error:
@@ -683,61 +727,113 @@ class EpisodeRecorder:
                 self._error(f'{self._dropped} messages dropped: more than '
                             f'{self.params.max_buffered} arrived while no episode was open')
 
-    def _schedule_close(self, delay: float, reason: str) -> None:
-        close_at = self._clock() + delay
-        if self._close_at is None or close_at < self._close_at:
-            self._close_at = close_at
-            self._close_reason = reason
-
     # -- the interface the node uses --------------------------------------------------------
 
+    @property
+    def current_episode(self) -> typing.Optional[int]:
+        """Return the episode of the newest open file (None between episodes)."""
+        return self.current.episode if self.current is not None else None
+
     def record(self, message: RawMessage, event=None) -> None:
-        """Record one message; ``event`` says what it means for the episode boundaries."""
+        """Record one message; ``event`` says what it means for the episode boundaries.
+
+        Messages wait ``reorder_window`` seconds (of their log time) and are then handled in
+        log-time order: the executor takes one message per subscription in turn, so when the
+        recorder lags, a topic's messages reach it later than another's received after them.
+        """
         if self.failed is not None:
             raise self.failed
-        if isinstance(event, SessionSeen):
-            self.last_status = dict(event.status)
-            if self.current is not None and event.status.get('phase') in SESSION_FINISHED_PHASES:
-                self._schedule_close(self.params.close_grace, 'the session finished')
-        if isinstance(event, StateSeen) and (self.current is None
-                                             or event.episode != self.current_episode):
-            if self.current is not None:
-                self._close(f'a state of episode {event.episode} arrived')
-            self._open(event.episode)
-        if self.current is not None:
-            self._write(message)
-        else:
-            self._buffer(message)
-        if self.current is not None:
-            if isinstance(event, StateSeen) and event.final:
-                self._schedule_close(self.params.summary_timeout,
-                                     'no EpisodeSummary after the final state')
-            if isinstance(event, SummarySeen) and event.episode == self.current_episode:
-                self._schedule_close(self.params.close_grace, 'EpisodeSummary received')
+        heapq.heappush(self._reorder, (message.log_time, next(self._arrivals), message, event))
         self.tick()
 
+    def _release(self, everything: bool = False) -> None:
+        """Handle the waiting messages received more than reorder_window ago."""
+        threshold = self._wall_clock() - int(self.params.reorder_window * 1e9)
+        while self._reorder and (everything or self._reorder[0][0] <= threshold):
+            _, _, message, event = heapq.heappop(self._reorder)
+            self._handle(message, event)
+
+    def _episode_of(self, message: RawMessage, event) -> typing.Optional[int]:
+        """Return the episode a message belongs to, or None when it does not say."""
+        if isinstance(event, (StateSeen, SummarySeen)):
+            return event.episode
+        stamp, episode = cdr_peek.peek(message.type_name, message.data)
+        if episode is None and stamp is not None and not message.type_name.startswith('hrc_'):
+            # a command (or a marker, an image) stamped with the state it belongs to; the
+            # session's own messages (SessionStatus) say nothing about an episode
+            episode = self._stamp_episodes.get(stamp)
+        return episode
+
+    def _remember_stamp(self, message: RawMessage, episode: int) -> None:
+        stamp, _ = cdr_peek.peek(message.type_name, message.data)
+        if stamp is not None:
+            self._stamp_episodes[stamp] = episode
+            while len(self._stamp_episodes) > 10000:
+                self._stamp_episodes.popitem(last=False)
+
+    def _handle(self, message: RawMessage, event) -> None:
+        """Route one message (in log-time order) following the boundary rule."""
+        now = self._clock()
+        grace = self.params.close_grace
+        if isinstance(event, SessionSeen):
+            self.last_status = dict(event.status)
+            if event.status.get('phase') in SESSION_FINISHED_PHASES:
+                for episode in self.open_files.values():
+                    episode.schedule_close(now + grace, 'the session finished')
+        number = self._episode_of(message, event)
+        if isinstance(event, StateSeen):
+            self._remember_stamp(message, event.episode)
+        target = self.open_files.get(number) if number is not None else self.current
+        if (target is None and isinstance(event, StateSeen)
+                and number not in self._closed_episodes):
+            # a new episode starts: the files before it close after the grace (their late
+            # messages on other topics still find them)
+            for episode in self.open_files.values():
+                episode.schedule_close(now + grace, f'episode {number} started')
+            target = self._open(number)
+        elif target is None and number is not None and number in self._closed_episodes:
+            target = self.current                           # came after its file closed
+            self._late[number] += 1
+            if self._late[number] == 1:
+                self._warn(f'a message of episode {number} ({message.topic}) arrived after its '
+                           f'file closed: recorded in the newest file instead')
+        if target is not None:
+            self._write(target, message)
+        else:
+            self._buffer(message)
+        if isinstance(event, StateSeen) and event.final and number in self.open_files:
+            self.open_files[number].schedule_close(now + self.params.summary_timeout,
+                                                   'no EpisodeSummary after the final state')
+        if isinstance(event, SummarySeen) and number in self.open_files:
+            self.open_files[number].schedule_close(now + grace, 'EpisodeSummary received')
+
     def tick(self) -> None:
-        """Close a file whose time has come; write the open chunk if it is due."""
+        """Handle due messages; close files whose time has come; write the chunk if due."""
         if self.failed is not None:
             raise self.failed
+        self._release()
         now = self._clock()
-        if self.current is not None and self._close_at is not None and now >= self._close_at:
-            self._close(self._close_reason)
-        if self.current is not None and now - self._last_flush >= self.params.flush_period:
+        for episode in list(self.open_files.values()):
+            if episode.close_at is not None and now >= episode.close_at:
+                self._close(episode, episode.reason)
+        if now - self._last_flush >= self.params.flush_period:
             self._last_flush = now
-            try:
-                self.current.flush()
-            except RecordingError as error:
-                raise self._fail(str(error), error)
+            for episode in self.open_files.values():
+                try:
+                    episode.file.flush()
+                except RecordingError as error:
+                    raise self._fail(str(error), error)
 
     def close(self) -> None:
-        """Close the open file; write what arrived after the last episode to the end file."""
+        """Close the open files; write what arrived after the last episode to the end file."""
         if self.failed is not None:
-            if self.current is not None:
-                self.current.abandon()
-                self.current = None
+            for episode in self.open_files.values():
+                episode.file.abandon()
+            self.open_files.clear()
+            self.current = None
             return
-        self._close('the recorder stopped')
+        self._release(everything=True)
+        for episode in list(self.open_files.values()):
+            self._close(episode, 'the recorder stopped')
         if self._pending:
-            self._open(None)
-            self._close('the recorder stopped')
+            self._close(self._open(None), 'the recorder stopped')

@@ -4,8 +4,9 @@ import dataclasses
 import pathlib
 import shutil
 
+from geometry_msgs.msg import WrenchStamped
 from hrc_common.params import load_yaml, validate
-from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
+from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
@@ -89,7 +90,7 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
         feed.send('/hrc/state', TaskState(episode=0, step=step, truncated=step == 2))
     feed.send('/hrc/episode', EpisodeSummary(episode=0))
     clock.now += 0.4                                                         # within the grace
-    feed.send('/hrc/agent/step', SessionStatus())                            # late, episode 0
+    feed.send('/hrc/agent/step', AgentStep(episode=0, step=1))               # late, episode 0
     clock.now += 0.2
     recorder.tick()                                                          # grace over
     assert [info.name for info in recorder.closed_files] == ['s_ep0000.mcap']
@@ -103,9 +104,12 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
     clock.now += 0.2
     recorder.tick()
     assert len(recorder.closed_files) == 2
-    # episode 2 is interrupted by a state of episode 3 (no final state, no summary)
+    # episode 2 is interrupted by a state of episode 3 (no final state, no summary); its
+    # file stays open for the grace: a late message of episode 2 still goes to it
     feed.send('/hrc/state', TaskState(episode=2, step=0))
     feed.send('/hrc/state', TaskState(episode=3, step=0))
+    feed.send('/hrc/agent/step', AgentStep(episode=2, step=0))
+    assert sorted(recorder.open_files) == [2, 3] and recorder.current_episode == 3
     feed.send('/hrc/session', SessionStatus(session_id='s', phase=SessionStatus.PHASE_DONE))
     clock.now += 0.6
     recorder.tick()                                      # the session finished: file closes
@@ -118,12 +122,80 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
         '/hrc/agent/step']
     assert file_topics(folder / 's_ep0001.mcap') == ['/hrc/session', '/hrc/state',
                                                      '/hrc/state']
-    assert file_topics(folder / 's_ep0002.mcap') == ['/hrc/state']
+    assert file_topics(folder / 's_ep0002.mcap') == ['/hrc/state', '/hrc/agent/step']
     assert file_topics(folder / 's_ep0003.mcap') == ['/hrc/state', '/hrc/session']
     assert file_topics(folder / 's_end.mcap') == ['/hrc/session']
     listed = bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths']
     assert listed == ['s_ep0000.mcap', 's_ep0001.mcap', 's_ep0002.mcap', 's_ep0003.mcap',
                       's_end.mcap']
+
+
+def test_messages_are_handled_in_reception_order_after_the_reorder_window(tmp_path):
+    """A lagging executor serves one topic late: the window puts it back in order."""
+    clock = FakeClock()
+    wall = [0]
+    recorder = EpisodeRecorder(
+        RecorderParams(output_dir=str(tmp_path), session_id='w', reorder_window=0.5,
+                       close_grace=0.2),
+        lambda topic, type_name: TopicDescription(type_name, (PROFILE,), ''), clock=clock,
+        wall_clock=lambda: wall[0])
+    second = 1_000_000_000
+
+    def receive(topic, message, received_at):
+        type_name = type_name_of(message)
+        recorder.record(RawMessage(topic, type_name, serialize_message(message),
+                                   received_at, received_at), boundary_event(type_name, message))
+
+    receive('/hrc/state', TaskState(episode=0, step=0), 1 * second)
+    receive('/hrc/state', TaskState(episode=0, step=1, truncated=True), 2 * second)
+    receive('/hrc/episode', EpisodeSummary(episode=0), 3 * second)
+    # DDS received state (1, 0) at 4 s and the human's answer at 5 s, but the executor
+    # served the answer first
+    receive('/hrc/human/action', SessionStatus(), 5 * second)
+    wall[0] = 5 * second + second // 10
+    recorder.tick()
+    assert recorder.current_episode == 0                  # 4 s, 5 s: still in the window
+    receive('/hrc/state', TaskState(episode=1, step=0), 4 * second)
+    wall[0] = 6 * second
+    clock.now += 1.0
+    recorder.tick()
+    recorder.close()
+    assert file_topics(tmp_path / 'w' / 'w_ep0000.mcap') == ['/hrc/state', '/hrc/state',
+                                                             '/hrc/episode']
+    assert file_topics(tmp_path / 'w' / 'w_ep0001.mcap') == ['/hrc/state', '/hrc/human/action']
+    assert sorted(path.name for path in (tmp_path / 'w').glob('*.mcap')) == [
+        'w_ep0000.mcap', 'w_ep0001.mcap']
+
+
+def test_messages_go_to_the_file_of_their_episode_whatever_their_order(tmp_path):
+    """Episode fields and command stamps route messages even when served out of order."""
+    clock = FakeClock()
+    recorder = make_recorder(tmp_path, clock, reorder_window=0.0)
+    feed = Feeder(recorder)
+
+    def state(episode, step, seconds, final=False):
+        message = TaskState(episode=episode, step=step, truncated=final)
+        message.header.stamp.sec = seconds
+        return message
+
+    def command(seconds):
+        message = WrenchStamped()
+        message.header.stamp.sec = seconds
+        return message
+
+    feed.send('/hrc/state', state(0, 0, 10))
+    feed.send('/hrc/state', state(0, 1, 11, final=True))
+    feed.send('/hrc/agent/step', AgentStep(episode=1, step=0))        # before its state
+    feed.send('/hrc/state', state(1, 0, 12))
+    feed.send('/hrc/robot/cmd_wrench', command(10))                    # answers episode 0
+    feed.send('/hrc/robot/cmd_wrench', command(12))                    # answers episode 1
+    feed.send('/hrc/human/action', HumanAction(episode=0, step=0))
+    recorder.close()
+    folder = tmp_path / 's'
+    assert file_topics(folder / 's_ep0000.mcap') == [
+        '/hrc/state', '/hrc/state', '/hrc/robot/cmd_wrench', '/hrc/human/action']
+    assert file_topics(folder / 's_ep0001.mcap') == [
+        '/hrc/agent/step', '/hrc/state', '/hrc/robot/cmd_wrench']
 
 
 @pytest.fixture(scope='module')
