@@ -4,18 +4,23 @@ import pathlib
 
 import pytest
 
-from hrc_common.testing import next_domain_id, NodeProcess, ros_environment
+from hrc_common.testing import DomainReservation, NodeProcess, ros_environment
 
 
 @pytest.fixture
 def ros_domain_id(monkeypatch):
-    """Give the test a ROS_DOMAIN_ID of its own, also set for the test process itself."""
-    domain_id = next_domain_id()
-    for name, value in ros_environment(domain_id).items():
+    """Give the test a ROS_DOMAIN_ID of its own, also set for the test process itself.
+
+    The id is reserved with a lock file for the test's duration, so that concurrent test runs
+    on the same machine never share a domain.
+    """
+    reservation = DomainReservation()
+    for name, value in ros_environment(reservation.domain_id).items():
         if name.startswith('ROS_'):
             monkeypatch.setenv(name, value)
     monkeypatch.delenv('ROS_LOCALHOST_ONLY', raising=False)
-    return domain_id
+    yield reservation.domain_id
+    reservation.release()
 
 
 @pytest.fixture

@@ -194,7 +194,7 @@ def declare_parameters(node, params_cls):
         if spec.choices:
             description += f' (one of: {", ".join(map(str, spec.choices))})'
         descriptor = ParameterDescriptor(description=description, read_only=spec.read_only)
-        # rclpy enforces these ranges itself on later changes; validate() words the reasons.
+        # rclpy enforces these ranges itself (at declaration and on later changes).
         if isinstance(default, float) and spec.low is not None and spec.high is not None:
             descriptor.floating_point_range = [FloatingPointRange(
                 from_value=float(spec.low), to_value=float(spec.high), step=0.0)]
@@ -203,23 +203,33 @@ def declare_parameters(node, params_cls):
             descriptor.integer_range = [IntegerRange(
                 from_value=int(spec.low), to_value=int(spec.high), step=0)]
         try:
-            parameter = node.declare_parameter(dataclass_field.name, default, descriptor)
-            values[dataclass_field.name] = parameter.value
+            value = node.declare_parameter(dataclass_field.name, default, descriptor).value
+            # An empty YAML list ([]) arrives untyped (NOT_SET): it means an empty list.
+            values[dataclass_field.name] = [] if value is None and isinstance(default, list) \
+                else value
         except InvalidParameterValueException as error:
             reasons.append(f'{dataclass_field.name}: {error}')
         except Exception as error:  # a wrong type given on the command line or YAML
             reasons.append(f'{dataclass_field.name}: {type(error).__name__}: {error}')
     if reasons:
+        # Check the other values too, so that one run lists every reason.
+        try:
+            from_dict(params_cls, values)
+        except ParameterError as error:
+            reasons.append(str(error).split(' rejected: ', 1)[1])
         raise ParameterError(f'{params_cls.__name__} rejected: ' + '; '.join(reasons))
     current = from_dict(params_cls, values)
+    known = set(values)
 
     def on_set(changes):
-        proposed = {change.name: change.value for change in changes}
+        # Names of other parameter sets on the same node are theirs to check.
+        proposed = {change.name: change.value for change in changes if change.name in known}
+        if not proposed:
+            return SetParametersResult(successful=True)
         try:
-            candidate = from_dict(params_cls, {**as_dict(current), **proposed})
+            from_dict(params_cls, {**as_dict(current), **proposed})
         except ParameterError as error:
             return SetParametersResult(successful=False, reason=str(error))
-        del candidate
         return SetParametersResult(successful=True)
 
     node.add_on_set_parameters_callback(on_set)

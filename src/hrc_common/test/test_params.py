@@ -105,3 +105,62 @@ def test_declare_parameters_rejects_bad_overrides(rclpy_context):
             declare_parameters(node, ExampleParams)
     finally:
         node.destroy_node()
+
+
+def test_empty_list_override_means_empty_list(rclpy_context):
+    import rclpy
+
+    # As given on the command line (-p actors:=[]), rcl reads it without an element type.
+    node = rclpy.create_node('example', context=rclpy_context,
+                             cli_args=['--ros-args', '-p', 'actors:=[]'])
+    try:
+        assert declare_parameters(node, ExampleParams).actors == []
+    finally:
+        node.destroy_node()
+
+
+def test_every_reason_is_listed_even_when_rclpy_refuses_a_range(rclpy_context):
+    import rclpy
+    from rclpy.parameter import Parameter
+
+    node = rclpy.create_node('example', context=rclpy_context, parameter_overrides=[
+        Parameter('period', value=5.0), Parameter('mode', value='warp')])
+    try:
+        with pytest.raises(ParameterError) as error:
+            declare_parameters(node, ExampleParams)
+        assert 'period' in str(error.value) and "'warp' is not one of" in str(error.value)
+    finally:
+        node.destroy_node()
+
+
+def test_changes_are_checked_and_other_parameters_left_alone(rclpy_context):
+    import rclpy
+    from rcl_interfaces.msg import ParameterDescriptor
+    from rclpy.parameter import Parameter
+
+    @dataclass
+    class Tunable:
+        """A parameter that may change at run time."""
+
+        gain: float = param(1.0, 'gain', low=0.0, high=10.0, read_only=False)
+
+    node = rclpy.create_node('example', context=rclpy_context)
+    try:
+        declare_parameters(node, Tunable)
+        node.declare_parameter('other', 'x', ParameterDescriptor())
+        assert node.set_parameters([Parameter('gain', value=2.0)])[0].successful
+        assert not node.set_parameters([Parameter('gain', value=20.0)])[0].successful
+        assert node.set_parameters([Parameter('other', value='y')])[0].successful
+    finally:
+        node.destroy_node()
+
+
+def test_domain_reservations_are_exclusive():
+    from hrc_common.testing import DomainReservation
+
+    first, second = DomainReservation(), DomainReservation()
+    try:
+        assert first.domain_id != second.domain_id
+    finally:
+        first.release()
+        second.release()
