@@ -114,7 +114,12 @@ class ReplayNode(Node):
                                                                - self._playback_started)
                 if wait > 0 and self._stop.wait(wait):
                     return
-                publisher.publish(message.data)
+                try:
+                    publisher.publish(message.data)
+                except Exception:       # the node is shutting down (Ctrl-C) under our feet
+                    if self._stop.is_set() or not self.context.ok():
+                        return
+                    raise
                 self.published += 1
             if not self.params.loop:
                 break

@@ -81,7 +81,7 @@ class SyntheticSession:
                 self.publishers[topic] = node.create_publisher(message_type, prefix + topic,
                                                                qos)
 
-    def wait_for_subscribers(self, count: int = 1, timeout: float = 20.0, topics=None,
+    def wait_for_subscribers(self, count: int = 1, timeout: float = 60.0, topics=None,
                              settle: float = 1.0) -> bool:
         """Wait until every publisher (of ``topics``) is matched by ``count`` subscriptions.
 

@@ -37,10 +37,22 @@ def listed_files(folder) -> list:
     return bag_reader.read_bag_metadata_yaml(folder).get('relative_file_paths', []) or []
 
 
-def wait_listed(folder, count, recorder, timeout=20.0):
+def process_state(pid: int) -> str:
+    """Return the scheduler state and wait channel of a process (to tell hung from slow)."""
+    try:
+        status = pathlib.Path(f'/proc/{pid}/status').read_text()
+        state = next(line for line in status.splitlines() if line.startswith('State:'))
+        wchan = pathlib.Path(f'/proc/{pid}/wchan').read_text()
+        return f'{state.strip()}, waiting in {wchan or "-"}'
+    except (OSError, StopIteration):
+        return 'gone'
+
+
+def wait_listed(folder, count, recorder, timeout=60.0):
     assert wait_for(lambda: len(listed_files(folder)) >= count
                     or recorder.process.poll() is not None, timeout), \
-        f'{folder} lists {listed_files(folder)}; recorder output:\n{recorder.output}'
+        (f'{folder} lists {listed_files(folder)}; recorder {process_state(recorder.process.pid)}'
+         f'; output:\n{recorder.output}')
     assert recorder.process.poll() is None, recorder.output
 
 
@@ -179,10 +191,17 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
 
     # a new recorder of the same session finishes the open file and lists it
     again = start_recorder(start_node, isolation, tmp_path, 'kill')
-    assert wait_for(lambda: 'kill_ep0001.mcap' in listed_files(folder), 20.0), again.output
+    assert wait_for(lambda: 'kill_ep0001.mcap' in listed_files(folder), 60.0), again.output
     assert again.stop() == 0, again.output
     with Reader(folder) as reader:
         assert sum(1 for _ in reader.messages()) == session.published.count()
+
+
+def _stop(process):
+    """Stop a recorder this test started (its own process group) if it still runs."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait(timeout=10)
 
 
 def _run_recorder(env, output_dir, command_prefix=(), preexec_fn=None, ros_args=()):
@@ -212,7 +231,10 @@ def test_a_read_only_output_dir_stops_the_recorder_with_a_clear_error(ros_env):
             env.update(ROS_LOG_DIR=str(log_dir), HOME=str(log_dir))
             prefix = ('setpriv', '--reuid=65534', '--regid=65534', '--clear-groups')
         process = _run_recorder(env, read_only, prefix)
-        output, _ = process.communicate(timeout=60)
+        try:
+            output, _ = process.communicate(timeout=60)
+        finally:
+            _stop(process)
         assert process.returncode == EXIT_RECORDING_FAILED, output
         assert 'Permission denied (EACCES)' in output, output
         assert f'cannot create the session folder {read_only}/denied' in output, output
@@ -234,6 +256,7 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
     mount_point.mkdir()
     mounted = subprocess.run(['mount', '-t', 'tmpfs', '-o', 'size=100k', 'tmpfs',
                               str(mount_point)], capture_output=True).returncode == 0
+    process = None
     try:
         process = _run_recorder(ros_env, mount_point,
                                 preexec_fn=None if mounted else _limit_file_size,
@@ -243,7 +266,7 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
         session.publish_status(0)
         session.publish_episode(0, steps=8, step_period=0.01)
         folder = mount_point / 'denied'
-        assert wait_for(lambda: len(listed_files(folder)) == 1, 20.0)
+        assert wait_for(lambda: len(listed_files(folder)) == 1, 60.0)
         first = session.published.count()
         session.publish_episode(1, steps=600, step_period=0.002)
         output, _ = process.communicate(timeout=60)
@@ -254,6 +277,8 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
         with Reader(folder) as reader:
             assert sum(1 for _ in reader.messages()) == first
     finally:
+        if process is not None:
+            _stop(process)
         if mounted:
             subprocess.run(['umount', '-l', str(mount_point)], check=False)
 

@@ -120,7 +120,7 @@ def test_a_session_is_replayed_with_the_same_bytes_and_timing(start_node, test_n
                         parameters={'path': str(session_folder), 'rate': rate,
                                     'start_delay': 0.5, 'wait_for_subscribers': 1},
                         ros_args=isolation.ros_args)
-    assert listener.spin_until(lambda: replay.process.poll() is not None, 60.0), replay.output
+    assert listener.spin_until(lambda: replay.process.poll() is not None, 120.0), replay.output
     assert replay.wait(timeout=10) == 0, replay.output
     listener.spin_until(lambda: len(listener.received) >= len(recorded), 5.0)
 
@@ -161,7 +161,7 @@ def test_one_file_with_topic_selection_offset_clock_and_loop(start_node, test_no
                                     'wait_for_subscribers': 1},
                         ros_args=isolation.ros_args)
     assert listener.spin_until(lambda: len(listener.received) >= 2 * len(expected) + 1,
-                               60.0), replay.output
+                               120.0), replay.output
     assert replay.stop() == 0, replay.output
     states = listener.of('/hrc/state')
     assert {topic for topic, _, _ in listener.received} == {'/hrc/state'}
