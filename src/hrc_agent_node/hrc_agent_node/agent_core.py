@@ -16,8 +16,10 @@ so they cannot diverge::
         <save core.checkpoint()>
 
 Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
-``evaluation`` -> ``done``. Training ends when the strategy's last step converges or after
-``max_training_episodes``; evaluation runs the frozen deterministic policy for
+``evaluation`` -> ``done``; the operator may put ``paused`` between two episodes
+(:meth:`pause`, :meth:`resume`) or end the session as ``aborted`` (:meth:`abort`).
+Training ends when the strategy's last step converges or after ``max_training_episodes``;
+evaluation runs the frozen deterministic policy for
 ``evaluation_episodes`` episodes in the last training step's setting (human involved as there).
 
 Reward timing: the reward of the action taken in state s_k is computed from the state reached,
@@ -155,6 +157,7 @@ class AgentCore:
         self.evaluation_results = []        # EpisodeResult of this session's evaluation
         self.last_update = None             # statistics of the last PPO update
         self._log = None
+        self._interrupted_phase = None      # the phase a pause or an abort interrupted
 
     # ------------------------------------------------------------------ the session right now
 
@@ -169,9 +172,16 @@ class AgentCore:
         return self.case.human_dof
 
     @property
+    def activity_phase(self) -> str:
+        """Return the phase, or while paused/aborted the phase that was interrupted."""
+        if self.phase in ('paused', 'aborted') and self._interrupted_phase is not None:
+            return self._interrupted_phase
+        return self.phase
+
+    @property
     def training_step(self):
         """Return the TrainingStep in force (the last one in evaluation)."""
-        if self.phase in ('evaluation', 'done') or self.progress.finished:
+        if self.activity_phase in ('evaluation', 'done') or self.progress.finished:
             return self.case.steps[-1]
         return self.progress.step
 
@@ -341,6 +351,32 @@ class AgentCore:
         self.phase = 'training'
         return self.last_update
 
+    # ------------------------------------------------------------------ operator
+
+    def pause(self) -> None:
+        """Pause between two episodes: no episode starts until :meth:`resume`."""
+        if self._log is not None:
+            raise RuntimeError(f'episode {self.episode} is running: pause at its end')
+        if self.phase not in ('training', 'evaluation'):
+            raise RuntimeError(f'cannot pause in phase {self.phase!r}')
+        self._interrupted_phase, self.phase = self.phase, 'paused'
+
+    def resume(self) -> None:
+        """Continue a paused session in the phase it was paused in."""
+        if self.phase != 'paused':
+            raise RuntimeError(f'cannot resume in phase {self.phase!r}: not paused')
+        self.phase, self._interrupted_phase = self._interrupted_phase, None
+
+    def abort(self) -> None:
+        """End the session now; a running episode is dropped (not learned from, not counted).
+
+        The last checkpoint taken at an episode end stays the one to resume from.
+        """
+        if self.phase != 'aborted':
+            self._interrupted_phase = self.activity_phase
+        self._log = None
+        self.phase = 'aborted'
+
     def evaluation_summary(self) -> dict:
         """Return the Table II metrics averaged over the evaluation episodes."""
         results = self.evaluation_results
@@ -393,7 +429,8 @@ class AgentCore:
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
                              'human_involved_episodes': self.human_involved_episodes},
-                'phase': self.phase}
+                # a paused session resumes in the phase it was paused in
+                'phase': self.activity_phase}
 
     def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
         """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""

@@ -19,7 +19,18 @@ loop). The step protocol (docs/architecture.md):
   first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with any change; then the
   reset for the next episode. After training (last step converged or max_training_episodes) the
   evaluation phase runs the frozen deterministic policy; then phase ``done`` and the node exits
-  with code 0.
+  with code 0. In realtime the next reset waits until ``episode_break`` wall seconds after the
+  final state (the person rests; the update runs within the break).
+
+Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``):
+
+* ``/hrc/agent/pause``: takes effect at the next episode boundary (after the update and the
+  checkpoint): phase ``paused`` is announced and no reset is called until resumed;
+* ``/hrc/agent/resume``: continues (or cancels a pause that has not taken effect yet);
+* ``/hrc/agent/abort``: immediate: a zero wrench answers the newest state, phase ``aborted`` is
+  announced, nothing more is answered, the checkpoint of the last episode end (latest.pt) is
+  kept as it is, and the node exits with code ``EXIT_OPERATOR_ABORT`` (3). (A service call waits
+  for a PPO update in progress, which takes about a second.)
 """
 
 import math
@@ -36,9 +47,12 @@ from hrc_common import qos, topics
 from hrc_common.dof import DOF_INDEX, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
+from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
+                                        PAUSE_SERVICE, RESUME_SERVICE)
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from rclpy.node import Node
+from std_srvs.srv import Trigger
 
 PHASE_CODES = {'training': SessionStatus.PHASE_TRAINING,
                'updating': SessionStatus.PHASE_UPDATING,
@@ -93,6 +107,12 @@ class AgentNode(Node):
         self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
                                  qos.HUMAN_ACTION_QOS)
         self.reset_client = self.create_client(ResetEpisode, topics.RESET_SERVICE)
+        self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
+        self.create_service(Trigger, RESUME_SERVICE, self.on_resume)
+        self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
+        self.pause_requested = False
+        self.next_episode_at = 0.0      # monotonic s: realtime break between episodes
+        self.newest_state = None        # the newest state of the running episode (for abort)
         self.human_actions = {}         # stamp key -> normalized command
         self.latest_human_action = 0.0
         self.pending_state = None       # a state waiting for its human action (lockstep)
@@ -121,10 +141,10 @@ class AgentNode(Node):
             if now >= self.exit_at:
                 raise SystemExit(self.exit_code)
             return
-        if self.core.phase == 'done':
+        if self.core.phase in ('done', 'paused'):
             return
         if not self.core.in_episode and self.reset_future is None:
-            if self.core.phase == 'updating':
+            if self.core.phase == 'updating' or now < self.next_episode_at:
                 return
             if not self.reset_client.service_is_ready():
                 if now - self.waiting_since > self.params.reset_timeout:
@@ -166,13 +186,103 @@ class AgentNode(Node):
         if not response.success:
             self.abort(f'the sim refused the reset: {response.message}')
 
-    def abort(self, reason: str):
-        """End the session with phase ``aborted`` and exit code 1."""
+    def abort(self, reason: str, exit_code: int = 1):
+        """End the session with phase ``aborted`` and ``exit_code`` (1: a failure)."""
         self.get_logger().error(f'session aborted: {reason}')
-        self.core.phase = 'aborted'
+        self.core.abort()
+        self.pending_state = None
         self.publish_session(f'aborted: {reason}')
-        self.exit_code = 1
+        self.exit_code = exit_code
         self.exit_at = time.monotonic() + EXIT_LINGER_S
+
+    # ------------------------------------------------------------------ operator controls
+
+    def on_pause(self, request, response):
+        """Pause at the next episode boundary (at once when between episodes)."""
+        phase = self.core.phase
+        if self.exit_at is not None or phase in ('done', 'aborted'):
+            response.success, response.message = False, f'cannot pause: the session is {phase}'
+        elif phase == 'paused':
+            response.success, response.message = True, 'already paused'
+        elif self.core.in_episode or self.reset_future is not None:
+            self.pause_requested = True
+            response.success = True
+            response.message = (f'pause requested: the session pauses when episode '
+                                f'{self.core.episode} ends')
+            self.publish_session(f'pause requested: the session pauses when episode '
+                                 f'{self.core.episode} ends; ' + self.core.status_line())
+        else:
+            self.enter_pause()
+            response.success, response.message = True, f'paused before episode {self.core.episode}'
+        self.get_logger().info(f'operator pause: {response.message}')
+        return response
+
+    def enter_pause(self):
+        """Pause the core between two episodes and announce it."""
+        self.pause_requested = False
+        self.core.pause()
+        self.publish_session(f'paused by the operator before episode {self.core.episode}: '
+                             + self.core.status_line())
+
+    def on_resume(self, request, response):
+        """Resume a paused session (or cancel a pause that has not taken effect)."""
+        if self.core.phase == 'paused':
+            self.core.resume()
+            # A person gets the same break before the next episode as after an episode.
+            self.next_episode_at = time.monotonic() + self.break_seconds()
+            response.success = True
+            response.message = f'resumed: episode {self.core.episode} starts next'
+            self.publish_session('resumed by the operator: ' + self.core.status_line())
+        elif self.pause_requested:
+            self.pause_requested = False
+            response.success, response.message = True, 'pause request cancelled'
+            self.publish_session('pause request cancelled: ' + self.core.status_line())
+        else:
+            response.success = False
+            response.message = f'not paused (phase {self.core.phase})'
+        self.get_logger().info(f'operator resume: {response.message}')
+        return response
+
+    def on_abort(self, request, response):
+        """Stop now: zero wrench, phase aborted, keep the last checkpoint, exit code 3."""
+        if self.exit_at is not None:
+            response.success = False
+            response.message = f'the session is already ending (phase {self.core.phase})'
+            return response
+        where = f'before episode {self.core.episode}'
+        if self.core.in_episode and self.newest_state is not None:
+            where = (f'in episode {self.newest_state.episode} at step '
+                     f'{self.newest_state.step} (dropped, not learned from)')
+        self.publish_zero_wrench(self.newest_state)
+        checkpoint = self.latest_checkpoint_path()
+        if checkpoint and os.path.exists(checkpoint):
+            resume = f'resume from {checkpoint} ({self.core.total_episodes} training episodes)'
+        else:
+            resume = 'no checkpoint yet: a new session starts from scratch'
+        self.abort(f'by the operator {where}; {resume}', EXIT_OPERATOR_ABORT)
+        response.success, response.message = True, f'aborted {where}; {resume}'
+        return response
+
+    def publish_zero_wrench(self, state):
+        """Send a zero wrench answering ``state`` (the newest state; None: stamp 0).
+
+        In realtime the sim applies the newest command whatever its stamp; in lockstep the
+        stamp makes it the answer to the state the sim waits on.
+        """
+        wrench = WrenchStamped()
+        if state is not None:
+            wrench.header.stamp = state.header.stamp
+        wrench.header.frame_id = 'world'
+        self.wrench_pub.publish(wrench)
+
+    def latest_checkpoint_path(self) -> str:
+        """Return the path of the episode-end checkpoint ('' without checkpoints)."""
+        return os.path.join(self.checkpoint_dir, LATEST_CHECKPOINT) if self.checkpoint_dir \
+            else ''
+
+    def break_seconds(self) -> float:
+        """Return the wall seconds of the break between episodes (realtime only)."""
+        return self.params.episode_break if self.params.mode == 'realtime' else 0.0
 
     # ------------------------------------------------------------------ per step
 
@@ -204,8 +314,10 @@ class AgentNode(Node):
             self.get_logger().warn(f'episode {msg.episode}: got step {msg.step}, expected '
                                    f'{expected} (states lost)', throttle_duration_sec=5.0)
         self.stamps[msg.step] = msg.header.stamp
+        self.newest_state = msg
         if msg.truncated or msg.terminated:
             self.pending_state = None
+            self.next_episode_at = time.monotonic() + self.break_seconds()
             self.finish_episode(msg)
             return
         if not self.core.human_involved:
@@ -281,7 +393,7 @@ class AgentNode(Node):
                 f'{stats["seconds"]:.2f} s, policy loss {stats["policy_loss"]:.4f}, value loss '
                 f'{stats["value_loss"]:.4f}, approx kl {stats["approx_kl"]:.5f}, action std '
                 f'{stats["action_std"]:.3f}')
-        self.save_checkpoint('latest.pt')
+        self.save_checkpoint(LATEST_CHECKPOINT)
         if result.event == 'training_finished':
             outcome = 'converged' if result.converged else 'not converged'
             self.get_logger().info(f'training finished after {self.core.total_episodes} '
@@ -289,6 +401,9 @@ class AgentNode(Node):
                                    f'human), {outcome}')
         if self.core.phase == 'done':
             self.finish_session()
+            return
+        if self.pause_requested:
+            self.enter_pause()
             return
         self.publish_session(self.core.status_line())
 

@@ -53,6 +53,10 @@ class AgentParams:
                                         low=0.0, high=60.0)
     reset_timeout: float = param(30.0, 'Wall seconds to wait for the sim reset service before '
                                        'the session aborts', low=0.1, high=3600.0)
+    episode_break: float = param(3.0, 'Realtime only: wall seconds from the end of an episode '
+                                      'to the next reset, so the person rests and sees the '
+                                      'result and a countdown (the PPO update runs within it); '
+                                      'lockstep never waits', low=0.0, high=600.0)
     torch_threads: int = param(1, 'torch intra-op threads (the sim and the human share the 2 '
                                   'cores)', low=1, high=64)
     # --- strategy criteria (the paper does not define them; see strategies.py)

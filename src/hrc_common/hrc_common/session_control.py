@@ -1,0 +1,24 @@
+"""Operator controls of a session: the agent's services and the exit code of an operator abort.
+
+The agent owns the episode loop, so it serves the controls (``std_srvs/srv/Trigger``):
+
+* ``/hrc/agent/pause``: pause at the next episode boundary (phase ``paused`` on /hrc/session;
+  the agent does not reset the sim until resumed);
+* ``/hrc/agent/resume``: continue (or cancel a pause that has not taken effect yet);
+* ``/hrc/agent/abort``: stop now (safety): the agent sends a zero wrench, announces phase
+  ``aborted``, keeps its last episode-end checkpoint and exits with :data:`EXIT_OPERATOR_ABORT`;
+  the sim holds and the human node sends zero when they see the phase.
+"""
+
+PAUSE_SERVICE = '/hrc/agent/pause'
+RESUME_SERVICE = '/hrc/agent/resume'
+ABORT_SERVICE = '/hrc/agent/abort'
+OPERATOR_SERVICES = {'pause': PAUSE_SERVICE, 'resume': RESUME_SERVICE, 'abort': ABORT_SERVICE}
+
+# Exit code of the agent (and of the session runner) after an operator abort: a clean,
+# requested stop that can be resumed, distinct from success (0), a failure (1) and bad
+# parameters (2, hrc_common.nodes.EXIT_BAD_PARAMETERS).
+EXIT_OPERATOR_ABORT = 3
+
+# Name of the checkpoint the agent writes at every episode end (the one to resume from).
+LATEST_CHECKPOINT = 'latest.pt'
