@@ -115,32 +115,43 @@ class Progress:
                                       qos.EPISODE_QOS)
 
     def _on_status(self, status):
-        changed = self.status is None or (status.training_step, status.phase,
-                                           status.human_involved) != (
-            self.status.training_step, self.status.phase, self.status.human_involved)
+        # Announce what changes the task for the team; the training <-> updating toggles between
+        # episodes are shown on the progress line only.
+        def milestone(status):
+            phase = PHASES[status.phase] if status.phase < len(PHASES) else '?'
+            return (status.training_step, status.human_involved,
+                    phase if phase not in ('training', 'updating') else 'training')
+
+        changed = self.status is None or milestone(status) != milestone(self.status)
         self.status = status
         if changed:
             self._print(f'[session] case {status.case_id} {status.strategy}: training step '
                         f'{status.training_step + 1}/{max(status.training_step_count, 1)}, '
-                        f'phase {PHASES[status.phase] if status.phase < len(PHASES) else "?"}, '
-                        f'human {"involved" if status.human_involved else "not involved"}, '
-                        f'robot subtasks {list(status.robot_subtasks)}'
-                        + (f' — {status.message}' if status.message else ''))
+                        f'phase {milestone(status)[2]}, human '
+                        f'{"involved" if status.human_involved else "not involved"}, robot '
+                        f'subtasks {list(status.robot_subtasks)}, human subtasks '
+                        f'{list(status.human_subtasks)}', permanent=True)
 
     def _on_episode(self, summary):
         if any(seen.episode == summary.episode for seen in self.episodes):
             return
         self.episodes.append(summary)
-        kind = 'eval' if summary.evaluation else 'train'
+        kind = 'eval ' if summary.evaluation else 'train'
+        human_episodes = sum(s.human_involved for s in self.episodes if not s.evaluation)
         self._print(f'[episode {summary.episode:3d}] {kind} step {summary.training_step + 1} '
-                    f'return {summary.episode_return:8.1f}  error slider '
-                    f'{summary.slider_error:.3f} m pendulum {summary.pendulum_error:.3f} rad '
+                    f'return {summary.episode_return:7.1f}  error slider '
+                    f'{summary.slider_error:.3f} m  pendulum {summary.pendulum_error:.3f} rad  '
                     f'ball {summary.ball_error:.3f} m  human '
-                    f'{"yes" if summary.human_involved else "no "}'
-                    + ('  converged' if summary.converged else ''))
+                    f'{"yes" if summary.human_involved else "no "} ({human_episodes} so far)'
+                    + ('  converged' if summary.converged else ''),
+                    permanent=not self.interactive or summary.evaluation or summary.converged)
 
-    def _print(self, line):
-        print(line, flush=True)
+    def _print(self, line, permanent=True):
+        """Print a line; on a terminal, a non-permanent line is overwritten by the next one."""
+        if self.interactive:
+            print('\r\033[K' + line, end='\n' if permanent else '', flush=True)
+        else:
+            print(line, flush=True)
 
     def close(self):
         """Destroy the node."""
