@@ -136,10 +136,12 @@ class Progress:
         if any(seen.episode == summary.episode for seen in self.episodes):
             return
         self.episodes.append(summary)
-        kind = 'eval ' if summary.evaluation else 'train'
         human_episodes = sum(s.human_involved for s in self.episodes if not s.evaluation)
-        self._print(f'[episode {summary.episode:3d}] {kind} step {summary.training_step + 1} '
-                    f'return {summary.episode_return:7.1f}  error slider '
+        steps = max(self.status.training_step_count, 1) if self.status else 1
+        case = self.status.case_id if self.status else summary.case_id
+        self._print(f'[case {case} | step {summary.training_step + 1}/{steps} | episode '
+                    f'{summary.episode:3d} | {"evaluation" if summary.evaluation else "training"}'
+                    f'] return {summary.episode_return:7.1f}  error slider '
                     f'{summary.slider_error:.3f} m  pendulum {summary.pendulum_error:.3f} rad  '
                     f'ball {summary.ball_error:.3f} m  human '
                     f'{"yes" if summary.human_involved else "no "} ({human_episodes} so far)'
