@@ -6,9 +6,11 @@ of its episode it publishes ``/hrc/human/action`` (HumanAction) and ``/hrc/human
 (WrenchStamped, only the human's degree of freedom set, scaled by ``max_force``/``max_torque``),
 both carrying the state's stamp, so the lockstep sim can match them to the step. It answers even
 when the human is not involved (zero, ``engaged`` false), so the sim can always wait for both
-actors. Which input drives the command, and the fallback when it is lost, are in
-:mod:`hrc_joystick_node.inputs`; the joystick device is sampled (drained without blocking) when
-each state arrives, so the command is the stick's position at that moment.
+actors. When the session is aborted (phase ``aborted``) it sends a zero command at once,
+answering the newest state, and zero for anything after. Which input drives the command,
+and the fallback when it is lost, are in :mod:`hrc_joystick_node.inputs`; the joystick device
+is sampled (drained without blocking) when each state arrives, so the command is the stick's
+position at that moment.
 """
 
 from dataclasses import dataclass
@@ -124,6 +126,7 @@ class HumanNode(Node):
         self.involved = params.involved
         self.subtasks = self._default_subtasks(self.dof)
         self.session_seen = False
+        self.aborted = False
         self.sim_human = self._new_sim_human(self.dof)
         self._sim_episode = None
         self._sim_step = None
@@ -227,6 +230,14 @@ class HumanNode(Node):
             self._sim_episode = None
         self.dof, self.involved, self.subtasks = dof, bool(message.human_involved), subtasks
         self.session_seen = True
+        aborted = message.phase == SessionStatus.PHASE_ABORTED
+        if aborted and not self.aborted:
+            self.get_logger().warning(f'session {message.session_id!r} aborted: sending zero '
+                                      f'({message.message})')
+            if self._last_answer is not None:
+                (episode, step), answered, _ = self._last_answer
+                self._publish_zero(episode, step, answered.header.stamp)
+        self.aborted = aborted
         if changed:
             self.get_logger().info(
                 f'session {message.session_id!r} (case {message.case_id}, '
@@ -240,6 +251,9 @@ class HumanNode(Node):
         if message.truncated or message.terminated:
             return  # the last state of an episode needs no answer
         key = (message.episode, message.step)
+        if self.aborted:
+            self._publish_zero(message.episode, message.step, message.header.stamp)
+            return
         if self._last_answer is not None and self._last_answer[0] == key:
             # The same state again: repeat the answer, do not advance the simulated human.
             self.action_publisher.publish(self._last_answer[1])
@@ -260,6 +274,19 @@ class HumanNode(Node):
         self.wrench_publisher.publish(wrench)
         self._last_answer = (key, action, wrench)
         self.answered += 1
+
+    def _publish_zero(self, episode: int, step: int, stamp) -> None:
+        """Publish a zero, disengaged command answering the state of ``stamp`` (abort)."""
+        action = HumanAction(episode=episode, step=step, command=0.0, dof=DOF_INDEX[self.dof],
+                             source=HumanAction.SOURCE_NONE,
+                             source_detail='session aborted by the operator', engaged=False)
+        action.header.stamp = stamp
+        action.header.frame_id = 'world'
+        wrench = WrenchStamped()
+        wrench.header = action.header
+        self.action_publisher.publish(action)
+        self.wrench_publisher.publish(wrench)
+        self._last_answer = ((episode, step), action, wrench)
 
     def _command(self, message: TaskState) -> tuple:
         """Return (command, engaged, input, source detail) for one state."""

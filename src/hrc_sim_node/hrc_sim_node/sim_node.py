@@ -17,6 +17,9 @@ non-zero components are ignored and reported; a command with a non-finite compon
 (logged, counted, the step counts it as missing); an out-of-range command is clamped to
 ``max_force``/``max_torque`` with a throttled warning. Every such event is counted and listed
 in the one-line summary logged at each episode end.
+
+Operator abort (``/hrc/session`` with phase ``aborted``): a running episode stops at once, the
+sim holds (no more steps or states, nothing applied) until ``/hrc/sim/reset`` is called again.
 """
 
 from collections import Counter
@@ -393,6 +396,8 @@ class SimNode(Node):
                        f'{qos.COMMAND_DEADLINE_S} s ({event.total_count} deadline misses)')
 
     def _on_session(self, message: SessionStatus):
+        if message.phase == SessionStatus.PHASE_ABORTED and self._active:
+            self._hold_after_abort(message)
         robot, human = DOF_NAME.get(message.robot_dof), DOF_NAME.get(message.human_dof)
         if robot is None or human is None or robot == human:
             self.get_logger().error(
@@ -407,6 +412,20 @@ class SimNode(Node):
             self.get_logger().info(f'session {message.session_id!r}: robot drives {robot}, '
                                    f'human drives {human}, human involved: '
                                    f'{self.human_involved}')
+
+    def _hold_after_abort(self, message: SessionStatus):
+        """Stop the running episode at once: no more steps, nothing applied, hold."""
+        self._active = False
+        self._awaited = None
+        self._answers = {}
+        self._latest = {}
+        if self.params.mode == LOCKSTEP:
+            self._timeout_timer.cancel()
+            self._free_run.cancel()
+        self.get_logger().warning(
+            f'session {message.session_id!r} aborted ({message.message}): episode '
+            f'{self.episode} stopped at step {self._state.step}; holding, nothing applied, '
+            f'until {topics.RESET_SERVICE} is called')
 
     # -- visualization -------------------------------------------------------------------------
     def _publish_markers(self):

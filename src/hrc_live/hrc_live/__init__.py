@@ -1,0 +1,1 @@
+"""Live hrc sessions with a person: display, joystick set-up helper, operator controls."""
