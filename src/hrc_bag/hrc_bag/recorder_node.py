@@ -11,7 +11,9 @@ Exit codes: 0 after Ctrl-C/SIGTERM (files closed), 2 for bad parameters, 3 when 
 written (disk full, permissions): the session must stop, nothing is dropped silently.
 """
 
+import faulthandler
 import importlib
+import signal
 import sys
 import time
 
@@ -183,6 +185,8 @@ class RecorderNode(Node):
 
 def main(args=None):
     """Run the recorder node; exit 3 when bags cannot be written."""
+    # `kill -USR1 <pid>` prints where every thread of a recorder that seems stuck is
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
     try:
         return run_node(RecorderNode, EXECUTABLE, SUMMARY, RecorderParams, args)
     except RecordingError as error:
