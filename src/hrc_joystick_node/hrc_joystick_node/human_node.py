@@ -313,7 +313,10 @@ class HumanNode(Node):
                 self._sim_episode = message.episode
             self._sim_step = message.step
             view = state_view(message, params.control_period)
-            return self.sim_human.act(view, self.subtasks), True, SIM, params.profile
+            detail = params.profile
+            if params.input != SIM:  # standing in for a lost or absent joystick: say why
+                detail += f' ({self.selector.reason})'
+            return self.sim_human.act(view, self.subtasks), True, SIM, detail
         return 0.0, False, ZERO, f'zero held: {self.selector.reason}'
 
     def close(self) -> None:

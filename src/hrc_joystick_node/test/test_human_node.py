@@ -325,6 +325,7 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
         action = answer(slider_position=0.05)
         assert action.source == HumanAction.SOURCE_SIMULATED, process.output
         assert action.engaged and action.command < 0.0
+        assert action.source_detail.startswith('skilled (lost: ')
         assert 'vanished' in process.output
 
         writer = os.open(fifo, os.O_RDWR)  # plugged in again
