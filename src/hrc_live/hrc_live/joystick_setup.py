@@ -321,6 +321,7 @@ def watch_until(watcher: JoystickWatcher, console: Console, seconds: float = Non
                 break
         else:
             time.sleep(min(REFRESH_S, max(0.0, deadline - now)) if deadline else REFRESH_S)
+    watcher.poll()  # what came with the Enter key counts too
     if show:
         console.live(watcher.live_line())
         console.say('')
@@ -333,10 +334,10 @@ def guided(watcher: JoystickWatcher, options, console: Console) -> tuple:
     watch_until(watcher, console, until_enter=True)
     axis, invert = options.axis, options.invert
     if axis is None or invert is None:
+        watcher.start()  # before asking: what the operator does next is all in the window
         console.say('Push the stick the person will use all the way in the direction that '
                     'should mean "+" (slider up, right end of the pendulum up), hold it there, '
                     'and press Enter.')
-        watcher.start()
         watch_until(watcher, console, until_enter=True)
         detected = chosen_axis(watcher.watch) if axis is None else axis
         if detected is None or detected not in watcher.watch.axes:
@@ -358,9 +359,9 @@ def guided(watcher: JoystickWatcher, options, console: Console) -> tuple:
         console.say(f'at rest the axis reads up to {rest:.3f}: deadzone {deadzone}')
     enable_button = options.enable_button
     if enable_button is None:
+        watcher.start()
         console.say('Press and hold the button that must be held to act (a deadman button) '
                     'and press Enter; or press Enter alone for none.')
-        watcher.start()
         watch_until(watcher, console, until_enter=True, show=False)
         enable_button = chosen_button(watcher.held_buttons())
         console.say(f'enable button {enable_button}' if enable_button >= 0
