@@ -40,8 +40,8 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    down, by about m_p * d / c_p = 0.25 rad per m/s of slider speed change with the default
    physics), so it adds ``(P_z - target) / coupling_full_scale`` to its slider command: a
    weak, real authority, as the paper's asymmetric task intends. Subtasks of the other degree
-   of freedom are out of the person's reach and ignored (a command of 0 if nothing else is
-   assigned).
+   of freedom are out of the person's reach and ignored (with nothing in reach the intent is
+   0 and only the motor noise floor moves the stick).
 4. **Motor execution.** Limited bandwidth: the stick moves at most ``max_rate`` per second and
    follows the intent with a first-order neuromuscular lag (``neuromuscular_time``). Motor
    noise is signal-dependent (standard deviation ``motor_noise * |command|`` plus a floor
