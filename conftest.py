@@ -16,7 +16,7 @@ def ros_domain_id(monkeypatch):
     """
     reservation = DomainReservation()
     for name, value in ros_environment(reservation.domain_id).items():
-        if name.startswith('ROS_'):
+        if name.startswith(('ROS_', 'FASTDDS_')):
             monkeypatch.setenv(name, value)
     monkeypatch.delenv('ROS_LOCALHOST_ONLY', raising=False)
     yield reservation.domain_id

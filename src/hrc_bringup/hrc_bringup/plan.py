@@ -123,6 +123,7 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
     sim['mode'] = agent['mode'] = settings.mode
     for name in ('max_force', 'max_torque'):
         agent[name] = human[name] = sim[name]
+    human['control_period'] = sim['control_period']
     # The agent announces the roles on /hrc/session; the start values agree with it.
     sim['robot_dof'] = robot_dof_of_case(settings.case)
     human['dof'] = 'rotation' if sim['robot_dof'] == 'translation' else 'translation'

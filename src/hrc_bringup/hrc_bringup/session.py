@@ -7,15 +7,28 @@ It starts sim, agent, human and recorder as separate processes (the executables 
 starts) with one parameter file composed from ``params/*.yaml`` (see hrc_bringup.plan), prints a
 progress line per episode, and stops everything when the agent finishes, a node dies, or on
 Ctrl-C / SIGTERM, the recorder last so its bags are closed. Then it runs the report.
+
+Live sessions (hrc_live): ``--display`` also starts the display node (a page on localhost);
+``--params FILE`` merges a parameter file such as the one ``joystick_setup`` writes; the
+operator pauses, resumes or aborts with ``ros2 run hrc_live operator ...``. An operator abort
+is a clean stop: the bags are closed, the runner prints the command that resumes the session
+from its last checkpoint (counters continue), and exits with code 3 (EXIT_OPERATOR_ABORT).
+
+Exit codes: 0 done, 1 a node failed, 2 bad arguments, 3 aborted by the operator, 124 timeout,
+130/143 SIGINT/SIGTERM.
 """
 
 import argparse
 import os
 import pathlib
+import shlex
 import signal
 import subprocess
 import sys
 import time
+
+from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
+import yaml
 
 from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, SessionSettings,
                               write_session_files)
@@ -66,6 +79,13 @@ def parse_args(argv=None):
     parser.add_argument('--notes', default='', help='free-text notes (bag metadata)')
     parser.add_argument('--set', dest='overrides', action='append', default=[],
                         metavar='NODE.PARAM=VALUE', help='override a node parameter (repeatable)')
+    parser.add_argument('--params', dest='params_files', action='append', default=[],
+                        metavar='FILE', help='a ROS 2 parameter file whose node sections '
+                        'override params/*.yaml, e.g. the joystick_setup output (repeatable; '
+                        '--set wins)')
+    parser.add_argument('--display', action='store_true',
+                        help='also start the display node (hrc_live): the page for the person '
+                        'on http://127.0.0.1:<port>/ (params/display.yaml)')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
     parser.add_argument('--no-report', dest='report', action='store_false',
@@ -73,7 +93,13 @@ def parse_args(argv=None):
     parser.add_argument('--timeout', type=float, default=0.0,
                         help='stop the session after this many wall seconds (0 = none)')
     options = parser.parse_args(argv)
+    options.argv = list(sys.argv[1:] if argv is None else argv)
     overrides = {}
+    for path in options.params_files:
+        try:
+            overrides.update(file_overrides(path))
+        except (OSError, ValueError, yaml.YAMLError) as error:
+            parser.error(f'--params {path}: {error}')
     for text in options.overrides:
         try:
             node, name, value = parse_override(text)
@@ -91,9 +117,43 @@ def parse_args(argv=None):
     if not settings.session_id:
         settings.session_id = new_session_id(settings)
     reasons = settings.check()
+    if settings.subject_id and settings.subject_id.lower() in settings.session_id.lower():
+        # Bag and run folders are named after the session id: no personal data in file names.
+        reasons.append('the session id must not contain the subject id (it names files)')
     if reasons:
         parser.error('; '.join(reasons))
     return settings, options
+
+
+def file_overrides(path) -> dict:
+    """Return {'node.name': value} of the node sections of a ROS 2 parameter file."""
+    document = yaml.safe_load(pathlib.Path(path).read_text()) or {}
+    if not isinstance(document, dict):
+        raise ValueError('not a parameter file (a mapping of node sections)')
+    overrides = {}
+    for node, section in document.items():
+        if node not in NODES:
+            raise ValueError(f'section {node!r} is not one of the nodes {sorted(NODES)}')
+        values = (section or {}).get('ros__parameters') or {}
+        overrides.update({f'{node}.{name}': value for name, value in values.items()})
+    return overrides
+
+
+def resume_command(options, session_id: str, checkpoint: pathlib.Path) -> str:
+    """Return the command line that resumes this session from ``checkpoint``."""
+    args, skip = [], False
+    for arg in options.argv:
+        if skip:
+            skip = False
+            continue
+        if arg in ('--resume-from', '--session-id'):
+            skip = True
+            continue
+        if arg.startswith(('--resume-from=', '--session-id=')):
+            continue
+        args.append(arg)
+    return shlex.join(['ros2', 'run', 'hrc_bringup', 'session', *args, '--session-id',
+                       session_id, '--resume-from', str(checkpoint)])
 
 
 class Progress:
@@ -182,7 +242,9 @@ def run_session(settings: SessionSettings, options) -> int:
     if options.domain_id is not None:
         env['ROS_DOMAIN_ID'] = str(options.domain_id)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    supervisor = Supervisor(run_dir / 'logs', env)
+    # A resumed session keeps the logs of the run it continues.
+    logs = 'logs' if not settings.resume_from else time.strftime('logs-resumed-%Y%m%d-%H%M%S')
+    supervisor = Supervisor(run_dir / logs, env)
     print(f'[session] {settings.session_id}: case {settings.case}, seed {settings.seed}, '
           f'{settings.mode}, human input {settings.human_input}; logs and parameters in '
           f'{run_dir}' + (f', bags in {pathlib.Path(settings.bags_dir) / settings.session_id}'
@@ -210,6 +272,13 @@ def run_session(settings: SessionSettings, options) -> int:
             package, executable, _ = NODES[node]
             supervisor.start(node, [str(executable_path(package, executable)), '--ros-args',
                                     '--params-file', str(params_path)])
+        if options.display:
+            display_params = params_dir / 'display.yaml'
+            supervisor.start('display', [str(executable_path('hrc_live', 'display_node'))] + (
+                ['--ros-args', '--params-file', str(display_params)]
+                if display_params.is_file() else []))
+            print(f'[session] display: see {run_dir / logs / "display.log"} for its address '
+                  f'(http://127.0.0.1:<port>/)', flush=True)
         while True:
             executor.spin_once(timeout_sec=0.1)
             if stop_reason:
@@ -221,6 +290,11 @@ def run_session(settings: SessionSettings, options) -> int:
                 first = finished[0]
                 if first.name == 'agent' and first.returncode == 0:
                     print('[session] the agent finished the session', flush=True)
+                elif first.name == 'agent' and first.returncode == EXIT_OPERATOR_ABORT:
+                    message = progress.status.message if progress.status else ''
+                    print(f'[session] the operator aborted the session ({message}); stopping '
+                          f'the other nodes and closing the bags', flush=True)
+                    code = EXIT_OPERATOR_ABORT
                 else:
                     print(f'[session] node {first.name} stopped unexpectedly '
                           f'({describe_exit(first.returncode)}); stopping the session. Last '
@@ -243,9 +317,18 @@ def run_session(settings: SessionSettings, options) -> int:
     elapsed = time.monotonic() - start
     print(f'[session] stopped after {elapsed:.1f} s: ' + ', '.join(
         f'{name} {describe_exit(returncode)}' for name, returncode in exits.items()), flush=True)
-    if exits.get('recorder', 0) not in (0, None) and code == 0:
+    if exits.get('recorder', 0) not in (0, None) and code in (0, EXIT_OPERATOR_ABORT):
         print('[session] the recorder did not exit cleanly: check its log', file=sys.stderr)
         code = 1
+    if code == EXIT_OPERATOR_ABORT:
+        checkpoint = (pathlib.Path(parameters['agent']['checkpoint_dir']) / settings.session_id
+                      / LATEST_CHECKPOINT)
+        if checkpoint.is_file():
+            print(f'[session] to resume from the last finished episode (counters continue):\n'
+                  f'  {resume_command(options, settings.session_id, checkpoint)}', flush=True)
+        else:
+            print('[session] no episode had finished: there is no checkpoint to resume from',
+                  flush=True)
     if settings.record and options.report and (code == 0 or progress.episodes):
         report(settings, run_dir)
     return code

@@ -51,6 +51,10 @@ def ros_environment(domain_id: int) -> dict:
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     env.pop('ROS_LOCALHOST_ONLY', None)
     env['PYTHONUNBUFFERED'] = '1'
+    # Tests kill nodes on purpose; Fast DDS's shared-memory transport can then leave matched
+    # endpoints that exchange no data for a minute (eProsima/Fast-DDS#1144, #5053). UDP on
+    # loopback has no such state to go stale.
+    env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
     return env
 
 

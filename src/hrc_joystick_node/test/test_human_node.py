@@ -134,18 +134,6 @@ def task_state(episode, step, physics_state=None, truncated=False, **values):
     return message
 
 
-@pytest.fixture(autouse=True)
-def udp_transport(monkeypatch):
-    """Use Fast DDS over UDP loopback only, in this process and in the node processes.
-
-    Fast DDS's shared-memory transport can stay corrupted after a participant is killed
-    (eProsima/Fast-DDS#1144, #5053, #5469); other test runs on this machine kill nodes, and
-    this test then saw matched endpoints exchange no data for minutes. UDP is unaffected.
-    Autouse: runs before rclpy_context and ros_env read the environment.
-    """
-    monkeypatch.setenv('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
-
-
 @pytest.fixture
 def harness(rclpy_context):
     harness = Harness(rclpy_context)
