@@ -436,7 +436,9 @@ def action_trace(session: Session, seconds: float = 4.0, start: float = 0.0,
 
     def window(samples):
         points = sorted((stamp - origin, value) for stamp, value in samples.values())
-        return [(time, value) for time, value in points if start <= time < start + seconds]
+        # (1 us of slack: stamps are sums of control periods in floating point)
+        return [(time, value) for time, value in points
+                if start - 1e-6 <= time < start + seconds - 1e-6]
 
     return {'episode': episode, 'robot': window(robot), 'human': window(human)}
 

@@ -20,7 +20,7 @@ from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, 
 import numpy
 from rclpy.node import Node
 
-CONTROL_PERIOD = 0.2          # s of simulation time per control step
+CONTROL_PERIOD_NS = 200_000_000    # simulation time per control step (0.2 s)
 
 # topic -> (type, QoS its publisher offers), as in docs/architecture.md
 TOPICS = {
@@ -72,7 +72,7 @@ class SyntheticSession:
         self.robot_dof = robot_dof
         self.rng = numpy.random.default_rng(seed)
         self.published = Published()
-        self.sim_time = 0.0
+        self.sim_time_ns = 0          # simulation time (ns): integer, so stamps are exact
         self.total_episodes = 0
         self.human_involved_episodes = 0
         self.publishers = {}
@@ -106,9 +106,8 @@ class SyntheticSession:
         self.published.add(topic, message)
 
     def _stamp(self, message) -> None:
-        seconds = int(self.sim_time)
-        message.header.stamp.sec = seconds
-        message.header.stamp.nanosec = int(round((self.sim_time - seconds) * 1e9))
+        message.header.stamp.sec, message.header.stamp.nanosec = divmod(self.sim_time_ns,
+                                                                        1_000_000_000)
 
     def publish_status(self, episode: int, phase: int = SessionStatus.PHASE_TRAINING,
                        training_step: int = 0, human_involved: bool = False) -> SessionStatus:
@@ -170,7 +169,7 @@ class SyntheticSession:
                 human_actions.append(human_action)
                 self._publish_answers(state, robot_action, human_action, human_involved,
                                       evaluation, training_step)
-            self.sim_time += CONTROL_PERIOD
+            self.sim_time_ns += CONTROL_PERIOD_NS
             if step_period:
                 time.sleep(step_period)
         if not final:
@@ -288,7 +287,7 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
 
     def sink(topic, message):
         counter[0] += 1
-        log_time = start_time_ns + int(session.sim_time * 1e9) + counter[0] * 1000
+        log_time = start_time_ns + session.sim_time_ns + counter[0] * 1000
         type_name = type_name_of(message)
         recorder.record(RawMessage(topic, type_name, serialize_message(message), log_time,
                                    log_time, counter[0]),

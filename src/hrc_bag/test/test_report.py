@@ -25,9 +25,9 @@ def bags(tmp_path_factory):
     published = {}
     for case, strategy in CASES.items():
         for seed in SEEDS:
-            plan = strategy_plan(strategy, 1 + seed, 2, 2)
+            plan = strategy_plan(strategy, seed, 1, 1)
             session = record_in_process(folder, f'case{case}_seed{seed}', case, strategy, seed,
-                                        plan, steps=21)
+                                        plan, steps=12)
             published[(case, seed)] = session.published.by_topic['/hrc/episode']
     return folder, published
 
@@ -72,8 +72,8 @@ def test_table2_values_are_the_mean_and_spread_over_seeds(bags, written):
             assert mean == pytest.approx(numpy.mean(values), rel=1e-12), (case, key)
             assert spread == pytest.approx(numpy.std(values, ddof=1), rel=1e-9, abs=1e-15)
     # responsibility-guided: the human joins in step 2 only; the others: always involved
-    assert rows[1].values['human_involved_episodes'][0] == 2.0
-    assert rows[1].values['total_episodes'][0] == 4.5
+    assert rows[1].values['human_involved_episodes'][0] == 1.0
+    assert rows[1].values['total_episodes'][0] == 2.5
     assert rows[4].values['percentage'][0] == 100.0
     assert [row.case_id for row in result['rows']] == [1, 2, 4, 5]
     assert (rows[1].robot_dof, rows[2].robot_dof) == ('translation', 'rotation')
@@ -109,16 +109,16 @@ def test_figure_data(bags):
     sessions = [report.load_session(path) for path in report.find_sessions([folder])]
     case1 = next(session for session in sessions if session.session_id == 'case1_seed2')
     curve = report.training_curve(case1)
-    assert len(curve['returns']) == 5
-    assert curve['human_joins'] == [4] and curve['reward_changes'] == [4]
+    assert len(curve['returns']) == 3
+    assert curve['human_joins'] == [3] and curve['reward_changes'] == [3]
     trace = report.action_trace(case1, seconds=2.0)
-    assert trace['episode'] == 5                                 # first evaluation episode
+    assert trace['episode'] == 3                                 # first evaluation episode
     assert [time for time, _ in trace['robot']] == pytest.approx(
         [0.2 * step for step in range(10)])
     factors = {entry['strategy']: entry for entry in report.three_factors(report.table2(
         sessions))}
-    assert factors['responsibility_guided']['human_involved_episodes'][0] == 2.0
-    assert factors['learn_together']['total_episodes'][0] == 4.5
+    assert factors['responsibility_guided']['human_involved_episodes'][0] == 1.0
+    assert factors['learn_together']['total_episodes'][0] == 2.5
     assert report.factor_score(0.0, 10.0) == 1.0
     assert report.factor_score(10.0, 10.0) == pytest.approx(0.2)
     assert math.isnan(report.factor_score(math.nan, 1.0))
