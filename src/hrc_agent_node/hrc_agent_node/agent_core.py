@@ -261,11 +261,29 @@ class AgentCore:
         # Clip: a wild state must not saturate the tanh layers into a useless gradient.
         return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
 
+    @property
+    def needs_human_action(self) -> bool:
+        """Return True when act() needs the human's answer to the same state."""
+        return self.params.human_action_source == 'same_step' and self.human_involved
+
+    def applied_human_action(self, state) -> float:
+        """Return the human's normalized command the sim applied in the last control period.
+
+        Each degree of freedom has one actor, so the state's applied force (torque) on the
+        human's degree of freedom is the human's command, after the sim's clamping and with a
+        missing command as 0.
+        """
+        if self.human_dof == 'translation':
+            return float(state.applied_force) / self.params.max_force
+        return float(state.applied_torque) / self.params.max_torque
+
     def act(self, state, human_action: float = 0.0) -> Decision:
         """Return the robot's action for a non-final state of the running episode.
 
-        ``human_action`` is the human's normalized command for the same step; it is observed as
-        0 when the human is not involved. A non-finite human action is observed as 0.
+        The observed human action is, by ``human_action_source``: ``applied``, the human's
+        command applied in the last period (from ``state``; ``human_action`` is not used) or
+        ``same_step``, ``human_action``, the human's command for the same step. It is observed
+        as 0 when the human is not involved; a non-finite one is observed as 0.
         """
         log = self._require_episode()
         if state.truncated or state.terminated:
@@ -277,6 +295,8 @@ class AgentCore:
         # from the state that did arrive (a gap, reported by the caller), and the episode goes on.
         previous = self._close_pending(state) if log.next_step > 0 else None
         plan = log.plan
+        if plan.human_involved and self.params.human_action_source == 'applied':
+            human_action = self.applied_human_action(state)
         if not plan.human_involved or not math.isfinite(human_action):
             human_action = 0.0
         human_action = min(1.0, max(-1.0, float(human_action)))

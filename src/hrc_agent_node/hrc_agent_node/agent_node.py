@@ -7,10 +7,13 @@ loop). The step protocol (docs/architecture.md):
 * at start: publish ``/hrc/session`` (transient local), wait for ``/hrc/sim/reset``, call it
   for episode 0 with a seed derived from the session seed;
 * every non-final ``/hrc/state`` of the running episode is answered on
-  ``/hrc/robot/cmd_wrench`` with the state's stamp, on the robot's degree of freedom only. In
-  lockstep the agent first waits for the ``/hrc/human/action`` of the same step (stamp match, up
-  to ``human_action_timeout`` wall seconds, then 0 and a warning) so the observation is
-  deterministic; in realtime it uses the newest human action it has. When the human is not
+  ``/hrc/robot/cmd_wrench`` with the state's stamp, on the robot's degree of freedom only. The
+  observed human action is by default (``human_action_source: applied``) the human's command
+  the sim applied in the last period, read from the state itself: robot and human act on the
+  same state at the same time, as at a real joystick, in both clock modes. With ``same_step``
+  the agent observes the human's answer to the same state: in lockstep it waits for the
+  ``/hrc/human/action`` of the same step (stamp match, up to ``human_action_timeout`` wall
+  seconds, then 0 and a warning); in realtime it uses the newest one. When the human is not
   involved the observed human action is 0;
 * the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
   computed from the state reached);
@@ -320,8 +323,8 @@ class AgentNode(Node):
             self.next_episode_at = time.monotonic() + self.break_seconds()
             self.finish_episode(msg)
             return
-        if not self.core.human_involved:
-            self.act(msg, 0.0)
+        if not self.core.needs_human_action:
+            self.act(msg, 0.0)  # the core observes the applied action, or 0 if not involved
             return
         key = stamp_key(msg.header.stamp)
         if key in self.human_actions:

@@ -25,9 +25,10 @@ class AgentParams:
                       low=1, high=6)
     seed: int = param(0, 'Session seed: network init, exploration noise, episode seeds',
                       low=0, high=2**31 - 1)
-    mode: str = param('lockstep', 'Clock mode of the sim: lockstep waits for the human action '
-                                  'of each step (up to human_action_timeout); realtime uses the '
-                                  'latest one', choices=('lockstep', 'realtime'))
+    mode: str = param('lockstep', 'Clock mode of the sim: with human_action_source same_step, '
+                                  'lockstep waits for the human action of each step (up to '
+                                  'human_action_timeout) and realtime uses the latest one',
+                      choices=('lockstep', 'realtime'))
     max_training_episodes: int = param(60, 'Training ends after this many training episodes '
                                            'if the last training step has not converged',
                                        low=1, high=100000)
@@ -48,6 +49,12 @@ class AgentParams:
                                    'the sim)', low=0.001, high=1000.0)
     max_torque: float = param(0.5, 'N*m for a normalized action of 1 on rotation (must match '
                                    'the sim)', low=0.001, high=1000.0)
+    human_action_source: str = param(
+        'applied', "What the robot observes as the human action a_h: applied = the human's "
+        'command the sim applied in the last control period (read from the state: the two act '
+        'at the same time, as at a real joystick; deterministic, no waiting); same_step = the '
+        "human's answer to the same state (lockstep waits for it)",
+        choices=('applied', 'same_step'))
     human_action_timeout: float = param(1.0, 'Lockstep: wall seconds to wait for the human '
                                              'action of a step before acting with 0 (reported)',
                                         low=0.0, high=60.0)

@@ -149,7 +149,8 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
         'case': 1, 'seed': 7, 'session_id': 'dds_test', 'task_tree_file': str(easy_tree),
         'convergence_window': 2, 'max_training_episodes': 10, 'evaluation_episodes': 1,
         'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': str(tmp_path / 'ckpt'),
-        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})
+        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque,
+        'human_action_source': 'same_step'})  # the fake sim checks the same-step protocol
     code = run_until_exit(fake, agent, rclpy_context, timeout=90)
     fake.node.destroy_node()
     assert code == 0, agent.output
@@ -208,7 +209,7 @@ def test_missing_human_action_times_out_and_is_reported(start_node, rclpy_contex
     fake = FakeSim(rclpy_context, human_answers=False)
     agent = start_node('hrc_agent_node', 'agent_node', params_file=AGENT_YAML, parameters={
         'case': 5, 'max_training_episodes': 1, 'evaluation_episodes': 0,
-        'human_action_timeout': 0.05, 'checkpoint_dir': '',
+        'human_action_timeout': 0.05, 'checkpoint_dir': '', 'human_action_source': 'same_step',
         'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})
     code = run_until_exit(fake, agent, rclpy_context, timeout=60)
     fake.node.destroy_node()

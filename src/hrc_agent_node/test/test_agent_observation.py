@@ -1,0 +1,40 @@
+"""What the robot observes as the human action (human_action_source)."""
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.config import AgentParams
+from hrc_common.params import with_overrides
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+
+def core_for(case, source):
+    """Return an AgentCore of ``case`` (5 and 6 involve the human from the first episode)."""
+    return AgentCore(with_overrides(AgentParams(), case=case, seed=3, checkpoint_dir='',
+                                    human_action_source=source))
+
+
+def test_applied_source_reads_the_human_command_the_sim_applied():
+    # Case 5 (learn together): the human rotates and is involved from the start.
+    core = core_for(5, 'applied')
+    assert core.human_involved and core.human_dof == 'rotation'
+    assert not core.needs_human_action
+    with SliderPendulumBall(PhysicsParams()) as sim:
+        core.start_episode()
+        state = sim.reset(seed=1)
+        first = core.act(state, human_action=0.9)   # ignored: nothing applied yet
+        assert first.record.observed_human_action == 0.0
+        state = sim.step_normalized(first.action, -0.4)   # the human turned at -0.4
+        second = core.act(state, human_action=0.9)
+        assert abs(second.record.observed_human_action - (-0.4)) < 1e-9
+        # An out-of-range human command is observed as the sim applied it: clamped.
+        state = sim.step(0.0, 5 * PhysicsParams().max_torque)
+        assert core.act(state).record.observed_human_action == 1.0
+
+
+def test_same_step_source_observes_the_answer_to_the_same_state():
+    core = core_for(6, 'same_step')
+    assert core.human_involved and core.human_dof == 'translation'
+    assert core.needs_human_action
+    with SliderPendulumBall(PhysicsParams()) as sim:
+        core.start_episode()
+        state = sim.reset(seed=1)
+        assert core.act(state, human_action=0.3).record.observed_human_action == 0.3
