@@ -91,8 +91,10 @@ def test_a_node_killed_mid_session_stops_the_session_with_bags_intact(tmp_path, 
     while len(list(bags.glob('*.mcap'))) < 3:
         assert time.monotonic() < deadline and runner.poll() is None, runner.stdout.read()
         time.sleep(0.2)
-    human_pid = int(subprocess.run(['pgrep', '-f', '-n', 'lib/hrc_joystick_node/human_node'],
-                                   capture_output=True, text=True).stdout.split()[0])
+    # This session's human node: its command line names this test's parameter file.
+    human_pid = int(subprocess.run(
+        ['pgrep', '-f', f'human_node --ros-args --params-file {tmp_path}'],
+        capture_output=True, text=True).stdout.split()[0])
     os.kill(human_pid, signal.SIGKILL)
     output, _ = runner.communicate(timeout=120)
     assert runner.returncode == 1, output
