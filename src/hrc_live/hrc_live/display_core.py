@@ -141,6 +141,8 @@ class Overlay:
 
 def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str:
     """Return "Episode x of y" for the current (or next) episode."""
+    if session.phase == 'done':
+        return f'{session.total_episodes} training episodes done'
     evaluating = session.phase == 'evaluation' or (
         session.phase in ('paused', 'done', 'aborted') and plan is not None
         and session.episode > session.total_episodes)

@@ -96,7 +96,9 @@ def test_updating_paused_aborted_done_and_evaluation_words():
     model.on_session(session(phase='aborted', total_episodes=7), now=41.0)
     assert overlay(model.snapshot(now=41.1)).tone == 'stop'
     model.on_session(session(phase='done', total_episodes=7), now=42.0)
-    assert overlay(model.snapshot(now=42.1)).banner == 'The session is finished. Thank you!'
+    words = overlay(model.snapshot(now=42.1))
+    assert words.banner == 'The session is finished. Thank you!'
+    assert words.episode_label == '7 training episodes done'
     model.on_session(session(phase='evaluation', episode=8, total_episodes=7), now=43.0)
     assert overlay(model.snapshot(now=43.1)).episode_label == 'Test episode 2 of 2'
 
