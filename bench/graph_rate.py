@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmark: lockstep control steps per second, full graph over DDS vs one process without ROS.
 
-    python bench/graph_rate.py --episodes 3 --case 2
+    python bench/graph_rate.py --episodes 3 --case 2 --repeats 3
 
 Measures, within episodes (PPO updates between episodes excluded in both):
 
@@ -142,23 +142,36 @@ def main() -> int:
     parser.add_argument('--episodes', type=int, default=3)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--domain-id', type=int, default=91)
+    parser.add_argument('--repeats', type=int, default=3, help='rounds of the three runs')
     args = parser.parse_args()
 
     print(f'machine: {os.cpu_count()} cores, python {sys.version.split()[0]}; case {args.case}, '
-          f'{args.episodes} episodes of 200 steps each measurement', flush=True)
-    local = in_process_rate(args.case, args.episodes, args.seed)
-    print(f'in-process (no ROS)      : {local:8.0f} steps/s', flush=True)
-    bare = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id)
-    print(f'graph over DDS           : {bare["rate"]:8.0f} steps/s  ({bare["episodes"]} episodes,'
-          f' nodes CPU {bare["cpu"]:.1f} s, wall {bare["wall"]:.1f} s)', flush=True)
-    recorded = graph_rate(args.case, args.episodes, args.seed, True, args.domain_id)
-    print(f'graph over DDS + recorder: {recorded["rate"]:8.0f} steps/s  ({recorded["episodes"]} '
-          f'episodes, nodes CPU {recorded["cpu"]:.1f} s, wall {recorded["wall"]:.1f} s, '
-          f'{recorded["bag_bytes_per_episode"] / 1024:.0f} KiB of MCAP per episode)', flush=True)
-    print(f'ratio graph / in-process : {bare["rate"] / local:.2f}')
-    print(f'real-time factor (graph) : {bare["rate"] * 0.2:.0f}x')
-    print(f'recorder overhead        : {(1 - recorded["rate"] / bare["rate"]) * 100:+.1f}% steps/s'
-          f', {(recorded["cpu"] / bare["cpu"] - 1) * 100:+.1f}% CPU')
+          f'{args.episodes} episodes of 200 steps per measurement, {args.repeats} rounds '
+          f'(in-process, graph, graph + recorder in turn; ratios pair by pair)', flush=True)
+    rounds = []
+    for round_index in range(args.repeats):
+        local = in_process_rate(args.case, args.episodes, args.seed)
+        bare = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id)
+        recorded = graph_rate(args.case, args.episodes, args.seed, True, args.domain_id)
+        rounds.append((local, bare, recorded))
+        print(f'round {round_index + 1}: in-process {local:6.0f} steps/s | graph '
+              f'{bare["rate"]:5.0f}'
+              f' steps/s (nodes CPU {bare["cpu"]:.1f} s) | graph + recorder '
+              f'{recorded["rate"]:5.0f} steps/s (nodes CPU {recorded["cpu"]:.1f} s, '
+              f'{recorded["bag_bytes_per_episode"] / 1024:.0f} KiB MCAP per episode)', flush=True)
+    median = statistics.median
+    local = median(r[0] for r in rounds)
+    bare = median(r[1]['rate'] for r in rounds)
+    recorded = median(r[2]['rate'] for r in rounds)
+    print(f'median in-process (no ROS)      : {local:6.0f} steps/s')
+    print(f'median graph over DDS           : {bare:6.0f} steps/s  '
+          f'(real-time factor {bare * 0.2:.0f}x)')
+    print(f'median graph over DDS + recorder: {recorded:6.0f} steps/s')
+    print(f'ratio graph / in-process       : {median(r[1]["rate"] / r[0] for r in rounds):.2f}')
+    print(f'recorder overhead (steps/s)    : '
+          f'{median(1 - r[2]["rate"] / r[1]["rate"] for r in rounds) * 100:+.1f}%')
+    print(f'recorder overhead (nodes CPU)  : '
+          f'{median(r[2]["cpu"] / r[1]["cpu"] - 1 for r in rounds) * 100:+.1f}%')
     return 0
 
 

@@ -90,6 +90,10 @@ def parse_args(argv=None):
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
     parser.add_argument('--no-report', dest='report', action='store_false',
                         help='skip the report at the end')
+    parser.add_argument('--recorder-niceness', type=int, default=10, choices=range(0, 20),
+                        metavar='0..19', help='run the recorder at this lower CPU priority '
+                        '(default 10): it buffers and catches up between episodes, so it does '
+                        'not slow the control loop; 0 = same priority as the nodes')
     parser.add_argument('--timeout', type=float, default=0.0,
                         help='stop the session after this many wall seconds (0 = none)')
     options = parser.parse_args(argv)
@@ -271,7 +275,8 @@ def run_session(settings: SessionSettings, options) -> int:
                 continue
             package, executable, _ = NODES[node]
             supervisor.start(node, [str(executable_path(package, executable)), '--ros-args',
-                                    '--params-file', str(params_path)])
+                                    '--params-file', str(params_path)],
+                             niceness=options.recorder_niceness if node == 'recorder' else 0)
         if options.display:
             display_params = params_dir / 'display.yaml'
             supervisor.start('display', [str(executable_path('hrc_live', 'display_node'))] + (

@@ -24,6 +24,15 @@ def _die_with_parent():
         pass
 
 
+def _child_setup(niceness: int):
+    """Return the function run in the child before exec: parent-death signal, niceness."""
+    def setup():
+        _die_with_parent()
+        if niceness:
+            os.nice(niceness)
+    return setup
+
+
 def describe_exit(returncode: int) -> str:
     """Return a readable description of a process exit code."""
     if returncode is None:
@@ -69,13 +78,13 @@ class Supervisor:
         self.env = dict(os.environ if env is None else env)
         self.processes = {}
 
-    def start(self, name: str, command: list) -> ManagedProcess:
-        """Start ``command`` as the process called ``name``."""
+    def start(self, name: str, command: list, niceness: int = 0) -> ManagedProcess:
+        """Start ``command`` as the process called ``name`` (``niceness`` > 0: lower priority)."""
         log_path = self.log_dir / f'{name}.log'
         with open(log_path, 'wb') as log:
             popen = subprocess.Popen(command, env=self.env, stdout=log,
                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     start_new_session=True, preexec_fn=_die_with_parent)
+                                     start_new_session=True, preexec_fn=_child_setup(niceness))
         process = ManagedProcess(name, list(command), log_path, popen)
         self.processes[name] = process
         return process
