@@ -87,3 +87,21 @@ def rosbags_typestore():
         types.update(get_types_from_msg(path.read_text(), f'hrc_msgs/msg/{path.stem}'))
     typestore.register(types)
     return typestore
+
+
+@pytest.fixture
+def read_rosbag(rosbags_typestore):
+    """Return a function reading a rosbag2 folder with rosbags: {topic: [decoded messages]}."""
+    import collections
+
+    from rosbags.rosbag2 import Reader
+
+    def read(folder):
+        messages = collections.defaultdict(list)
+        with Reader(folder) as reader:
+            for connection, _, raw in reader.messages():
+                messages[connection.topic].append(
+                    rosbags_typestore.deserialize_cdr(raw, connection.msgtype))
+        return messages
+
+    return read

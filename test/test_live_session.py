@@ -20,7 +20,6 @@ from hrc_common.testing import executable_path, wait_for
 from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
-from rosbags.rosbag2 import Reader
 import yaml
 
 STEPS = 25  # control steps per episode here (episode_duration 5 s)
@@ -66,16 +65,6 @@ def operator(domain_id, command):
     return result.returncode, result.stdout + result.stderr
 
 
-def read_bag(folder, typestore):
-    """Return {topic: [decoded messages]} of a rosbag2 folder, read with rosbags."""
-    messages = collections.defaultdict(list)
-    with Reader(folder) as reader:
-        for connection, _, raw in reader.messages():
-            messages[connection.topic].append(
-                typestore.deserialize_cdr(raw, connection.msgtype))
-    return messages
-
-
 def session_records(folder):
     """Return the hrc_session MCAP metadata record of every file of a bag folder."""
     records = {}
@@ -96,7 +85,7 @@ def watcher(rclpy_context):
 
 def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, ros_domain_id,
                                                                      watcher,
-                                                                     rosbags_typestore):
+                                                                     read_rosbag):
     session = str(executable_path('hrc_bringup', 'session'))
     command = [session, '--domain-id', str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'),
                '--runs-dir', str(tmp_path / 'runs'), '--session-id', 'live', *LIVE,
@@ -172,7 +161,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
 
     # The bags: closed, readable by rosbags; the aborted episode ends with zero commands.
     bags = tmp_path / 'bags' / 'live'
-    bag = read_bag(bags, rosbags_typestore)
+    bag = read_rosbag(bags)
     episodes = collections.Counter(s.episode for s in bag['/hrc/state'])
     assert all(episodes[episode] == STEPS + 1 for episode in range(finished)), episodes
     if mid_episode:
@@ -213,7 +202,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     assert {s.episode for s in new_states} == {finished}
     done = watcher.statuses[-1]
     assert (done.total_episodes, done.episode) == (finished + 1, finished + 1)
-    bag = read_bag(bags, rosbags_typestore)
+    bag = read_rosbag(bags)
     assert [s.episode for s in bag['/hrc/episode']] == list(range(finished + 1))
     truncated = [s.episode for s in bag['/hrc/state'] if s.truncated]
     assert truncated == list(range(finished + 1))

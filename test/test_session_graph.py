@@ -13,7 +13,6 @@ import struct
 import subprocess
 import time
 
-from rosbags.rosbag2 import Reader
 
 from hrc_common.testing import executable_path
 
@@ -28,23 +27,13 @@ def session_command(tmp_path, domain_id, *args):
             '--session-id', 'test', *SHORT, *args]
 
 
-def read_bag(folder, typestore):
-    """Return {topic: [decoded messages]} of a rosbag2 folder, read with rosbags."""
-    messages = collections.defaultdict(list)
-    with Reader(folder) as reader:
-        for connection, _, raw in reader.messages():
-            messages[connection.topic].append(
-                typestore.deserialize_cdr(raw, connection.msgtype))
-    return messages
-
-
 def stamp_of(message):
     """Return the header stamp of a message as a hashable pair."""
     return (message.header.stamp.sec, message.header.stamp.nanosec)
 
 
 def test_short_session_completes_answered_recorded_and_reported(tmp_path, ros_domain_id,
-                                                                rosbags_typestore):
+                                                                read_rosbag):
     result = subprocess.run(session_command(tmp_path, ros_domain_id, '--case', '3',
                                             '--episodes', '2', '--eval-episodes', '1'),
                             capture_output=True, text=True, timeout=300)
@@ -52,7 +41,7 @@ def test_short_session_completes_answered_recorded_and_reported(tmp_path, ros_do
     assert 'the agent finished the session' in result.stdout
     assert 'recorder exit code 0' in result.stdout
 
-    bag = read_bag(tmp_path / 'bags' / 'test', rosbags_typestore)
+    bag = read_rosbag(tmp_path / 'bags' / 'test')
     states = bag['/hrc/state']
     episodes = collections.Counter(state.episode for state in states)
     assert episodes == {0: STEPS + 1, 1: STEPS + 1, 2: STEPS + 1}, episodes
@@ -80,7 +69,7 @@ def test_short_session_completes_answered_recorded_and_reported(tmp_path, ros_do
 
 
 def test_a_node_killed_mid_session_stops_the_session_with_bags_intact(tmp_path, ros_domain_id,
-                                                                    rosbags_typestore):
+                                                                    read_rosbag):
     runner = subprocess.Popen(session_command(tmp_path, ros_domain_id, '--case', '1',
                                               '--episodes', '50', '--no-report'),
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -101,7 +90,7 @@ def test_a_node_killed_mid_session_stops_the_session_with_bags_intact(tmp_path, 
     assert 'node human stopped unexpectedly (killed by SIGKILL)' in output
     assert 'recorder exit code 0' in output, output
     assert (logs / 'human.log').exists()
-    bag = read_bag(bags, rosbags_typestore)
+    bag = read_rosbag(bags)
     finished = collections.Counter(s.episode for s in bag['/hrc/state'] if s.truncated)
     assert finished[0] == 1 and finished[1] == 1
     assert collections.Counter(s.episode for s in bag['/hrc/state'])[0] == STEPS + 1
@@ -116,7 +105,7 @@ def js_event(time_ms, value, kind, number):
     return struct.pack('IhBB', time_ms, value, kind, number)
 
 
-def test_a_joystick_fifo_drives_the_human_side(tmp_path, ros_domain_id, rosbags_typestore):
+def test_a_joystick_fifo_drives_the_human_side(tmp_path, ros_domain_id, read_rosbag):
     fifo = tmp_path / 'js0'
     os.mkfifo(fifo)
     # Hold the FIFO open read-write (never blocks, keeps a writer present), and queue the
@@ -134,7 +123,7 @@ def test_a_joystick_fifo_drives_the_human_side(tmp_path, ros_domain_id, rosbags_
     finally:
         os.close(writer)
     assert runner.returncode == 0, output
-    bag = read_bag(tmp_path / 'bags' / 'test', rosbags_typestore)
+    bag = read_rosbag(tmp_path / 'bags' / 'test')
     actions = bag['/hrc/human/action']
     assert len(actions) == STEPS
     assert all(action.source == action.SOURCE_DEVICE for action in actions)
