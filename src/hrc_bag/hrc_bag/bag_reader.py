@@ -102,11 +102,14 @@ def _wanted(topic, topics) -> bool:
     return topics is None or topic in topics
 
 
-def _scan_stream(path, topics) -> FileScan:
-    """Read a file record by record; stop quietly at a truncated record."""
+def scan_records(path):
+    """Read a file record by record up to its end or its first cut (a killed writer).
+
+    Returns (schemas, channels, messages, metadata, error): schemas and channels by id, the raw
+    Message records in file order, the metadata records as dicts, and '' if the file was read
+    to its end, else what stopped the reading.
+    """
     schemas, channels, messages, metadata = {}, {}, [], {}
-    make_message = _MessageFactory()
-    complete = False
     error = ''
     with open(path, 'rb') as stream:
         try:
@@ -118,16 +121,23 @@ def _scan_stream(path, topics) -> FileScan:
                 elif isinstance(record, Metadata):
                     metadata[record.name] = dict(record.metadata)
                 elif isinstance(record, Message):
-                    channel = channels.get(record.channel_id)
-                    if channel is None or not _wanted(channel.topic, topics):
-                        continue
-                    messages.append(make_message(schemas.get(channel.schema_id), channel,
-                                                 record))
-            complete = True
+                    messages.append(record)
         except TRUNCATION_ERRORS as exception:
-            error = f'{type(exception).__name__}: {exception}'.rstrip(': ')
+            error = f'{type(exception).__name__}: {exception}'.rstrip(': ') or 'truncated'
+    return schemas, channels, messages, metadata, error
+
+
+def _scan_stream(path, topics) -> FileScan:
+    """Read a file record by record; stop quietly at a truncated record."""
+    schemas, channels, records, metadata, error = scan_records(path)
+    make_message = _MessageFactory()
+    messages = []
+    for record in records:
+        channel = channels.get(record.channel_id)
+        if channel is not None and _wanted(channel.topic, topics):
+            messages.append(make_message(schemas.get(channel.schema_id), channel, record))
     messages.sort(key=lambda message: message.log_time)
-    return FileScan(pathlib.Path(path), complete, messages, metadata, error)
+    return FileScan(pathlib.Path(path), not error, messages, metadata, error)
 
 
 def scan_file(path, topics=None) -> FileScan:

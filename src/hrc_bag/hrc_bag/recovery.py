@@ -10,32 +10,11 @@ file is complete, so a recovery that is itself interrupted loses nothing.
 import os
 import pathlib
 
-from mcap.records import Channel, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
 
-from hrc_bag.bag_reader import TRUNCATION_ERRORS
+from hrc_bag.bag_reader import scan_records
 from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.recording import (describe_error, EpisodeFile, FileInfo, RawMessage,
                                RecordingError, ROSBAG2_RECORD, TopicDescription)
-
-
-def _scan_records(path):
-    """Return (schemas, channels, messages, metadata) read before the file's first cut."""
-    schemas, channels, messages, metadata = {}, {}, [], {}
-    with open(path, 'rb') as stream:
-        try:
-            for record in StreamReader(stream).records:
-                if isinstance(record, Schema):
-                    schemas[record.id] = record
-                elif isinstance(record, Channel):
-                    channels[record.id] = record
-                elif isinstance(record, Metadata):
-                    metadata[record.name] = dict(record.metadata)
-                elif isinstance(record, Message):
-                    messages.append(record)
-        except TRUNCATION_ERRORS:
-            pass
-    return schemas, channels, messages, metadata
 
 
 def _description(channel, schemas) -> TopicDescription:
@@ -52,7 +31,7 @@ def recover_file(path, compression: str = 'zstd') -> FileInfo:
     """Rewrite an unfinished MCAP file as a finished one in place; return its info."""
     path = pathlib.Path(path)
     try:
-        schemas, channels, messages, metadata = _scan_records(path)
+        schemas, channels, messages, metadata, _ = scan_records(path)
     except OSError as error:
         raise RecordingError(f'cannot read {path}: {describe_error(error)}') from error
     metadata.pop(ROSBAG2_RECORD, None)
