@@ -39,7 +39,6 @@ from hrc_sim_node.physics import (body_poses, physics_params_of, PhysicsParams,
                                   SliderPendulumBall)
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image
@@ -203,18 +202,6 @@ class SimNode(Node):
         self._warned[kind] = (now, 0)
 
     # -- parameters ----------------------------------------------------------------------------
-    def declare_parameter(self, name, value=None, descriptor=None, ignore_override=False):
-        """Declare a parameter; an empty list given for a list parameter means the empty list.
-
-        rcl reads an empty YAML list (``-p expected_actors:=[]``) without an element type and
-        reports the parameter as not set; for a parameter whose default is a list that can only
-        mean ``[]``. (The node's parameter store keeps it as not set.)
-        """
-        parameter = super().declare_parameter(name, value, descriptor, ignore_override)
-        if isinstance(value, list) and parameter.type_ == Parameter.Type.NOT_SET:
-            return Parameter(name, Parameter.Type.STRING_ARRAY, [])
-        return parameter
-
     # -- episodes ------------------------------------------------------------------------------
     def start_episode(self, episode: int, seed: int = -1) -> TaskState:
         """Reset the physics, publish the state of step 0 and wait for its commands."""
