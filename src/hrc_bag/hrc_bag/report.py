@@ -247,6 +247,8 @@ def _format(value: tuple, decimals: int, percent: bool = False) -> str:
     if count == 0:
         return 'n/a'
     suffix = '%' if percent else ''
+    if count == 1 and decimals == 1 and float(mean).is_integer():
+        return f'{int(mean)}'  # an episode count of one session
     text = f'{mean:.{decimals}f}{suffix}'
     if count > 1:
         text += f' ± {spread:.{decimals}f}{suffix}'
