@@ -54,6 +54,7 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
             if close is not None:
                 close()
             node.destroy_node()
-        if rclpy.ok():
-            rclpy.shutdown()
+        # The SIGINT/SIGTERM handler may shut the context down at any moment (a check-then-act
+        # race with rclpy.ok()); try_shutdown tolerates a context already shut down.
+        rclpy.try_shutdown()
     return code
