@@ -25,6 +25,19 @@ if [ ! -f "$req_stamp" ]; then
   touch "$req_stamp"
 fi
 
+# 2b. the browser the display tests drive (Debian's chromium and its WebDriver). Installed with
+# apt-get when missing and we are root; otherwise say how, and the browser tests fail with that.
+if ! command -v chromium >/dev/null 2>&1 || ! command -v chromedriver >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "setup: installing Debian's chromium and chromium-driver (browser tests of the display)"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq >/dev/null
+    apt-get install -y -qq chromium chromium-driver >/dev/null
+  else
+    echo "setup: chromium/chromedriver missing; as root: apt-get install chromium chromium-driver"
+  fi
+fi
+
 # 3. the ROS wheels' exported CMake targets point at the wheel build machine: fix once
 fix_stamp=$venv/.ros-wheels-fixed-$(stamp_of requirements.txt scripts/fix_ros_wheels.py)
 if [ ! -f "$fix_stamp" ]; then
