@@ -46,7 +46,11 @@ if [ ! -f "$fix_stamp" ]; then
   touch "$fix_stamp"
 fi
 
-# 4. colcon build, only when a package file changed since the last successful build
+# 4. colcon build, only when a package file changed since the last successful build. One build
+# at a time per checkout: concurrent `make` calls wait for the lock instead of racing in build/.
+mkdir -p "$top/log"
+exec 9>"$top/log/.setup.lock"
+flock 9
 build_stamp=$top/install/.hrc-build-stamp
 newest=$(find src colcon.meta -newer "$build_stamp" -not -name '*.pyc' -print -quit 2>/dev/null || true)
 if [ ! -f "$build_stamp" ] || [ -n "$newest" ]; then
