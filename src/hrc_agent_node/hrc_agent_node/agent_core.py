@@ -132,6 +132,32 @@ def derive_seed(session_seed: int, episode: int) -> int:
                & 0x7FFFFFFF)
 
 
+def observation_of(params: AgentParams, state, partner_action: float) -> np.ndarray:
+    """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates).
+
+    Shared by AgentCore and the Gymnasium/PettingZoo environments (hrc_gym); ``params`` gives
+    the scales and ``observe_rates``; ``partner_action`` is the other actor's command.
+    """
+    p = params
+    values = [state.ball_position / p.ball_position_scale,
+              state.pendulum_angle / p.pendulum_angle_scale,
+              state.slider_position / p.slider_position_scale,
+              partner_action]
+    if p.observe_rates:
+        values += [state.ball_velocity / p.ball_velocity_scale,
+                   state.pendulum_angular_velocity / p.pendulum_velocity_scale,
+                   state.slider_velocity / p.slider_velocity_scale]
+    # Clip: a wild state must not saturate the tanh layers into a useless gradient.
+    return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
+
+
+def applied_command(state, dof: str, params: AgentParams) -> float:
+    """Return the normalized command the sim applied on ``dof`` in the last control period."""
+    if dof == 'translation':
+        return float(state.applied_force) / params.max_force
+    return float(state.applied_torque) / params.max_torque
+
+
 class AgentCore:
     """Task tree, reward, strategy progress, PPO learner and counters of one session."""
 
@@ -249,17 +275,7 @@ class AgentCore:
 
     def observation(self, state, human_action: float) -> np.ndarray:
         """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates)."""
-        p = self.params
-        values = [state.ball_position / p.ball_position_scale,
-                  state.pendulum_angle / p.pendulum_angle_scale,
-                  state.slider_position / p.slider_position_scale,
-                  human_action]
-        if p.observe_rates:
-            values += [state.ball_velocity / p.ball_velocity_scale,
-                       state.pendulum_angular_velocity / p.pendulum_velocity_scale,
-                       state.slider_velocity / p.slider_velocity_scale]
-        # Clip: a wild state must not saturate the tanh layers into a useless gradient.
-        return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
+        return observation_of(self.params, state, human_action)
 
     @property
     def needs_human_action(self) -> bool:
@@ -273,9 +289,7 @@ class AgentCore:
         human's degree of freedom is the human's command, after the sim's clamping and with a
         missing command as 0.
         """
-        if self.human_dof == 'translation':
-            return float(state.applied_force) / self.params.max_force
-        return float(state.applied_torque) / self.params.max_torque
+        return applied_command(state, self.human_dof, self.params)
 
     def act(self, state, human_action: float = 0.0) -> Decision:
         """Return the robot's action for a non-final state of the running episode.
