@@ -1,0 +1,371 @@
+"""The contract between the hrc nodes, in one place. Pure: no rclpy, no message import.
+
+Every definition two packages must agree on lives here once; everything else imports it.
+The API below is stable (other packages import it by name):
+
+Phases (``SessionStatus.phase``)
+    ``Phase`` -- IntEnum whose values equal ``hrc_msgs/msg/SessionStatus`` ``PHASE_*``
+    (checked by a test); ``Phase.X.label`` is the lower-case name the CLI and the display show
+    ('training', ...); ``Phase.from_label(text)``; ``phase_label(code, default=None)`` for a
+    raw code (an unknown code gives ``default``, or 'phase N'); ``FINISHED_PHASES`` (done,
+    aborted); ``ACTIVE_PHASES`` (training, updating, evaluation).
+Degrees of freedom and the wrench axis convention
+    ``TRANSLATION``, ``ROTATION``, ``DOFS`` (in ``SessionStatus.DOF_*`` order), ``DOF_INDEX``,
+    ``DOF_NAME``, ``check_dof``, ``other_dof``, ``dof_name(code, default=None)``,
+    ``wrench_axis``, ``wrench_value``, ``set_wrench_value``, ``off_axis_components``.
+Message types (as in bags and ``ros2 topic type``)
+    ``TASK_STATE_TYPE``, ``HUMAN_ACTION_TYPE``, ``SESSION_STATUS_TYPE``,
+    ``EPISODE_SUMMARY_TYPE``, ``AGENT_STEP_TYPE``, ``WRENCH_STAMPED_TYPE``.
+Time
+    ``NS_PER_S``, ``NS_PER_MS``, ``seconds_to_ns``, ``ns_to_seconds``.
+Body colours (the paper's figure; sim URDF, markers and display)
+    ``BODY_COLOURS`` {body: (r, g, b) in 0..1}, ``rgb8(colour)``.
+Ids
+    ``ID_PATTERN``, ``id_problem(text, what)`` -> reason or None (session ids, subject ids:
+    one rule everywhere they enter), ``check_id``, ``make_session_id(case, seed, now)``
+    ('case{N}-seed{S}-{YYYYmmdd-HHMMSS}').
+Cases (``params/cases.yaml``, the only place they are defined)
+    ``CaseSpec``, ``CaseTableError``, ``load_case_table(path=None)``, ``case_table()``
+    (cached default), ``case_ids()``, ``case_problem(case)`` -> reason or None,
+    ``cases_file_path()``.
+Files
+    ``atomic_write(path, data, mode=0o644)``; ``PERSONAL_FILE_MODE`` (0o600) for files that
+    hold a subject id or notes.
+"""
+
+from dataclasses import dataclass
+import datetime
+import enum
+import functools
+import os
+import re
+import tempfile
+
+import yaml
+
+# --------------------------------------------------------------------------- phases
+
+
+class Phase(enum.IntEnum):
+    """Session phase; values equal hrc_msgs/msg/SessionStatus PHASE_*."""
+
+    TRAINING = 0     # episodes run, the robot explores and collects experience
+    UPDATING = 1     # between episodes: the policy is being updated, the sim holds
+    EVALUATION = 2   # the frozen deterministic policy is evaluated
+    PAUSED = 3       # the operator paused the session at an episode boundary
+    DONE = 4         # the session finished
+    ABORTED = 5      # the operator or a failure aborted the session
+
+    @property
+    def label(self) -> str:
+        """Return the lower-case name shown to users ('training', ...)."""
+        return self.name.lower()
+
+    @classmethod
+    def from_label(cls, label: str) -> 'Phase':
+        """Return the phase named ``label`` (as ``Phase.X.label``); ValueError if unknown."""
+        try:
+            return cls[label.upper()]
+        except KeyError:
+            raise ValueError(f'unknown phase {label!r}: expected one of '
+                             f'{[phase.label for phase in cls]}') from None
+
+
+FINISHED_PHASES = frozenset({Phase.DONE, Phase.ABORTED})
+ACTIVE_PHASES = frozenset({Phase.TRAINING, Phase.UPDATING, Phase.EVALUATION})
+
+
+def phase_label(code: int, default: str = None) -> str:
+    """Return the label of a raw phase code; ``default`` (or 'phase N') if the code is unknown."""
+    try:
+        return Phase(code).label
+    except ValueError:
+        return default if default is not None else f'phase {code}'
+
+
+# --------------------------------------------------------------------------- degrees of freedom
+# World frame ("world"): x points toward the viewer (the pendulum's joint axis), y points east
+# along the horizontal pendulum, z points up along the rod. Hence:
+# * translation: force.z (N) pushes the slider up the rod (+ = up);
+# * rotation: torque.x (N*m) turns the pendulum about its joint axis; + raises the east end
+#   (counter-clockwise as the viewer sees it) and increases P_z.
+# Every other wrench component is off-axis: the sim ignores it and reports it.
+
+TRANSLATION = 'translation'
+ROTATION = 'rotation'
+DOFS = (TRANSLATION, ROTATION)   # in HumanAction/SessionStatus DOF_* order
+DOF_INDEX = {name: index for index, name in enumerate(DOFS)}
+DOF_NAME = dict(enumerate(DOFS))
+_WRENCH_AXES = {TRANSLATION: ('force', 'z'), ROTATION: ('torque', 'x')}
+
+
+def check_dof(dof: str) -> str:
+    """Return ``dof`` or raise ValueError naming the allowed values."""
+    if dof not in DOFS:
+        raise ValueError(f'unknown degree of freedom {dof!r}: expected one of {DOFS}')
+    return dof
+
+
+def other_dof(dof: str) -> str:
+    """Return the degree of freedom that is not ``dof``."""
+    check_dof(dof)
+    return ROTATION if dof == TRANSLATION else TRANSLATION
+
+
+def dof_name(code: int, default: str = None) -> str:
+    """Return the name of a DOF_* code; ``default`` (or 'dof N') if the code is unknown."""
+    return DOF_NAME.get(code, default if default is not None else f'dof {code}')
+
+
+def wrench_axis(dof: str) -> tuple:
+    """Return (part, axis) of the WrenchStamped component that drives ``dof``."""
+    return _WRENCH_AXES[check_dof(dof)]
+
+
+def wrench_value(wrench, dof: str) -> float:
+    """Return the component of a geometry_msgs/Wrench that drives ``dof``."""
+    part, axis = wrench_axis(dof)
+    return float(getattr(getattr(wrench, part), axis))
+
+
+def set_wrench_value(wrench, dof: str, value: float) -> None:
+    """Set the component of ``wrench`` that drives ``dof`` to ``value``."""
+    part, axis = wrench_axis(dof)
+    setattr(getattr(wrench, part), axis, float(value))
+
+
+def off_axis_components(wrench, dof: str) -> dict:
+    """Return {'force.x': value, ...} of the non-zero components that do not drive ``dof``."""
+    driving = '.'.join(wrench_axis(dof))
+    found = {}
+    for part in ('force', 'torque'):
+        vector = getattr(wrench, part)
+        for axis in 'xyz':
+            name = f'{part}.{axis}'
+            value = float(getattr(vector, axis))
+            if name != driving and value != 0.0:
+                found[name] = value
+    return found
+
+
+# --------------------------------------------------------------------------- message types
+
+TASK_STATE_TYPE = 'hrc_msgs/msg/TaskState'
+HUMAN_ACTION_TYPE = 'hrc_msgs/msg/HumanAction'
+SESSION_STATUS_TYPE = 'hrc_msgs/msg/SessionStatus'
+EPISODE_SUMMARY_TYPE = 'hrc_msgs/msg/EpisodeSummary'
+AGENT_STEP_TYPE = 'hrc_msgs/msg/AgentStep'
+WRENCH_STAMPED_TYPE = 'geometry_msgs/msg/WrenchStamped'
+
+# --------------------------------------------------------------------------- time
+
+NS_PER_S = 1_000_000_000
+NS_PER_MS = 1_000_000
+
+
+def seconds_to_ns(seconds: float) -> int:
+    """Return ``seconds`` as integer nanoseconds (rounded)."""
+    return int(round(seconds * NS_PER_S))
+
+
+def ns_to_seconds(nanoseconds: int) -> float:
+    """Return ``nanoseconds`` in seconds."""
+    return nanoseconds / NS_PER_S
+
+
+# --------------------------------------------------------------------------- colours
+# The bodies' colours (the paper's figure), RGB in 0..1: the sim's URDF, its markers and the
+# display all draw with these.
+BODY_COLOURS = {
+    'rod': (0.6, 0.6, 0.6),
+    'slider': (1.0, 0.55, 0.1),
+    'pendulum': (0.15, 0.35, 0.85),
+    'ball': (0.45, 0.45, 0.45),
+}
+
+
+def rgb8(colour) -> tuple:
+    """Return an RGB colour in 0..1 as 8-bit integers (0..255)."""
+    return tuple(int(round(channel * 255)) for channel in colour)
+
+
+# --------------------------------------------------------------------------- ids
+# Session ids and subject ids become file and directory names and travel in every bag, so one
+# rule holds wherever they enter: 1..64 characters, letters, digits, '_', '.', '-', starting
+# with a letter or digit (so no path separator, no '..' component, no hidden file, no option).
+ID_PATTERN = re.compile(r'[A-Za-z0-9][A-Za-z0-9_.-]{0,63}')   # the whole id must match
+ID_RULE = ("1..64 characters from letters, digits, '_', '.', '-', starting with a letter or "
+           "digit, without '..'")
+
+
+def id_problem(text, what: str = 'id'):
+    """Return why ``text`` is not a valid id (naming it ``what``), or None if it is valid."""
+    if not isinstance(text, str):
+        return f'{what} must be a string, got {type(text).__name__}'
+    if not ID_PATTERN.fullmatch(text) or '..' in text:
+        return f'{what} {text!r} is not valid: {ID_RULE}'
+    return None
+
+
+def check_id(text, what: str = 'id') -> str:
+    """Return ``text`` or raise ValueError with the reason it is not a valid id."""
+    problem = id_problem(text, what)
+    if problem:
+        raise ValueError(problem)
+    return text
+
+
+def make_session_id(case: int, seed: int, now: datetime.datetime = None) -> str:
+    """Return the session id 'case{N}-seed{S}-{YYYYmmdd-HHMMSS}' (local time, no personal data)."""
+    now = now or datetime.datetime.now()
+    return f'case{case}-seed{seed}-{now:%Y%m%d-%H%M%S}'
+
+
+# --------------------------------------------------------------------------- cases
+
+CASES_FILE_NAME = 'cases.yaml'
+
+
+class CaseTableError(ValueError):
+    """The cases file is missing or not of the expected shape."""
+
+
+@dataclass(frozen=True)
+class CaseSpec:
+    """A paper case: a strategy and the role assignment (the human drives the other DOF)."""
+
+    case_id: int
+    strategy: str
+    robot_dof: str
+    human_dof: str
+
+
+def cases_file_path() -> str:
+    """Return the default cases file path.
+
+    share/hrc_common/params/cases.yaml when installed, else the repository's params/cases.yaml
+    (a source checkout).
+    """
+    try:
+        from ament_index_python.packages import (get_package_share_directory,
+                                                 PackageNotFoundError)
+        try:
+            installed = os.path.join(get_package_share_directory('hrc_common'), 'params',
+                                     CASES_FILE_NAME)
+            if os.path.exists(installed):
+                return installed
+        except PackageNotFoundError:
+            pass
+    except ImportError:
+        pass
+    here = os.path.dirname(os.path.realpath(__file__))
+    return os.path.normpath(os.path.join(here, '..', '..', '..', 'params', CASES_FILE_NAME))
+
+
+def load_case_table(path=None) -> dict:
+    """Return {case id: CaseSpec} from a cases file (default: ``cases_file_path()``).
+
+    Checks the shape: a mapping with ``strategies`` (a mapping) and ``cases`` (a mapping of
+    positive integer ids to {strategy: a key of strategies, robot_action: a DOF}). Every
+    problem is reported at once in one CaseTableError.
+    """
+    path = path or cases_file_path()
+    try:
+        with open(path, 'rb') as stream:
+            document = yaml.safe_load(stream)
+    except OSError as error:
+        raise CaseTableError(f'cannot read cases file {path}: {error.strerror}') from None
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise CaseTableError(f'cases file {path} is not YAML: {error}') from None
+    if not isinstance(document, dict):
+        raise CaseTableError(f'cases file {path}: expected a mapping with strategies and cases, '
+                             f'got {type(document).__name__}')
+    strategies = document.get('strategies')
+    cases = document.get('cases')
+    problems = []
+    if not isinstance(strategies, dict):
+        problems.append('strategies must be a mapping of strategy names')
+        strategies = {}
+    if not isinstance(cases, dict) or not cases:
+        problems.append('cases must be a non-empty mapping of case ids')
+        cases = {}
+    table = {}
+    for case_id, entry in cases.items():
+        if isinstance(case_id, bool) or not isinstance(case_id, int) or case_id < 1:
+            problems.append(f'case id {case_id!r} must be a positive integer')
+            continue
+        if not isinstance(entry, dict):
+            problems.append(f'case {case_id}: expected a mapping, got {type(entry).__name__}')
+            continue
+        unknown = sorted(set(entry) - {'strategy', 'robot_action'})
+        if unknown:
+            problems.append(f'case {case_id}: unknown keys {unknown}')
+        strategy = entry.get('strategy')
+        robot = entry.get('robot_action')
+        if strategy not in strategies:
+            problems.append(f'case {case_id}: strategy {strategy!r} is not one of '
+                            f'{sorted(strategies)}')
+        if robot not in DOFS:
+            problems.append(f'case {case_id}: robot_action {robot!r} is not one of {DOFS}')
+        else:
+            table[case_id] = CaseSpec(case_id, strategy, robot, other_dof(robot))
+    if problems:
+        raise CaseTableError(f'cases file {path}: ' + '; '.join(problems))
+    return dict(sorted(table.items()))
+
+
+@functools.lru_cache(maxsize=None)
+def case_table() -> dict:
+    """Return the default case table (loaded once)."""
+    return load_case_table()
+
+
+def case_ids() -> tuple:
+    """Return the ids of the defined cases, ascending."""
+    return tuple(case_table())
+
+
+def case_problem(case) -> str:
+    """Return why ``case`` is not a defined case id, or None if it is."""
+    ids = case_ids()
+    if isinstance(case, bool) or not isinstance(case, int) or case not in ids:
+        return f'case must be one of {min(ids)}..{max(ids)}, got {case!r}'
+    return None
+
+
+# --------------------------------------------------------------------------- files
+
+PUBLIC_FILE_MODE = 0o644
+PERSONAL_FILE_MODE = 0o600   # files holding a subject id or notes: owner only
+
+
+def atomic_write(path, data, mode: int = PUBLIC_FILE_MODE) -> None:
+    """Write ``data`` (str as UTF-8, or bytes) to ``path`` atomically and durably.
+
+    A temporary file in the same directory is created with ``mode`` (whatever the umask),
+    written, fsynced and renamed over ``path``; then the directory is fsynced so the rename
+    survives a crash. Readers see the old file or the new one, never a part.
+    """
+    path = os.fspath(path)
+    directory = os.path.dirname(os.path.abspath(path))
+    payload = data.encode('utf-8') if isinstance(data, str) else bytes(data)
+    descriptor, temporary = tempfile.mkstemp(prefix='.' + os.path.basename(path) + '.',
+                                             suffix='.tmp', dir=directory)
+    try:
+        os.fchmod(descriptor, mode)
+        with os.fdopen(descriptor, 'wb') as stream:
+            stream.write(payload)
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        try:
+            os.unlink(temporary)
+        except FileNotFoundError:
+            pass
+        raise
+    directory_descriptor = os.open(directory, os.O_RDONLY)
+    try:
+        os.fsync(directory_descriptor)
+    finally:
+        os.close(directory_descriptor)
