@@ -14,6 +14,9 @@ import subprocess
 
 import yaml
 
+from hrc_common.contract import (atomic_write, case_problem, case_table, id_problem,
+                                 make_session_id, PERSONAL_FILE_MODE)
+
 # Node name -> (package, executable, parameter file). The node name is the section of the file.
 NODES = {
     'sim': ('hrc_sim_node', 'sim_node', 'sim.yaml'),
@@ -21,16 +24,6 @@ NODES = {
     'human': ('hrc_joystick_node', 'human_node', 'human.yaml'),
     'recorder': ('hrc_bag', 'recorder_node', 'recorder.yaml'),
 }
-# Paper cases: 1, 3, 5 the robot translates (human rotates); 2, 4, 6 swapped.
-STRATEGY_OF_CASE = {1: 'responsibility_guided', 2: 'responsibility_guided',
-                    3: 'level_guided', 4: 'level_guided',
-                    5: 'learn_together', 6: 'learn_together'}
-
-
-def robot_dof_of_case(case: int) -> str:
-    """Return the robot's degree of freedom in a paper case."""
-    return 'translation' if case % 2 == 1 else 'rotation'
-
 
 @dataclass
 class SessionSettings:
@@ -55,8 +48,9 @@ class SessionSettings:
     def check(self) -> list:
         """Return the reasons these settings are unusable (empty if fine)."""
         reasons = []
-        if self.case not in STRATEGY_OF_CASE:
-            reasons.append(f'case must be 1..6, got {self.case}')
+        problem = case_problem(self.case)
+        if problem:
+            reasons.append(problem)
         if self.mode not in ('lockstep', 'realtime'):
             reasons.append(f"mode must be 'lockstep' or 'realtime', got {self.mode!r}")
         if self.seed < 0:
@@ -64,15 +58,16 @@ class SessionSettings:
         for key in self.overrides:
             if key.split('.', 1)[0] not in NODES:
                 reasons.append(f'--set {key}: the node must be one of {sorted(NODES)}')
-        if any(char in self.session_id for char in '/\\ '):
-            reasons.append(f'session id {self.session_id!r} must not contain / \\ or spaces')
+        for value, what in ((self.session_id, 'session id'), (self.subject_id, 'subject id')):
+            problem = value and id_problem(value, what)
+            if problem:
+                reasons.append(problem)
         return reasons
 
 
 def new_session_id(settings: SessionSettings, now=None) -> str:
     """Return a session id: case, seed and start time (no personal data)."""
-    now = now or datetime.datetime.now()
-    return f'case{settings.case}-seed{settings.seed}-{now:%Y%m%d-%H%M%S}'
+    return make_session_id(settings.case, settings.seed, now)
 
 
 def parse_override(text: str):
@@ -125,8 +120,9 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
         agent[name] = human[name] = sim[name]
     human['control_period'] = sim['control_period']
     # The agent announces the roles on /hrc/session; the start values agree with it.
-    sim['robot_dof'] = robot_dof_of_case(settings.case)
-    human['dof'] = 'rotation' if sim['robot_dof'] == 'translation' else 'translation'
+    case = case_table()[settings.case]
+    sim['robot_dof'] = case.robot_dof
+    human['dof'] = case.human_dof
     agent['case'] = settings.case
     agent['session_id'] = settings.session_id
     agent['checkpoint_dir'] = str(pathlib.Path(settings.runs_dir) / 'checkpoints')
@@ -149,20 +145,22 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
 def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path):
     """Write ``parameters.yaml`` (for --params-file) and ``session.yaml`` (the session config).
 
+    ``session.yaml`` holds the subject id and notes, so it is created owner-only (0600).
+
     Returns (parameters_path, session_config_path).
     """
     session_dir.mkdir(parents=True, exist_ok=True)
     params_path = session_dir / 'parameters.yaml'
-    params_path.write_text(yaml.safe_dump(
+    atomic_write(params_path, yaml.safe_dump(
         {node: {'ros__parameters': values} for node, values in parameters.items()},
         sort_keys=False))
+    case = case_table()[settings.case]
     config = {
         'session_id': settings.session_id,
         'case': settings.case,
-        'strategy': STRATEGY_OF_CASE[settings.case],
-        'robot_dof': robot_dof_of_case(settings.case),
-        'human_dof': 'rotation' if robot_dof_of_case(settings.case) == 'translation'
-        else 'translation',
+        'strategy': case.strategy,
+        'robot_dof': case.robot_dof,
+        'human_dof': case.human_dof,
         'seed': settings.seed,
         'mode': settings.mode,
         'human_input': settings.human_input,
@@ -174,5 +172,6 @@ def write_session_files(settings: SessionSettings, parameters: dict, session_dir
         'parameters': parameters,
     }
     config_path = session_dir / 'session.yaml'
-    config_path.write_text(yaml.safe_dump(config, sort_keys=False))
+    # It holds the subject id and the notes: owner-only.
+    atomic_write(config_path, yaml.safe_dump(config, sort_keys=False), PERSONAL_FILE_MODE)
     return params_path, config_path

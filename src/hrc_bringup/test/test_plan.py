@@ -5,15 +5,16 @@ import pathlib
 import pytest
 import yaml
 
-from hrc_bringup.plan import (compose, new_session_id, parse_override, robot_dof_of_case,
-                              SessionSettings, write_session_files)
+from hrc_bringup.plan import (compose, new_session_id, parse_override, SessionSettings,
+                              write_session_files)
 
 PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
 
 
 def test_roles_of_the_six_cases():
-    assert [robot_dof_of_case(case) for case in range(1, 7)] == [
-        'translation', 'rotation'] * 3
+    roles = [(compose(SessionSettings(case=case), PARAMS)['sim']['robot_dof'],
+              compose(SessionSettings(case=case), PARAMS)['human']['dof']) for case in range(1, 7)]
+    assert roles == [('translation', 'rotation'), ('rotation', 'translation')] * 3
 
 
 def test_compose_makes_the_nodes_agree():
@@ -32,11 +33,13 @@ def test_compose_makes_the_nodes_agree():
 
 
 @pytest.mark.parametrize('settings, reason', [
-    (SessionSettings(case=7), 'case must be 1..6'),
+    (SessionSettings(case=7), 'case must be one of 1..6, got 7'),
     (SessionSettings(mode='fast'), "mode must be 'lockstep' or 'realtime'"),
     (SessionSettings(seed=-1), 'seed must be >= 0'),
     (SessionSettings(overrides={'robot.x': 1}), '--set robot.x: the node must be one of'),
-    (SessionSettings(session_id='a/b'), 'must not contain'),
+    (SessionSettings(session_id='a/b'), "session id 'a/b' is not valid"),
+    (SessionSettings(session_id='../../x'), "session id '../../x' is not valid"),
+    (SessionSettings(subject_id='/etc/p'), "subject id '/etc/p' is not valid"),
 ])
 def test_bad_settings_are_rejected(settings, reason):
     with pytest.raises(ValueError, match=None) as error:
@@ -62,3 +65,12 @@ def test_session_files(tmp_path):
     config = yaml.safe_load(config_path.read_text())
     assert config['strategy'] == 'responsibility_guided' and config['robot_dof'] == 'rotation'
     assert config['subject_id'] == 'P07' and config['parameters']['sim']['seed'] == 1
+    assert config_path.stat().st_mode & 0o777 == 0o600
+
+
+def test_every_reason_at_once():
+    settings = SessionSettings(case=0, mode='fast', seed=-2, session_id='..', subject_id='a b')
+    with pytest.raises(ValueError) as error:
+        compose(settings, PARAMS)
+    for reason in ('case must be', 'mode must be', 'seed must be', 'session id', 'subject id'):
+        assert reason in str(error.value)
