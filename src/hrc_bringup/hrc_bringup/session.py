@@ -27,6 +27,7 @@ import subprocess
 import sys
 import time
 
+from hrc_common.contract import phase_label
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 import yaml
 
@@ -34,7 +35,6 @@ from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, Se
                               write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
-PHASES = ['training', 'updating', 'evaluation', 'paused', 'done', 'aborted']
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
 
@@ -182,7 +182,7 @@ class Progress:
         # Announce what changes the task for the team; the training <-> updating toggles between
         # episodes are shown on the progress line only.
         def milestone(status):
-            phase = PHASES[status.phase] if status.phase < len(PHASES) else '?'
+            phase = phase_label(status.phase, '?')
             return (status.training_step, status.human_involved,
                     phase if phase not in ('training', 'updating') else 'training')
 
