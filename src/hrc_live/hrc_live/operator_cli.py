@@ -15,12 +15,11 @@ import argparse
 import sys
 import time
 
+from hrc_common.contract import dof_name, phase_label
 from hrc_common.session_control import OPERATOR_SERVICES
 
 EXIT_REFUSED = 1
 EXIT_NO_AGENT = 4
-PHASES = ('training', 'updating', 'evaluation', 'paused', 'done', 'aborted')
-DOFS = ('translation', 'rotation')
 
 
 def parse_args(argv=None):
@@ -42,14 +41,14 @@ def parse_args(argv=None):
 
 def describe_status(status) -> str:
     """Return the lines ``operator status`` prints for a SessionStatus."""
-    phase = PHASES[status.phase] if status.phase < len(PHASES) else str(status.phase)
+    phase = phase_label(status.phase, str(status.phase))
     human = (f'involved on {list(status.human_subtasks)}' if status.human_involved
              else 'not involved')
     return '\n'.join([
         f'session {status.session_id}: case {status.case_id} ({status.strategy}), phase {phase}',
         f'training step {status.training_step + 1}/{max(status.training_step_count, 1)}; '
-        f'robot drives {DOFS[status.robot_dof] if status.robot_dof < 2 else "?"}, human '
-        f'drives {DOFS[status.human_dof] if status.human_dof < 2 else "?"} ({human})',
+        f'robot drives {dof_name(status.robot_dof, "?")}, human '
+        f'drives {dof_name(status.human_dof, "?")} ({human})',
         f'episode {status.episode}; {status.total_episodes} training episodes done, '
         f'{status.human_involved_episodes} with the human',
         f'{status.message}'])
