@@ -47,6 +47,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
+from hrc_common.contract import Phase
 from hrc_common.dof import DOF_INDEX, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
@@ -57,12 +58,6 @@ from hrc_msgs.srv import ResetEpisode
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-PHASE_CODES = {'training': SessionStatus.PHASE_TRAINING,
-               'updating': SessionStatus.PHASE_UPDATING,
-               'evaluation': SessionStatus.PHASE_EVALUATION,
-               'paused': SessionStatus.PHASE_PAUSED,
-               'done': SessionStatus.PHASE_DONE,
-               'aborted': SessionStatus.PHASE_ABORTED}
 # Wall seconds between the last message and the exit, so reliable subscribers receive it.
 EXIT_LINGER_S = 0.5
 # Human actions kept for stamp matching (a few steps are enough: they answer the newest state).
@@ -475,7 +470,7 @@ class AgentNode(Node):
         msg.episode = core.episode
         msg.total_episodes = core.total_episodes
         msg.human_involved_episodes = core.human_involved_episodes
-        msg.phase = PHASE_CODES[core.phase]
+        msg.phase = int(Phase.from_label(core.phase))
         msg.message = message
         self.session_pub.publish(msg)
 
