@@ -1,0 +1,185 @@
+"""One episode of the task for the environments: physics, roles, reward, observation. Pure.
+
+Nothing here is a second implementation: :class:`TaskRun` only wires the cores the nodes use.
+
+* physics: ``hrc_sim_node.physics.SliderPendulumBall`` (PyBullet), stepped with the normalized
+  command of each degree of freedom;
+* roles, training steps, reward: ``hrc_agent_node`` (``params/cases.yaml`` resolved by
+  ``strategies.load_cases``; the reward is ``TaskTree.reward`` of the step's subtasks on the
+  state reached, eq. 2-5, exactly as ``AgentCore`` computes it);
+* observation: ``hrc_agent_node.agent_core.observation_of`` ({B_y, P_z, S_x, a_partner}, plus
+  the three rates when ``observe_rates``), where a_partner is the partner's command *applied in
+  the last control period* (``applied_command``, the agent's default ``human_action_source``);
+* the simulated human: ``hrc_joystick_node.sim_human`` (see :func:`make_human`).
+
+Per-episode errors (mean |x - mu| of every subtask over the states reached, as ``AgentCore``
+reports them) are kept so a learner can be judged by the strategies' criterion (a subtask is
+satisfied when its mean error is within its tolerance, ``params/task_tree.yaml``).
+"""
+
+from dataclasses import dataclass
+
+from hrc_agent_node.agent_core import applied_command, observation_of
+from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.strategies import load_cases, StrategyProgress
+from hrc_agent_node.task_tree import TaskTree
+from hrc_common.params import checked, param, ParameterError, with_overrides
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+ROBOT = 'robot'
+HUMAN = 'human'
+NO_HUMAN = 'none'
+POPULATION_PREFIX = 'population:'
+
+
+@dataclass
+class TaskParams:
+    """Which case, training step and reward the environments pose (shared by both)."""
+
+    case: int = param(2, 'Paper case 1..6 (params/cases.yaml): strategy and which degree of '
+                         'freedom the robot drives (cases 2, 4, 6: rotation)', low=1, high=6)
+    training_step: int = param(0, "Index of the case's training step (0 = first); -1 = the "
+                                  'last: its subtasks make the reward, it says whether the '
+                                  'human acts', low=-1, high=9)
+    preset: str = param(AgentParams().preset, 'Reward preset of params/task_tree.yaml (paper = '
+                                              'alpha 10, sigma 1: nearly flat in SI units; '
+                                              'tuned = sigma scaled to each range)')
+    observe_rates: bool = param(False, "Add dB_y/dt, dP_z/dt, dS_x/dt to the paper's "
+                                       'observation {B_y, P_z, S_x, a_h}')
+
+
+@dataclass
+class GymParams(TaskParams):
+    """The Gymnasium environment's parameters: the task, plus who the human is."""
+
+    human: str = param('paper', "The human in the environment when the step involves it: a "
+                                "profile of params/sim_human.yaml ('paper', 'skilled', "
+                                "'novice'), 'population:<profile>' for a person drawn from "
+                                "that profile's population (by the reset seed), or 'none' "
+                                '(zero command). A human model object may be passed instead '
+                                '(argument human_model).')
+
+
+def resolve_step(case, index: int):
+    """Return the case's training step ``index`` (-1 = last), or raise ParameterError."""
+    steps = case.steps
+    if not -len(steps) <= index < len(steps):
+        raise ParameterError(f'training_step {index}: case {case.case_id} has '
+                             f'{len(steps)} training step(s) (0..{len(steps) - 1}, or -1)')
+    return steps[index]
+
+
+def make_human(spec: str, dof: str, seed: int, control_period: float):
+    """Return the simulated human named by ``spec`` on ``dof``, seeded with ``seed``, or None.
+
+    ``spec``: 'none', a profile name, or 'population:<profile>' (a member of the population
+    around that profile, ``hrc_joystick_node.sim_human.sample_person``).
+    """
+    if spec == NO_HUMAN:
+        return None
+    from hrc_joystick_node import sim_human
+
+    if spec.startswith(POPULATION_PREFIX):
+        sample_person = getattr(sim_human, 'sample_person', None)
+        if sample_person is None:
+            raise ParameterError('human: population members need '
+                                 'hrc_joystick_node.sim_human.sample_person (not available)')
+        profile = sample_person(sim_human.load_profile(spec[len(POPULATION_PREFIX):]), seed)
+    else:
+        profile = sim_human.load_profile(spec)
+    return sim_human.SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
+
+
+def step_physics(physics: SliderPendulumBall, commands: dict):
+    """Step ``physics`` one control period with {dof: normalized command}; return the state."""
+    return physics.step_normalized(commands.get('translation', 0.0),
+                                   commands.get('rotation', 0.0))
+
+
+class TaskRun:
+    """The physics with the roles, reward and observation of one case's training step."""
+
+    def __init__(self, params: TaskParams, physics_params: PhysicsParams = None):
+        self.params = checked(params)
+        physics_params = physics_params if physics_params is not None else PhysicsParams()
+        self.agent_params = with_overrides(
+            AgentParams(), case=params.case, preset=params.preset,
+            observe_rates=params.observe_rates, max_force=physics_params.max_force,
+            max_torque=physics_params.max_torque)
+        self.tree = TaskTree.from_file(share_file(TREE_FILE_NAME), params.preset)
+        self.case = load_cases(share_file(CASES_FILE_NAME), self.tree)[params.case]
+        self.step_spec = resolve_step(self.case, params.training_step)
+        # The strategies' judge of an episode (satisfied subtasks, the step's criterion).
+        self.progress = StrategyProgress(self.case, self.tree)
+        self.progress.step_index = self.step_spec.index
+        self.dofs = {ROBOT: self.case.robot_dof, HUMAN: self.case.human_dof}
+        self.subtasks = {ROBOT: self.step_spec.robot_subtasks,
+                         HUMAN: self.step_spec.human_subtasks}
+        self.physics = SliderPendulumBall(physics_params)
+        self.state = None
+        self._error_sums = {}
+        self._states_reached = 0
+
+    @property
+    def human_involved(self) -> bool:
+        """Return whether the human acts in this training step."""
+        return self.step_spec.human_involved
+
+    @property
+    def observation_size(self) -> int:
+        """Return the length of an observation (4, or 7 with rates)."""
+        return 7 if self.params.observe_rates else 4
+
+    @property
+    def steps_per_episode(self) -> int:
+        """Return the control steps of an episode (200)."""
+        return self.physics.params.steps_per_episode
+
+    def reset(self, seed: int):
+        """Start an episode from the physics seeded with ``seed``; return the state."""
+        self.state = self.physics.reset(int(seed))
+        self._error_sums = {subtask_id: 0.0 for subtask_id in self.tree.subtasks}
+        self._states_reached = 0
+        return self.state
+
+    def advance(self, commands: dict):
+        """Apply {actor: normalized command} for one control period; return the state reached.
+
+        A human that is not involved in the step is held at 0 (as the sim does).
+        """
+        if not self.human_involved:
+            commands = dict(commands, **{HUMAN: 0.0})
+        self.state = step_physics(self.physics, {self.dofs[actor]: float(command)
+                                                 for actor, command in commands.items()})
+        for subtask_id in self.tree.subtasks:
+            self._error_sums[subtask_id] += self.tree.error(subtask_id, self.state)
+        self._states_reached += 1
+        return self.state
+
+    def reward(self, actor: str) -> tuple:
+        """Return (components by subtask id, total) of ``actor``'s reward on the state reached."""
+        ids = self.subtasks[actor]
+        components, total = self.tree.reward(self.state, ids)
+        return dict(zip(ids, components)), total
+
+    def observation(self, actor: str):
+        """Return ``actor``'s observation: the state and the partner's applied command."""
+        partner = HUMAN if actor == ROBOT else ROBOT
+        partner_action = 0.0
+        if self.human_involved:
+            partner_action = applied_command(self.state, self.dofs[partner], self.agent_params)
+        return observation_of(self.agent_params, self.state, partner_action)
+
+    def episode_errors(self) -> dict:
+        """Return {subtask id: mean |x - mu|} over the states reached so far in the episode."""
+        reached = max(self._states_reached, 1)
+        return {subtask_id: total / reached for subtask_id, total in self._error_sums.items()}
+
+    @property
+    def finished(self) -> bool:
+        """Return True when the state reached ends the episode."""
+        return bool(self.state.truncated or self.state.terminated)
+
+    def close(self):
+        """Release the physics client."""
+        self.physics.close()
