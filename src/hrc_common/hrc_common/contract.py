@@ -22,8 +22,9 @@ Body colours (the paper's figure; sim URDF, markers and display)
     ``BODY_COLOURS`` {body: (r, g, b) in 0..1}, ``rgb8(colour)``.
 Ids
     ``ID_PATTERN``, ``id_problem(text, what)`` -> reason or None (session ids, subject ids:
-    one rule everywhere they enter), ``check_id``, ``make_session_id(case, seed, now)``
-    ('case{N}-seed{S}-{YYYYmmdd-HHMMSS}').
+    one rule everywhere they enter), ``check_id``,
+    ``make_session_id(case, seed, now, timestamped=True)`` ('case{N}-seed{S}-{YYYYmmdd-HHMMSS}',
+    or 'case{N}-seed{S}' inside an experiment).
 Cases (``params/cases.yaml``, the only place they are defined)
     ``CaseSpec``, ``CaseTableError``, ``load_case_table(path=None)``, ``case_table()``
     (cached default), ``case_ids()``, ``case_problem(case)`` -> reason or None,
@@ -215,8 +216,15 @@ def check_id(text, what: str = 'id') -> str:
     return text
 
 
-def make_session_id(case: int, seed: int, now: datetime.datetime = None) -> str:
-    """Return the session id 'case{N}-seed{S}-{YYYYmmdd-HHMMSS}' (local time, no personal data)."""
+def make_session_id(case: int, seed: int, now: datetime.datetime = None,
+                    timestamped: bool = True) -> str:
+    """Return the session id 'case{N}-seed{S}-{YYYYmmdd-HHMMSS}' (local time, no personal data).
+
+    ``timestamped=False`` gives 'case{N}-seed{S}', for sessions grouped under an experiment
+    folder that already names the time.
+    """
+    if not timestamped:
+        return f'case{case}-seed{seed}'
     now = now or datetime.datetime.now()
     return f'case{case}-seed{seed}-{now:%Y%m%d-%H%M%S}'
 

@@ -76,6 +76,7 @@ def test_session_id_format():
     made = make_session_id(3, 12, when)
     assert made == 'case3-seed12-20261130-200509'
     assert id_problem(made) is None
+    assert make_session_id(3, 12, timestamped=False) == 'case3-seed12'
 
 
 def test_case_table_from_the_repository_file():
