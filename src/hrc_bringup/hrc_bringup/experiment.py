@@ -14,6 +14,7 @@ import sys
 import time
 
 from hrc_bringup.supervisor import describe_exit
+from hrc_common.contract import case_problem, make_session_id
 
 
 def parse_args(argv=None):
@@ -36,9 +37,9 @@ def parse_args(argv=None):
                         help='extra argument passed to every session (repeatable), e.g. '
                         '--session-arg=--episodes=30')
     options = parser.parse_args(argv)
-    bad = [case for case in options.cases if case not in range(1, 7)]
-    if bad:
-        parser.error(f'cases must be 1..6, got {bad}')
+    problems = [case_problem(case) for case in options.cases if case_problem(case)]
+    if problems:
+        parser.error('; '.join(problems))
     if options.seeds < 1 or options.parallel < 1:
         parser.error('--seeds and --parallel must be >= 1')
     return options
@@ -68,7 +69,7 @@ def main(argv=None) -> int:
             while jobs and free_slots:
                 case, seed = jobs.pop(0)
                 slot = free_slots.pop(0)
-                session_id = f'case{case}-seed{seed}'
+                session_id = make_session_id(case, seed, timestamped=False)
                 log = open(runs_dir / f'{session_id}.log', 'wb')
                 command = [session, '--case', str(case), '--seed', str(seed),
                            '--session-id', session_id, '--bags-dir', str(bags_dir),
