@@ -144,6 +144,7 @@ import tempfile
 
 import numpy
 
+from hrc_common.contract import BODY_COLOURS
 from hrc_common.params import checked, param
 
 # PyBullet joint indices of the chain rod -> slider -> pendulum -> ball.
@@ -286,7 +287,8 @@ def _inertial(mass, com, inertia):
             f'</inertial>')
 
 
-def _visual(geometry, xyz, material, rgba):
+def _visual(geometry, xyz, material, body):
+    rgba = ' '.join(str(channel) for channel in BODY_COLOURS[body]) + ' 1'
     return (f'<visual><origin xyz="{xyz[0]} {xyz[1]} {xyz[2]}"/><geometry>{geometry}</geometry>'
             f'<material name="{material}"><color rgba="{rgba}"/></material></visual>')
 
@@ -304,17 +306,17 @@ def model_urdf(params: PhysicsParams) -> str:
     ball_height = BEAM_HEIGHT / 2 + params.ball_radius
     rod = (_inertial(1.0, (0, 0, 0), (1, 1, 1))
            + _visual(f'<cylinder radius="{ROD_RADIUS}" length="{params.rod_length + 0.04}"/>',
-                     (BODY_DEPTH_OFFSET, 0, 0), 'grey', '0.6 0.6 0.6 1'))
+                     (BODY_DEPTH_OFFSET, 0, 0), 'grey', 'rod'))
     slider = (_inertial(params.slider_mass, (0, 0, 0), (slider_inertia,) * 3)
               + _visual('<box size="{} {} {}"/>'.format(*SLIDER_SIZE), (BODY_DEPTH_OFFSET, 0, 0),
-                        'orange', '1.0 0.55 0.1 1'))
+                        'orange', 'slider'))
     pendulum = (_inertial(params.pendulum_mass, (0, half_beam, 0),
                           (beam_inertia_xz, beam_inertia_y, beam_inertia_xz))
                 + _visual(f'<box size="{BEAM_WIDTH} {params.pendulum_length} {BEAM_HEIGHT}"/>',
-                          (0, half_beam, 0), 'blue', '0.15 0.35 0.85 1'))
+                          (0, half_beam, 0), 'blue', 'pendulum'))
     ball = (_inertial(params.ball_mass, (0, 0, 0), (ball_inertia,) * 3)
             + _visual(f'<sphere radius="{params.ball_radius}"/>', (0, 0, 0), 'ball_grey',
-                      '0.45 0.45 0.45 1'))
+                      'ball'))
     limit = params.pendulum_limit
     return f"""<?xml version="1.0"?>
 <robot name="slider_pendulum_ball">
