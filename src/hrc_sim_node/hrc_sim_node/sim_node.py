@@ -29,6 +29,7 @@ import time
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
 from hrc_common import qos, topics
+from hrc_common.contract import BODY_COLOURS
 from hrc_common.dof import DOF_INDEX, DOF_NAME, DOFS, other_dof, ROTATION, TRANSLATION
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, param, ParameterError
@@ -456,10 +457,10 @@ def state_message(state, episode: int, stamp: Time, missing: dict) -> TaskState:
 
 # Marker looks: id, RViz type, size (m) and colour of each body (the paper's colours).
 MARKER_STYLE = {
-    'rod': (0, Marker.CYLINDER, None, (0.6, 0.6, 0.6)),
-    'slider': (1, Marker.CUBE, (0.05, 0.05, 0.03), (1.0, 0.55, 0.1)),
-    'pendulum': (2, Marker.CUBE, None, (0.15, 0.35, 0.85)),
-    'ball': (3, Marker.SPHERE, None, (0.45, 0.45, 0.45)),
+    'rod': (0, Marker.CYLINDER, None, BODY_COLOURS['rod']),
+    'slider': (1, Marker.CUBE, (0.05, 0.05, 0.03), BODY_COLOURS['slider']),
+    'pendulum': (2, Marker.CUBE, None, BODY_COLOURS['pendulum']),
+    'ball': (3, Marker.SPHERE, None, BODY_COLOURS['ball']),
 }
 
 
