@@ -29,6 +29,7 @@ import typing
 
 import yaml
 
+from hrc_common.contract import atomic_write
 from hrc_joystick_node.js_event import device_axis, JoystickDevice
 
 DEVICE_PATTERN = '/dev/input/js*'
@@ -265,10 +266,7 @@ def write_settings(path: str, settings: JoystickSettings, detected: str = '') ->
     check_settings(settings)
     directory = os.path.dirname(os.path.abspath(path))
     os.makedirs(directory, exist_ok=True)
-    temporary = f'{path}.tmp'
-    with open(temporary, 'w') as stream:
-        stream.write(settings_yaml(settings, detected))
-    os.replace(temporary, path)
+    atomic_write(path, settings_yaml(settings, detected))
 
 
 # ---------------------------------------------------------------------------- the command
