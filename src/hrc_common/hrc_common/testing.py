@@ -14,6 +14,8 @@ import subprocess
 import tempfile
 import time
 
+from hrc_common.executables import executable_path  # noqa: F401 (tests import it here)
+
 # Test domain ids: 1..100 (Fast DDS ports stay valid up to 232; the session benchmarks and the
 # experiment runner use 40+ and 90+ only when they are not under test). Each test reserves one
 # with an exclusive lock file, so concurrent test runs on one machine never share a domain.
@@ -56,13 +58,6 @@ def ros_environment(domain_id: int) -> dict:
     # loopback has no such state to go stale.
     env['FASTDDS_BUILTIN_TRANSPORTS'] = 'UDPv4'
     return env
-
-
-def executable_path(package: str, executable: str) -> pathlib.Path:
-    """Return ``<prefix>/lib/<package>/<executable>`` as ``ros2 run`` finds it."""
-    from ament_index_python.packages import get_package_prefix
-
-    return pathlib.Path(get_package_prefix(package)) / 'lib' / package / executable
 
 
 class NodeProcess:
