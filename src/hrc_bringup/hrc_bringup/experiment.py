@@ -47,7 +47,7 @@ def parse_args(argv=None):
 
 def main(argv=None) -> int:
     """Entry point of ``ros2 run hrc_bringup experiment``."""
-    from hrc_common.testing import executable_path
+    from hrc_common.executables import executable_path
 
     options = parse_args(argv)
     name = options.name or time.strftime('experiment-%Y%m%d-%H%M%S')

@@ -229,7 +229,7 @@ def run_session(settings: SessionSettings, options) -> int:
     import rclpy
     from rclpy.context import Context
 
-    from hrc_common.testing import executable_path
+    from hrc_common.executables import executable_path
 
     params_dir = pathlib.Path(options.params_dir) if options.params_dir else default_params_dir()
     try:
@@ -341,7 +341,7 @@ def run_session(settings: SessionSettings, options) -> int:
 
 def report(settings: SessionSettings, run_dir: pathlib.Path) -> None:
     """Run the report CLI on the session's bags and print its Table II."""
-    from hrc_common.testing import executable_path
+    from hrc_common.executables import executable_path
 
     bag_dir = pathlib.Path(settings.bags_dir) / settings.session_id
     out_dir = run_dir / 'report'
