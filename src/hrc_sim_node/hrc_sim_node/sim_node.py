@@ -9,7 +9,10 @@ In ``lockstep`` the sim advances as soon as every actor in ``expected_actors`` h
 current state (or after ``lockstep_timeout`` wall seconds: the missing command counts as zero
 and the next state's ``*_command_missing`` flag says so); with ``expected_actors`` empty it runs
 free, as fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
-actor's latest command; one older than ``command_timeout`` counts as zero and is reported.
+actor's command answering the newest state; one older than ``command_timeout`` counts as zero
+and is reported. The rules are the pure core ``hrc_sim_node.protocol`` (shared with the
+in-process engine); a reset may switch the clock mode (``ResetEpisode.clock_mode``), and its
+response reports the mode, the control period and the limits the sim owns.
 
 Commands (``hrc_sim_node.commands``): from each actor only its degree of freedom is applied
 (``robot_dof`` parameter, the human gets the other, both updated from ``/hrc/session``); other
@@ -22,22 +25,23 @@ Operator abort (``/hrc/session`` with phase ``aborted``): a running episode stop
 sim holds (no more steps or states, nothing applied) until ``/hrc/sim/reset`` is called again.
 """
 
-from collections import Counter
-from dataclasses import dataclass
 import time
 
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
 from hrc_common import qos, topics
 from hrc_common.contract import BODY_COLOURS
-from hrc_common.dof import DOF_INDEX, DOF_NAME, DOFS, other_dof, ROTATION, TRANSLATION
+from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
-from hrc_common.params import declare_parameters, param, ParameterError
+from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
-from hrc_sim_node.commands import ACTORS, HUMAN, limit_for, read_command, ROBOT, unit_of
+from hrc_sim_node.commands import HUMAN, ROBOT, unit_of
 from hrc_sim_node.physics import (body_poses, physics_params_of, PhysicsParams,
                                   SliderPendulumBall)
+from hrc_sim_node.protocol import (ProtocolSettings, stamp_fields, stamp_ns,
+                                   StepProtocol, summary_line, WarningThrottle)
+from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -46,83 +50,24 @@ from sensor_msgs.msg import Image
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
-LOCKSTEP = 'lockstep'
-REALTIME = 'realtime'
+__all__ = ['SimNode', 'SimParams', 'LOCKSTEP', 'REALTIME', 'main']
+
 # Throttle (s) of each kind of warning about commands: a broken sender at 500 Hz would flood.
 WARN_THROTTLE_S = 2.0
 # /clock: reliable, so best-effort (rclpy's TimeSource) and reliable subscribers both match.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
-NANOSECONDS = 1_000_000_000
 # Period (s) of the free-run timer: as short as possible, the timer is re-armed every step.
 FREE_RUN_PERIOD_S = 1e-6
 
 
-@dataclass
-class SimParams(PhysicsParams):
-    """Parameters of the sim node: the physics (PhysicsParams, inherited) plus these."""
-
-    mode: str = param('lockstep', 'lockstep: advance when the commands of the step arrived; '
-                      'realtime: advance every control_period of wall time',
-                      choices=(LOCKSTEP, REALTIME))
-    expected_actors: list = param(
-        [ROBOT, HUMAN], 'actors whose command the sim waits for (lockstep) and reports missing;'
-        ' [] = run free', choices=ACTORS)
-    lockstep_timeout: float = param(
-        1.0, 'lockstep: wall seconds to wait for the commands of a step before counting the '
-        'missing ones as zero', low=0.001, high=600.0)
-    command_timeout: float = param(
-        0.5, 'realtime: a command older than this (wall s) counts as zero and is reported',
-        low=0.01, high=60.0)
-    auto_reset: bool = param(False, 'start the next episode by itself after the last state '
-                             '(standalone runs); false = hold until /hrc/sim/reset')
-    start_on_launch: bool = param(False, 'start episode 0 at launch instead of waiting for '
-                                  '/hrc/sim/reset (standalone runs)')
-    robot_dof: str = param(TRANSLATION, 'degree of freedom the robot drives until /hrc/session '
-                           'says otherwise; the human drives the other', choices=DOFS)
-    seed: int = param(0, 'seed of the initial states when a reset asks for none (-1)',
-                      low=0, high=2 ** 31 - 1)
-    max_episodes: int = param(0, 'exit (code 0) after this many finished episodes; 0 = never',
-                              low=0, high=10 ** 9)
-    camera_rate: float = param(0.0, 'rate (Hz, wall time) of the rendered image on '
-                               '/hrc/sim/image; 0 = off', low=0.0, high=60.0)
-    image_width: int = param(320, 'width of the rendered image (px)', low=16, high=1920)
-    image_height: int = param(240, 'height of the rendered image (px)', low=16, high=1080)
-    marker_rate: float = param(10.0, 'rate (Hz, wall time) of /hrc/sim/markers; 0 = off',
-                               low=0.0, high=60.0)
-    gui: bool = param(False, 'open the PyBullet GUI window (needs a display); default: '
-                      'headless (DIRECT)')
-
-    def check(self) -> list:
-        """Return the reasons why the fields do not fit together (empty if they do)."""
-        reasons = list(super().check())
-        if len(set(self.expected_actors)) != len(self.expected_actors):
-            reasons.append(f'expected_actors {self.expected_actors} lists an actor twice')
-        return reasons
-
-
 def stamp_of(nanoseconds: int) -> Time:
     """Return a builtin_interfaces/Time for a simulation time in nanoseconds."""
-    return Time(sec=nanoseconds // NANOSECONDS, nanosec=nanoseconds % NANOSECONDS)
-
-
-def summary_line(episode: int, state, counters: Counter, params: SimParams) -> str:
-    """Return the one-line summary of a finished episode (where each body ended, events)."""
-    end = 'truncated' if state.truncated else 'terminated' if state.terminated else 'stopped'
-    parts = [f'episode {episode} {end} after {state.step} steps ({state.time:.1f} s sim):',
-             f'slider S_x={state.slider_position:+.4f} m,',
-             f'pendulum P_z={state.pendulum_angle:+.4f} rad,',
-             f'ball B_y={state.ball_position:+.4f} m;',
-             'missing commands ' + ', '.join(
-                 f'{actor} {counters[actor + "_missing"]}' for actor in ACTORS) + ';']
-    events = [f'{name} {count}' for name, count in sorted(counters.items())
-              if count and not name.endswith('_missing')]
-    parts.append(', '.join(events) if events else 'no refused/clamped/off-axis/stale commands')
-    parts.append(f'({params.mode})')
-    return ' '.join(parts)
+    sec, nanosec = stamp_fields(nanoseconds)
+    return Time(sec=sec, nanosec=nanosec)
 
 
 class SimNode(Node):
-    """Thin ROS wrapper of :class:`SliderPendulumBall` (see the module docstring)."""
+    """Thin ROS wrapper of :class:`SliderPendulumBall` and :class:`StepProtocol`."""
 
     def __init__(self):
         super().__init__('sim')
@@ -131,84 +76,78 @@ class SimNode(Node):
             self.physics = SliderPendulumBall(physics_params_of(params), gui=params.gui)
         except RuntimeError as error:
             raise ParameterError(f'SimParams rejected: gui: {error}') from error
-        self.dof_of = {ROBOT: params.robot_dof, HUMAN: other_dof(params.robot_dof)}
-        self.human_involved = True
-        self._period_ns = int(round(params.control_period * NANOSECONDS))
-        self._sim_time_ns = None        # stamp of the last published state (ns), None = none yet
+        self.protocol = StepProtocol(ProtocolSettings.of(params))
         self._state = None              # last PhysicsState
-        self.episode = 0
-        self._active = False            # an episode is running (false while holding)
         self._seeded = False
-        self._finished_episodes = 0
-        self._counters = Counter()
-        self._awaited = None            # (sec, nanosec) of the state the commands must answer
-        self._answers = {}              # actor -> Command answering the awaited state
-        self._latest = {}               # realtime: actor -> (Command, monotonic receipt time)
         self._exiting = False
-        self._warned = {}               # kind -> (monotonic time of the last warning, suppressed)
+        self._throttle = WarningThrottle(WARN_THROTTLE_S)
 
         self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
-        self._clock_pub = (self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS)
-                           if params.mode == LOCKSTEP else None)
+        # /clock is published in lockstep only; the publisher exists in both modes because a
+        # reset may switch the mode.
+        self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS)
         self._marker_pub = self.create_publisher(MarkerArray, topics.MARKERS, qos.VISUAL_QOS)
         self._image_pub = (self.create_publisher(Image, topics.CAMERA_IMAGE, qos.VISUAL_QOS)
                            if params.camera_rate > 0 else None)
+        self._command_topics = {}
         for actor, topic in ((ROBOT, topics.ROBOT_CMD_WRENCH), (HUMAN, topics.HUMAN_CMD_WRENCH)):
             events = SubscriptionEventCallbacks(
                 deadline=lambda event, actor=actor: self._on_deadline_missed(actor, event))
-            self.create_subscription(WrenchStamped, topic,
-                                     lambda msg, actor=actor: self._on_command(actor, msg),
-                                     qos.COMMAND_QOS, event_callbacks=events)
+            subscription = self.create_subscription(
+                WrenchStamped, topic, lambda msg, actor=actor: self._on_command(actor, msg),
+                qos.COMMAND_QOS, event_callbacks=events)
+            self._command_topics[actor] = subscription.topic_name
         self.create_subscription(SessionStatus, topics.SESSION, self._on_session,
                                  qos.SESSION_QOS)
         self.create_service(ResetEpisode, topics.RESET_SERVICE, self._on_reset)
 
-        if params.mode == LOCKSTEP:
-            self._timeout_timer = self.create_timer(params.lockstep_timeout,
-                                                    self._on_lockstep_timeout)
-            self._timeout_timer.cancel()
-            # Free run: a timer that is due at once, re-armed after each state, makes one step
-            # per turn of the executor, so services and other timers are served in between.
-            # (A timer, not a guard condition: rclpy's EventsExecutor has no guard conditions.)
-            self._free_run = self.create_timer(FREE_RUN_PERIOD_S, self._on_free_run)
-            self._free_run.cancel()
-        else:
-            self._step_timer = self.create_timer(params.control_period, self._on_realtime_tick)
+        # Timers of both clock modes, cancelled while not in use (a reset may switch the mode).
+        self._timeout_timer = self.create_timer(params.lockstep_timeout,
+                                                self._on_lockstep_timeout)
+        self._timeout_timer.cancel()
+        # Free run: a timer that is due at once, re-armed after each state, makes one step
+        # per turn of the executor, so services and other timers are served in between.
+        # (A timer, not a guard condition: rclpy's EventsExecutor has no guard conditions.)
+        self._free_run = self.create_timer(FREE_RUN_PERIOD_S, self._on_free_run)
+        self._free_run.cancel()
+        self._step_timer = self.create_timer(params.control_period, self._on_realtime_tick)
+        self._step_timer.cancel()
         if params.marker_rate > 0:
             self.create_timer(1.0 / params.marker_rate, self._publish_markers)
         if params.camera_rate > 0:
             self.create_timer(1.0 / params.camera_rate, self._publish_image)
 
         actors = ', '.join(params.expected_actors) or 'none (free run)'
+        dof_of = self.protocol.dof_of
         self.get_logger().info(
             f'{params.mode} sim: control period {params.control_period} s, '
             f'{params.steps_per_episode} steps per episode, max_force {params.max_force} N, '
-            f'max_torque {params.max_torque} N*m, robot drives {self.dof_of[ROBOT]}, human '
-            f'drives {self.dof_of[HUMAN]}, expected actors: {actors}')
+            f'max_torque {params.max_torque} N*m, robot drives {dof_of[ROBOT]}, human '
+            f'drives {dof_of[HUMAN]}, expected actors: {actors}')
         if params.start_on_launch:
             self.start_episode(0, seed=-1)
         else:
             self.get_logger().info(f'waiting for {topics.RESET_SERVICE} to start an episode')
 
+    @property
+    def episode(self) -> int:
+        """Return the index of the current (or last) episode."""
+        return self.protocol.episode
+
     def _warn(self, kind: str, message: str):
         """Log a warning, at most once per WARN_THROTTLE_S for each kind (actor and event)."""
-        now = time.monotonic()
-        last, suppressed = self._warned.get(kind, (None, 0))
-        if last is not None and now - last < WARN_THROTTLE_S:
-            self._warned[kind] = (last, suppressed + 1)
-            return
-        if suppressed:
-            message += f' ({suppressed} more like this in the last {now - last:.1f} s)'
-        self.get_logger().warning(message)
-        self._warned[kind] = (now, 0)
+        suffix = self._throttle.admit(kind, time.monotonic())
+        if suffix is not None:
+            self.get_logger().warning(message + suffix)
 
-    # -- parameters ----------------------------------------------------------------------------
     # -- episodes ------------------------------------------------------------------------------
     def start_episode(self, episode: int, seed: int = -1) -> TaskState:
         """Reset the physics, publish the state of step 0 and wait for its commands."""
-        if self._active:
+        if self.protocol.active:
+            abandoned = self.protocol.counters
             self.get_logger().warning(
-                f'episode {self.episode} abandoned at step {self._state.step}: reset requested')
+                'reset requested: ' + summary_line(self.episode, self._state, abandoned,
+                                                   self.protocol.mode, end='abandoned'))
         if seed >= 0:
             state = self.physics.reset(seed=seed)
             origin = f'seed {seed}'
@@ -219,83 +158,103 @@ class SimNode(Node):
             state = self.physics.reset()  # next from the seeded sequence
             origin = 'next initial state of the seeded sequence'
         self._seeded = True
-        self.episode = episode
-        self._active = True
-        self._counters = Counter()
-        self._answers = {}
-        self._latest = {}
+        self.protocol.start_episode(episode)
         message = self._publish(state, missing={})
         self.get_logger().info(
-            f'episode {episode} started ({origin}): '
+            f'episode {episode} started ({origin}, {self.protocol.mode}): '
             f'S_x={state.slider_position:+.4f} m, P_z={state.pendulum_angle:+.4f} rad, '
             f'B_y={state.ball_position:+.4f} m')
-        if self.params.mode == REALTIME:
+        if self.protocol.mode == REALTIME:
             self._step_timer.reset()  # step 1 comes one full period after step 0
         return message
 
     def _end_episode(self):
-        self._active = False
-        self._awaited = None
-        self._finished_episodes += 1
-        self.get_logger().info(summary_line(self.episode, self._state, self._counters,
-                                            self.params))
-        if self.params.max_episodes and self._finished_episodes >= self.params.max_episodes:
-            self.get_logger().info(f'{self._finished_episodes} episode(s) finished '
+        protocol = self.protocol
+        self.get_logger().info(summary_line(self.episode, self._state, protocol.counters,
+                                            protocol.mode))
+        if self.params.max_episodes and protocol.finished_episodes >= self.params.max_episodes:
+            self.get_logger().info(f'{protocol.finished_episodes} episode(s) finished '
                                    f'(max_episodes): exiting')
             self._exiting = True
             self.context.try_shutdown()
         elif self.params.auto_reset:
-            self.start_episode(self.episode + 1, seed=-1)
+            following = protocol.next_episode()
+            if following is None:
+                self.get_logger().error(f'episode {self.episode} is the last index a uint32 '
+                                        f'holds: holding instead of starting another')
+                return
+            self.start_episode(following, seed=-1)
         else:
             self.get_logger().info(f'holding until {topics.RESET_SERVICE} is called')
 
+    def _set_clock_mode(self, mode: str) -> None:
+        """Switch lockstep <-> realtime between episodes (the timers of the old mode stop)."""
+        if self.protocol.active:
+            self.protocol.hold()  # the reset abandons the running episode anyway
+            self._cancel_timers()
+        if self.protocol.set_mode(mode):
+            self._cancel_timers()
+            self.get_logger().info(f'clock mode switched to {mode} by a reset request')
+
+    def _cancel_timers(self):
+        for timer in (self._timeout_timer, self._free_run, self._step_timer):
+            timer.cancel()
+
     def _on_reset(self, request, response):
+        response.clock_mode = self.protocol.mode
+        response.control_period = self.params.control_period
+        response.max_force = self.params.max_force
+        response.max_torque = self.params.max_torque
         if self._exiting:
             response.success = False
             response.message = 'the sim is exiting (max_episodes reached)'
             return response
+        reasons = []
+        if request.clock_mode and request.clock_mode not in CLOCK_MODES:
+            reasons.append(f'clock_mode {request.clock_mode!r} is not one of {CLOCK_MODES} '
+                           f'(or empty to keep {self.protocol.mode})')
+        if reasons:
+            response.success = False
+            response.message = 'reset refused: ' + '; '.join(reasons)
+            self.get_logger().error(response.message)
+            return response
+        if request.clock_mode:
+            abandoned = self.protocol.active
+            if abandoned:
+                self.get_logger().warning(
+                    'reset requested: ' + summary_line(self.episode, self._state,
+                                                       self.protocol.counters,
+                                                       self.protocol.mode, end='abandoned'))
+            self._set_clock_mode(request.clock_mode)
         response.state = self.start_episode(int(request.episode), seed=int(request.seed))
+        response.clock_mode = self.protocol.mode
         response.success = True
-        response.message = f'episode {request.episode} started'
+        response.message = f'episode {request.episode} started ({self.protocol.mode})'
         return response
 
     # -- stepping ------------------------------------------------------------------------------
-    def _advance(self, commands: dict, missing: dict):
-        """Apply one control period with ``commands`` (actor -> Command) and publish."""
-        wrench = {TRANSLATION: 0.0, ROTATION: 0.0}
-        for actor, command in commands.items():
-            if command is None or not command.accepted:
-                continue
-            if actor == HUMAN and not self.human_involved:
-                if command.value != 0.0:
-                    self._counters['human_not_involved'] += 1
-                    self._warn('human_not_involved', f'human command {command.value:+.3g} '
-                               f'ignored: the session says the human is not involved now')
-                continue
-            wrench[self.dof_of[actor]] += command.value
-        for actor, is_missing in missing.items():
-            if is_missing:
-                self._counters[actor + '_missing'] += 1
-        state = self.physics.step(wrench[TRANSLATION], wrench[ROTATION])
-        self._publish(state, missing)
+    def _advance(self, order):
+        """Apply one control period as ``order`` (a StepOrder) says, and publish."""
+        for actor, value in order.ignored:
+            self._warn('human_not_involved', f'{actor} command {value:+.3g} ignored: the '
+                       f'session says the human is not involved now')
+        state = self.physics.step(order.force, order.torque)
+        self._publish(state, order.missing)
         if state.truncated or state.terminated:
             self._end_episode()
 
     def _publish(self, state, missing: dict) -> TaskState:
         """Publish /clock (lockstep) and the state; arm the wait for its commands."""
         self._state = state
-        self._sim_time_ns = 0 if self._sim_time_ns is None else \
-            self._sim_time_ns + self._period_ns
-        stamp = stamp_of(self._sim_time_ns)
-        if self._clock_pub is not None:
+        last = state.truncated or state.terminated
+        stamp = stamp_of(self.protocol.next_stamp(state.step, last))
+        lockstep = self.protocol.mode == LOCKSTEP
+        if lockstep:
             self._clock_pub.publish(Clock(clock=stamp))
         message = state_message(state, self.episode, stamp, missing)
-        self._answers = {}
-        last = state.truncated or state.terminated
-        self._awaited = None if last else (stamp.sec, stamp.nanosec)
         self._state_pub.publish(message)
-        if self.params.mode == LOCKSTEP and not last:
-            if self.params.expected_actors:
+        if lockstep and not last:
+            if self.protocol.expected:
                 self._timeout_timer.reset()
             else:
                 self._free_run.reset()
@@ -303,113 +262,99 @@ class SimNode(Node):
 
     def _on_free_run(self):
         self._free_run.cancel()
-        if self._active and self._awaited is not None and not self.params.expected_actors:
-            self._advance(self._answers, missing={})
+        order = self.protocol.free_run()
+        if order is not None:
+            self._advance(order)
 
     def _on_lockstep_timeout(self):
         self._timeout_timer.cancel()
-        if not self._active or self._awaited is None:
+        order = self.protocol.on_timeout()
+        if order is None:
             return
-        missing = {actor: actor not in self._answers for actor in self.params.expected_actors}
-        absent = [actor for actor, is_missing in missing.items() if is_missing]
         self._warn('lockstep_timeout', f'step {self._state.step}: no command from '
-                   f'{", ".join(absent)} within lockstep_timeout '
+                   f'{", ".join(order.absent)} within lockstep_timeout '
                    f'{self.params.lockstep_timeout} s: counted as zero')
-        self._advance(self._answers, missing)
+        self._advance(order)
 
     def _on_realtime_tick(self):
-        if not self._active or self._awaited is None:
+        order = self.protocol.on_tick(time.monotonic())
+        if order is None:
             return
-        now = time.monotonic()
-        commands, missing = {}, {}
-        for actor in ACTORS:
-            command, received = self._latest.get(actor, (None, None))
-            fresh = command is not None and now - received <= self.params.command_timeout
-            if fresh and command.accepted:
-                commands[actor] = command
-            if actor in self.params.expected_actors:
-                missing[actor] = not (fresh and command.accepted)
-        absent = [actor for actor, is_missing in missing.items() if is_missing]
-        if absent:
+        if order.absent:
             self._warn('command_timeout', f'step {self._state.step}: no fresh command from '
-                       f'{", ".join(absent)} (command_timeout '
+                       f'{", ".join(order.absent)} (command_timeout '
                        f'{self.params.command_timeout} s): counted as zero')
-        self._advance(commands, missing)
+        self._advance(order)
 
     # -- inputs --------------------------------------------------------------------------------
     def _on_command(self, actor: str, message: WrenchStamped):
-        if not self._active:
-            self._counters[actor + '_between_episodes'] += 1
-            return
-        lockstep = self.params.mode == LOCKSTEP
-        stamp = (message.header.stamp.sec, message.header.stamp.nanosec)
-        if lockstep and stamp != self._awaited:
-            self._counters[actor + '_stale'] += 1
-            self.get_logger().debug(f'{actor} command stamped {stamp} does not answer the '
-                                    f'current state {self._awaited}: ignored')
-            return
-        dof = self.dof_of[actor]
-        limit = limit_for(dof, self.params.max_force, self.params.max_torque)
-        command = read_command(message.wrench, dof, limit)
-        step = self._state.step
-        if not command.accepted:
-            self._counters[actor + '_refused'] += 1
-            self._warn(actor + '_refused', f'refused {actor} command at step {step}: '
-                       f'{command.refused}; the step counts it as missing (zero)')
-        else:
+        header = message.header.stamp
+        result = self.protocol.on_command(actor, stamp_ns(header.sec, header.nanosec),
+                                          message.wrench, time.monotonic())
+        if result.kind == 'stale':
+            self._warn_stale(actor, (header.sec, header.nanosec), result.awaited)
+        elif result.kind == 'refused':
+            self._warn(actor + '_refused', f'refused {actor} command at step '
+                       f'{self.protocol.step}: {result.command.refused}; the step counts it '
+                       f'as missing (zero)')
+        elif result.kind == 'accepted':
+            command, dof = result.command, result.dof
             if command.clamped:
-                self._counters[actor + '_clamped'] += 1
                 self._warn(actor + '_clamped', f'clamped {actor} {dof} command '
                            f'{command.requested:+.4g} to {command.value:+.4g} {unit_of(dof)} '
-                           f'(limit {limit:g})')
+                           f"(limit {result.limit:g}, the sim's max_"
+                           f'{"force" if unit_of(dof) == "N" else "torque"})')
             if command.off_axis:
-                self._counters[actor + '_off_axis'] += 1
                 components = ', '.join(f'{name}={value:+.4g}'
                                        for name, value in sorted(command.off_axis.items()))
                 self._warn(actor + '_off_axis', f'ignored off-axis components of the {actor} '
                            f'command ({actor} drives {dof} only): {components}')
-        if not lockstep:
-            self._latest[actor] = (command, time.monotonic())
-            return
-        self._answers[actor] = command
-        if all(expected in self._answers for expected in self.params.expected_actors):
+        if result.order is not None:
             self._timeout_timer.cancel()
-            missing = {expected: not self._answers[expected].accepted
-                       for expected in self.params.expected_actors}
-            self._advance(self._answers, missing)
+            self._advance(result.order)
+
+    def _warn_stale(self, actor: str, stamp: tuple, awaited) -> None:
+        """Report a command that answers no state the sim waits for, with its publishers."""
+        kind = actor + '_stale'
+        suffix = self._throttle.admit(kind, time.monotonic())
+        if suffix is None:
+            return
+        topic = self._command_topics[actor]
+        publishers = self.get_publishers_info_by_topic(topic)
+        names = ', '.join(f'{info.node_namespace.rstrip("/")}/{info.node_name} (gid '
+                          f'{bytes(info.endpoint_gid).hex()[:24]})' for info in publishers)
+        expected = ('none (no state is awaited)' if awaited is None
+                    else f'{stamp_fields(awaited)}')
+        self.get_logger().warning(
+            f'{actor} command stamped {stamp} answers no state of the running episode '
+            f'(awaited {expected}): ignored as stale; {len(publishers)} publisher(s) on '
+            f'{topic}: {names}' + suffix)
 
     def _on_deadline_missed(self, actor: str, event):
-        if self._active and self.params.mode == REALTIME:
+        if self.protocol.active and self.protocol.mode == REALTIME:
             self._warn(actor + '_deadline', f'{actor} commands stopped for over '
                        f'{qos.COMMAND_DEADLINE_S} s ({event.total_count} deadline misses)')
 
     def _on_session(self, message: SessionStatus):
-        if message.phase == SessionStatus.PHASE_ABORTED and self._active:
+        if message.phase == SessionStatus.PHASE_ABORTED and self.protocol.active:
             self._hold_after_abort(message)
         robot, human = DOF_NAME.get(message.robot_dof), DOF_NAME.get(message.human_dof)
+        dof_of = self.protocol.dof_of
         if robot is None or human is None or robot == human:
             self.get_logger().error(
                 f'session {message.session_id!r} assigns robot_dof={message.robot_dof}, '
                 f'human_dof={message.human_dof}: not one of each of {DOF_INDEX}; ignored, '
-                f'keeping robot {self.dof_of[ROBOT]}, human {self.dof_of[HUMAN]}')
+                f'keeping robot {dof_of[ROBOT]}, human {dof_of[HUMAN]}')
             return
-        changed = (robot != self.dof_of[ROBOT] or message.human_involved != self.human_involved)
-        self.dof_of = {ROBOT: robot, HUMAN: human}
-        self.human_involved = bool(message.human_involved)
-        if changed:
+        if self.protocol.set_roles(robot, message.human_involved):
             self.get_logger().info(f'session {message.session_id!r}: robot drives {robot}, '
                                    f'human drives {human}, human involved: '
-                                   f'{self.human_involved}')
+                                   f'{self.protocol.human_involved}')
 
     def _hold_after_abort(self, message: SessionStatus):
         """Stop the running episode at once: no more steps, nothing applied, hold."""
-        self._active = False
-        self._awaited = None
-        self._answers = {}
-        self._latest = {}
-        if self.params.mode == LOCKSTEP:
-            self._timeout_timer.cancel()
-            self._free_run.cancel()
+        self.protocol.hold()
+        self._cancel_timers()
         self.get_logger().warning(
             f'session {message.session_id!r} aborted ({message.message}): episode '
             f'{self.episode} stopped at step {self._state.step}; holding, nothing applied, '
@@ -420,7 +365,7 @@ class SimNode(Node):
         if self._state is None:
             return
         self._marker_pub.publish(marker_array(self._state, self.params,
-                                              stamp_of(self._sim_time_ns)))
+                                              stamp_of(self.protocol.sim_time_ns)))
 
     def _publish_image(self):
         if self._state is None:
@@ -429,7 +374,7 @@ class SimNode(Node):
         pixels = self.physics.render(width, height)
         image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0,
                       step=width * 3, data=pixels.tobytes())
-        image.header.stamp = stamp_of(self._sim_time_ns)
+        image.header.stamp = stamp_of(self.protocol.sim_time_ns)
         image.header.frame_id = 'world'
         self._image_pub.publish(image)
 

@@ -72,9 +72,10 @@ class SimClient:
         # discovery a moment to finish both ways.
         self.spin(0.5)
 
-    def reset(self, seed: int = -1, episode: int = 0):
+    def reset(self, seed: int = -1, episode: int = 0, clock_mode: str = ''):
         """Call /hrc/sim/reset and return the response."""
-        future = self.reset_client.call_async(ResetEpisode.Request(seed=seed, episode=episode))
+        future = self.reset_client.call_async(ResetEpisode.Request(seed=seed, episode=episode,
+                                                                   clock_mode=clock_mode))
         assert self.wait(future.done, 10.0), 'no answer from /hrc/sim/reset'
         return future.result()
 

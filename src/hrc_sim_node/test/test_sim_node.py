@@ -280,3 +280,46 @@ def test_markers_and_camera_image_when_enabled(start_node, sim_client):
     ball = markers[3].pose.position
     assert (ball.x, ball.y, ball.z) == pytest.approx(poses['ball'][0])
     assert markers[1].pose.position.z == pytest.approx(state.slider_position)
+
+
+def test_a_reset_switches_the_clock_mode_and_reports_what_the_sim_owns(start_node, sim_client):
+    """Lockstep while the robot trains alone, realtime when the human joins (and back)."""
+    process = start_sim(start_node, sim_client, control_period=0.1, episode_duration=20.0,
+                        command_timeout=1.0, **PATIENT)
+    bad = sim_client.reset(seed=0, episode=0, clock_mode='fast')
+    assert not bad.success and "clock_mode 'fast' is not one of" in bad.message
+    response = sim_client.reset(seed=0, episode=0)
+    assert response.success and response.clock_mode == 'lockstep'
+    assert (response.control_period, response.max_force, response.max_torque) == (0.1, 2.0, 0.5)
+    sim_client.spin(0.5)
+    assert len(sim_client.states) == 1          # lockstep: holds without commands
+
+    # Realtime from the next episode on (the running one is abandoned by the reset).
+    sim_client.answer('robot', sim_client.states[0], force_z=5.0)   # clamped: counted
+    assert printed(process, 'clamped robot translation command')
+    response = sim_client.reset(seed=1, episode=1, clock_mode='realtime')
+    assert response.success and response.clock_mode == 'realtime'
+    assert printed(process, 'episode 0 abandoned after 0 steps')
+    assert printed(process, 'robot_clamped 1')  # counters of the abandoned episode kept
+    sim_client.spin(1.0)
+    realtime = [s for s in sim_client.states if s.episode == 1]
+    assert len(realtime) >= 5 and realtime[-1].human_command_missing   # steps on the clock
+
+    # Back to lockstep: the sim holds again.
+    response = sim_client.reset(seed=2, episode=2, clock_mode='lockstep')
+    assert response.clock_mode == 'lockstep'
+    assert sim_client.wait(lambda: sim_client.states[-1].episode == 2)
+    count = len(sim_client.states)
+    sim_client.spin(0.5)
+    assert len(sim_client.states) == count
+    assert printed(process, 'clock mode switched to lockstep')
+
+
+def test_the_last_uint32_episode_index_holds_instead_of_wrapping(start_node, sim_client):
+    process = start_sim(start_node, sim_client, episode_duration=0.2, auto_reset=True,
+                        expected_actors=[], marker_rate=0.0)
+    response = sim_client.reset(seed=0, episode=4294967295)
+    assert response.success
+    assert printed(process, 'episode 4294967295 is the last index a uint32 holds')
+    sim_client.spin(0.3)
+    assert [s.episode for s in sim_client.states] == [4294967295, 4294967295]

@@ -1,0 +1,357 @@
+"""The sim's step protocol as a pure core: plain values and a clock in, decisions out (no ROS).
+
+The sim node and the in-process engine (``hrc_engine``) both drive a :class:`StepProtocol`;
+the node only turns messages into calls and the decisions into physics steps, messages and
+timers. The rules (docs/architecture.md, "The step protocol"):
+
+* Stamps are simulation time in integer nanoseconds since the session started: 0 for the
+  first state, then one control period more for every state published (resets included), so
+  a stamp names one state of the session.
+* A command answers a state by carrying its stamp. From each actor only its degree of freedom
+  is read (:func:`hrc_sim_node.commands.read_command`: non-finite refused, beyond the limit
+  clamped where the limit is owned, here; off-axis components ignored and reported).
+* ``lockstep``: the step is taken as soon as every actor in ``expected_actors`` answered the
+  awaited state (:meth:`StepProtocol.on_command` returns the :class:`StepOrder`), or at the
+  ``lockstep_timeout`` (:meth:`StepProtocol.on_timeout`: the missing commands count as zero
+  and are reported); with no expected actor the sim runs free (:meth:`StepProtocol.free_run`).
+  A command with another stamp is stale: ignored, counted, reported.
+* ``realtime``: a wall timer calls :meth:`StepProtocol.on_tick` every control period; each
+  actor's kept command is applied unless older than ``command_timeout`` (wall s). The kept
+  command is the one answering the newest state of the running episode, not the latest
+  arrival: a command whose stamp names no state of the episode is stale, and one answering an
+  older state than the kept one does not replace it (a flood from another publisher with
+  wrong stamps cannot push the actor's real command out).
+* The clock mode can change at an episode boundary only (:meth:`StepProtocol.set_mode`, the
+  node calls it from a reset that asks for it: ``ResetEpisode.clock_mode``).
+* Counters (refused, clamped, off-axis, stale, missing, ...) are kept per episode and for the
+  whole session; an episode abandoned by a reset in its middle still yields its counters.
+* Episode indices are uint32 in the messages: :data:`MAX_EPISODE` is the last usable one.
+"""
+
+from collections import Counter
+from dataclasses import dataclass, field
+import typing
+
+from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, TRANSLATION
+from hrc_sim_node.commands import ACTORS, Command, HUMAN, limit_for, read_command, ROBOT
+from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME
+
+# Episode indices travel as uint32 (TaskState.episode, ResetEpisode.episode).
+MAX_EPISODE = 2 ** 32 - 1
+# Stamps of the running episode remembered for realtime matching (an episode has 200 states).
+REALTIME_STAMPS_KEPT = 100_000
+
+
+class ProtocolError(ValueError):
+    """A request the protocol cannot follow (unknown clock mode, episode index out of range)."""
+
+
+def stamp_ns(sec: int, nanosec: int) -> int:
+    """Return the stamp (ns) of a builtin_interfaces/Time's fields; -1 if it is malformed."""
+    if not 0 <= nanosec < NS_PER_S or sec < 0:
+        return -1
+    return int(sec) * NS_PER_S + int(nanosec)
+
+
+def stamp_fields(nanoseconds: int) -> tuple:
+    """Return (sec, nanosec) of a stamp in nanoseconds."""
+    return nanoseconds // NS_PER_S, nanoseconds % NS_PER_S
+
+
+def per_dof(values: dict, dof_of: dict) -> dict:
+    """Return {translation: x, rotation: y}: each actor's value on its degree of freedom.
+
+    ``values`` maps actor -> value (N, N*m, or normalized: the unit is the caller's); actors
+    absent count as zero. Both the sim and offline loops dispatch through this one function.
+    """
+    wrench = {TRANSLATION: 0.0, ROTATION: 0.0}
+    for actor, value in values.items():
+        wrench[dof_of[actor]] += value
+    return wrench
+
+
+def roles(robot_dof: str) -> dict:
+    """Return {robot: its dof, human: the other}."""
+    return {ROBOT: robot_dof, HUMAN: other_dof(robot_dof)}
+
+
+class WarningThrottle:
+    """At most one warning per ``period`` (s) for each kind; says how many were suppressed."""
+
+    def __init__(self, period: float):
+        self.period = period
+        self._last = {}                  # kind -> (time of the last warning, suppressed since)
+
+    def admit(self, kind: str, now: float) -> typing.Optional[str]:
+        """Return None to suppress, else a suffix ('' or ' (N more like this in ...)')."""
+        last, suppressed = self._last.get(kind, (None, 0))
+        if last is not None and now - last < self.period:
+            self._last[kind] = (last, suppressed + 1)
+            return None
+        self._last[kind] = (now, 0)
+        if suppressed:
+            return f' ({suppressed} more like this in the last {now - last:.1f} s)'
+        return ''
+
+
+@dataclass
+class StepOrder:
+    """A decision to advance the physics one control period with this wrench."""
+
+    force: float                         # N on the slider (translation)
+    torque: float                        # N*m on the pendulum (rotation)
+    missing: dict                        # expected actor -> its command counted as zero
+    reason: str                          # 'answered' | 'timeout' | 'tick' | 'free_run'
+    ignored: list = field(default_factory=list)   # (actor, value) not applied: not involved
+
+    @property
+    def absent(self) -> list:
+        """Return the actors whose command is missing."""
+        return [actor for actor, is_missing in self.missing.items() if is_missing]
+
+
+@dataclass
+class CommandResult:
+    """What the protocol made of one received command."""
+
+    actor: str
+    kind: str                    # 'between_episodes' | 'stale' | 'refused' | 'accepted'
+    stamp: int                   # ns as received (-1 malformed)
+    awaited: typing.Optional[int] = None   # ns of the state awaited (lockstep) or newest
+    command: typing.Optional[Command] = None
+    dof: str = ''
+    limit: float = 0.0
+    order: typing.Optional[StepOrder] = None   # lockstep: the step this command completed
+
+
+@dataclass
+class ProtocolSettings:
+    """What the protocol needs of the sim's parameters (fields of SimParams by these names)."""
+
+    mode: str = LOCKSTEP
+    expected_actors: tuple = (ROBOT, HUMAN)
+    lockstep_timeout: float = 1.0          # wall s
+    command_timeout: float = 0.5           # wall s
+    control_period: float = 0.2            # s of simulation time per state
+    max_force: float = 2.0                 # N
+    max_torque: float = 0.5                # N*m
+    robot_dof: str = TRANSLATION
+
+    @classmethod
+    def of(cls, params) -> 'ProtocolSettings':
+        """Return the settings carried by ``params`` (a SimParams or alike)."""
+        return cls(params.mode, tuple(params.expected_actors), params.lockstep_timeout,
+                   params.command_timeout, params.control_period, params.max_force,
+                   params.max_torque, params.robot_dof)
+
+
+class StepProtocol:
+    """The sim's side of the step protocol for one session (see the module docstring)."""
+
+    def __init__(self, settings: ProtocolSettings):
+        if settings.mode not in CLOCK_MODES:
+            raise ProtocolError(f'clock mode {settings.mode!r} is not one of {CLOCK_MODES}')
+        if settings.robot_dof not in DOFS:
+            raise ProtocolError(f'robot_dof {settings.robot_dof!r} is not one of {DOFS}')
+        self.settings = settings
+        self.mode = settings.mode
+        self.expected = tuple(settings.expected_actors)
+        self.period_ns = int(round(settings.control_period * NS_PER_S))
+        self.dof_of = roles(settings.robot_dof)
+        self.human_involved = True
+        self.episode = 0
+        self.active = False                  # an episode is running (false while holding)
+        self.step = 0                        # step of the last published state
+        self.sim_time_ns = None              # stamp of the last published state
+        self.awaited = None                  # stamp the commands must answer (None: none)
+        self.counters = Counter()            # this episode's events
+        self.totals = Counter()              # the session's events (every episode)
+        self.finished_episodes = 0
+        self._answers = {}                   # lockstep: actor -> Command for the awaited state
+        self._kept = {}                      # realtime: actor -> (Command, receipt s, stamp)
+        self._episode_first_stamp = None     # realtime: stamps of this episode start here
+
+    # -- episodes ----------------------------------------------------------------------------
+    def set_mode(self, mode: str) -> bool:
+        """Switch the clock mode between episodes; return True when it changed."""
+        if mode not in CLOCK_MODES:
+            raise ProtocolError(f'clock mode {mode!r} is not one of {CLOCK_MODES}')
+        if self.active:
+            raise ProtocolError(f'the clock mode changes between episodes only (episode '
+                                f'{self.episode} is running at step {self.step})')
+        changed = mode != self.mode
+        self.mode = mode
+        return changed
+
+    def set_roles(self, robot_dof: str, human_involved: bool) -> bool:
+        """Take the roles a session announces; return True when something changed."""
+        new = roles(robot_dof)
+        changed = new != self.dof_of or bool(human_involved) != self.human_involved
+        self.dof_of = new
+        self.human_involved = bool(human_involved)
+        return changed
+
+    def start_episode(self, episode: int) -> typing.Optional[Counter]:
+        """Begin ``episode``; return the counters of an episode it abandons (else None).
+
+        The caller publishes the first state right after (:meth:`next_stamp`).
+        """
+        if not 0 <= int(episode) <= MAX_EPISODE:
+            raise ProtocolError(f'episode index {episode} is outside 0..{MAX_EPISODE} '
+                                f'(uint32)')
+        abandoned = Counter(self.counters) if self.active else None
+        self.episode = int(episode)
+        self.active = True
+        self.step = 0
+        self.counters = Counter()
+        self._answers = {}
+        self._kept = {}
+        self._episode_first_stamp = None
+        return abandoned
+
+    def next_episode(self) -> typing.Optional[int]:
+        """Return the index after the current episode, None when uint32 is exhausted."""
+        return self.episode + 1 if self.episode < MAX_EPISODE else None
+
+    def next_stamp(self, step: int, final: bool) -> int:
+        """Return the stamp (ns) of the state of ``step`` about to be published; arm the wait."""
+        self.sim_time_ns = 0 if self.sim_time_ns is None else self.sim_time_ns + self.period_ns
+        self.step = int(step)
+        self._answers = {}
+        if self._episode_first_stamp is None:
+            self._episode_first_stamp = self.sim_time_ns
+        self.awaited = None if final else self.sim_time_ns
+        if final:
+            self.active = False
+            self.finished_episodes += 1
+        return self.sim_time_ns
+
+    def hold(self) -> None:
+        """Stop the running episode at once (operator abort): nothing more is applied."""
+        self.active = False
+        self.awaited = None
+        self._answers = {}
+        self._kept = {}
+
+    @property
+    def waiting(self) -> bool:
+        """Return True while a state awaits its commands."""
+        return self.active and self.awaited is not None
+
+    # -- commands ----------------------------------------------------------------------------
+    def _count(self, name: str) -> None:
+        self.counters[name] += 1
+        self.totals[name] += 1
+
+    def on_command(self, actor: str, stamp: int, wrench, now: float) -> CommandResult:
+        """Read one command of ``actor`` (a Wrench-like object) stamped ``stamp`` (ns).
+
+        ``now`` is a monotonic wall time (s), used in realtime for the command's age.
+        """
+        if not self.active:
+            self._count(actor + '_between_episodes')
+            return CommandResult(actor, 'between_episodes', stamp)
+        if self.mode == LOCKSTEP:
+            awaited = self.awaited
+            valid = stamp == awaited
+        else:
+            awaited = self.sim_time_ns
+            valid = (self._episode_first_stamp is not None
+                     and self._episode_first_stamp <= stamp <= self.sim_time_ns
+                     and (stamp - self._episode_first_stamp) % self.period_ns == 0)
+        if not valid:
+            self._count(actor + '_stale')
+            return CommandResult(actor, 'stale', stamp, awaited)
+        dof = self.dof_of[actor]
+        limit = limit_for(dof, self.settings.max_force, self.settings.max_torque)
+        command = read_command(wrench, dof, limit)
+        result = CommandResult(actor, 'accepted', stamp, awaited, command, dof, limit)
+        if not command.accepted:
+            result.kind = 'refused'
+            self._count(actor + '_refused')
+        else:
+            if command.clamped:
+                self._count(actor + '_clamped')
+            if command.off_axis:
+                self._count(actor + '_off_axis')
+        if self.mode == REALTIME:
+            kept = self._kept.get(actor)
+            if kept is None or stamp >= kept[2]:
+                self._kept[actor] = (command, now, stamp)
+            else:
+                self._count(actor + '_superseded')
+            return result
+        if actor in self._answers:
+            self._count(actor + '_duplicate')   # the first answer to a state stands
+            return result
+        self._answers[actor] = command
+        if all(expected in self._answers for expected in self.expected):
+            missing = {expected: not self._answers[expected].accepted
+                       for expected in self.expected}
+            result.order = self._order(self._answers, missing, 'answered')
+        return result
+
+    def on_timeout(self) -> typing.Optional[StepOrder]:
+        """Lockstep: the wait for the awaited state's commands timed out; step without them."""
+        if self.mode != LOCKSTEP or not self.waiting:
+            return None
+        missing = {actor: actor not in self._answers or not self._answers[actor].accepted
+                   for actor in self.expected}
+        return self._order(self._answers, missing, 'timeout')
+
+    def free_run(self) -> typing.Optional[StepOrder]:
+        """Lockstep without expected actors: step with what arrived (nothing is missing)."""
+        if self.mode != LOCKSTEP or self.expected or not self.waiting:
+            return None
+        return self._order(self._answers, {}, 'free_run')
+
+    def on_tick(self, now: float) -> typing.Optional[StepOrder]:
+        """Realtime: one control period of wall time passed; step with the fresh commands."""
+        if self.mode != REALTIME or not self.waiting:
+            return None
+        commands, missing = {}, {}
+        for actor in ACTORS:
+            command, received, _ = self._kept.get(actor, (None, None, None))
+            fresh = (command is not None and command.accepted
+                     and now - received <= self.settings.command_timeout)
+            if fresh:
+                commands[actor] = command
+            if actor in self.expected:
+                missing[actor] = not fresh
+        return self._order(commands, missing, 'tick')
+
+    def _order(self, commands: dict, missing: dict, reason: str) -> StepOrder:
+        """Count the missing commands and sum the applied ones per degree of freedom."""
+        applied, ignored = {}, []
+        for actor, command in commands.items():
+            if command is None or not command.accepted:
+                continue
+            if actor == HUMAN and not self.human_involved:
+                if command.value != 0.0:
+                    self._count('human_not_involved')
+                    ignored.append((actor, command.value))
+                continue
+            applied[actor] = command.value
+        for actor, is_missing in missing.items():
+            if is_missing:
+                self._count(actor + '_missing')
+        wrench = per_dof(applied, self.dof_of)
+        self.awaited = None                  # the next state arms the next wait
+        return StepOrder(wrench[TRANSLATION], wrench[ROTATION], missing, reason, ignored)
+
+
+def summary_line(episode: int, state, counters: Counter, mode: str, end: str = '') -> str:
+    """Return the one-line summary of an episode (where each body ended, events)."""
+    end = end or ('truncated' if state.truncated else 'terminated' if state.terminated
+                  else 'stopped')
+    parts = [f'episode {episode} {end} after {state.step} steps ({state.time:.1f} s sim):',
+             f'slider S_x={state.slider_position:+.4f} m,',
+             f'pendulum P_z={state.pendulum_angle:+.4f} rad,',
+             f'ball B_y={state.ball_position:+.4f} m;',
+             'missing commands ' + ', '.join(
+                 f'{actor} {counters[actor + "_missing"]}' for actor in ACTORS) + ';']
+    events = [f'{name} {count}' for name, count in sorted(counters.items())
+              if count and not name.endswith('_missing')]
+    parts.append(', '.join(events) if events else 'no refused/clamped/off-axis/stale commands')
+    parts.append(f'({mode})')
+    return ' '.join(parts)
