@@ -1,0 +1,90 @@
+"""Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
+
+import pathlib
+
+from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
+
+
+def _nested(config: dict, *keys, default=None):
+    value = config
+    for key in keys:
+        if not isinstance(value, dict) or key not in value:
+            return default
+        value = value[key]
+    return value
+
+
+def profile_of(config: dict) -> str:
+    """Return the simulated-human profile of a session config ('paper' when not given)."""
+    for path in (('human_profile',), ('settings', 'human_profile'),
+                 ('parameters', 'human', 'profile'), ('human', 'profile')):
+        value = _nested(config, *path)
+        if value:
+            return str(value)
+    return 'paper'
+
+
+def episode_limit_of(config: dict) -> int:
+    """Return the session's max training episodes (0 when the config does not say)."""
+    for path in (('parameters', 'agent', 'max_training_episodes'),
+                 ('agent', 'max_training_episodes'), ('max_training_episodes',),
+                 ('settings', 'training_episodes')):
+        value = _nested(config, *path)
+        if isinstance(value, (int, float)) and value > 0:
+            return int(value)
+    return 0
+
+
+def record_from_bag_session(session) -> SessionRecord:
+    """Convert an hrc_bag report Session into a SessionRecord."""
+    episodes = [EpisodeRecord(
+        episode=int(summary.episode), training_step=int(summary.training_step),
+        human_involved=bool(summary.human_involved), evaluation=bool(summary.evaluation),
+        converged=bool(summary.converged), episode_return=float(summary.episode_return),
+        slider_error=float(summary.slider_error), pendulum_error=float(summary.pendulum_error),
+        ball_error=float(summary.ball_error), total_error=float(summary.total_error),
+        human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
+        final_evaluation=_final_flag(summary))
+        for summary in session.summaries]
+    strategy, robot_dof = CASES.get(session.case_id, (session.strategy, session.robot_dof))
+    try:
+        seed = int(session.seed)
+    except ValueError:
+        seed = -1
+    step_count = max((int(status.training_step_count) for status in session.statuses),
+                     default=0)
+    return SessionRecord(session_id=session.session_id, case_id=session.case_id,
+                         strategy=session.strategy or strategy,
+                         robot_dof=session.robot_dof or robot_dof, seed=seed,
+                         profile=profile_of(session.config), episodes=episodes,
+                         step_count=step_count,
+                         episode_limit=episode_limit_of(session.config),
+                         path=str(session.path), extra={'bag_session': session})
+
+
+def _final_flag(summary):
+    """Return the summary's own final-evaluation flag if the message has one, else None."""
+    for name in ('final_evaluation', 'final'):
+        if hasattr(summary, name):
+            return bool(getattr(summary, name))
+    return None
+
+
+def load_sessions(paths, log=print) -> list:
+    """Return SessionRecords of every session folder under ``paths`` (sorted by case, seed)."""
+    from hrc_bag import bag_reader
+    from hrc_bag.report import find_sessions, load_session
+
+    decoder = bag_reader.MessageDecoder()
+    records = []
+    for path in find_sessions([pathlib.Path(path) for path in paths]):
+        session = load_session(path, decoder)
+        if not session.summaries:
+            log(f'{path}: no episode summaries, skipped')
+            continue
+        if not session.complete:
+            log(f'{path}: a file was not closed (recorder killed?): read up to its last chunk')
+        records.append(record_from_bag_session(session))
+    records.sort(key=lambda record: (record.profile, record.case_id, record.seed,
+                                     record.session_id))
+    return records

@@ -1,0 +1,86 @@
+"""``hrc_results``: docs/results.md and its figures from the bags of an experiment.
+
+    ros2 run hrc_study hrc_results bags/<experiment> --out docs/
+    ros2 run hrc_study hrc_results bags/<experiment> --out /tmp/r --priorities human=3,time=1
+
+Writes ``<out>/results.md`` and ``<out>/results/`` (Fig. 5-7, convergence curves,
+sessions.csv), prints the findings, the targets and the strategy ranking. Exit codes: 0 done,
+1 no session found, 2 bad arguments.
+"""
+
+import argparse
+import shlex
+import sys
+
+from hrc_study.chooser import parse_priorities
+
+DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episodes to '
+               "convergence, the paper's findings with Holm-corrected tests, the strategy "
+               'chooser) and its figures from recorded sessions.')
+
+
+def parse_arguments(argv):
+    """Return the parsed command line; exit 2 with every reason on bad input."""
+    parser = argparse.ArgumentParser(prog='hrc_results', description=DESCRIPTION)
+    parser.add_argument('paths', nargs='+', help='experiment folders (bags/<experiment>) or '
+                        'session folders')
+    parser.add_argument('--out', default='docs', help='folder of results.md (default docs)')
+    parser.add_argument('--priorities', default='',
+                        help='strategy chooser weights, e.g. performance=3,human=1,time=1, or '
+                        'a preset: balanced, "performance first", "least human time", '
+                        '"fastest training"')
+    parser.add_argument('--seed', type=int, default=0, help='bootstrap seed (default 0)')
+    arguments = parser.parse_args(argv)
+    if arguments.priorities:
+        try:
+            arguments.weights = parse_priorities(arguments.priorities)
+        except ValueError as error:
+            parser.error(f'--priorities: {error}')
+    else:
+        arguments.weights = None
+    return arguments
+
+
+def main(argv=None) -> int:
+    """Run the study's report."""
+    argv = sys.argv[1:] if argv is None else argv
+    arguments = parse_arguments(argv)
+    from hrc_study.chooser import choice_markdown
+    from hrc_study.loading import load_sessions
+    from hrc_study.results_doc import read_experiment, write_results
+
+    def log(text):
+        print(f'hrc_results: {text}', file=sys.stderr)
+
+    try:
+        sessions = load_sessions(arguments.paths, log=log)
+    except FileNotFoundError as error:
+        log(str(error))
+        return 1
+    if not sessions:
+        log('no session with episode summaries in ' + ', '.join(arguments.paths))
+        return 1
+    command = 'ros2 run hrc_study hrc_results ' + ' '.join(shlex.quote(arg) for arg in argv)
+    try:
+        result = write_results(sessions, arguments.out, command,
+                               read_experiment(arguments.paths), arguments.weights,
+                               arguments.seed)
+    except ValueError as error:
+        log(str(error))
+        return 1
+    print('findings:')
+    for finding in result['findings']:
+        print(f'  ({finding.key}) {finding.claim}: {finding.verdict.upper()} '
+              f'(Holm p = {finding.p_holm:.3g}; {finding.reason})')
+    print('targets:')
+    for target, measured, met in result['targets']:
+        print(f'  [{"met" if met else "NOT met"}] {target}: {measured}')
+    name = 'your priorities' if arguments.weights else 'balanced'
+    print('strategy chooser:\n' + choice_markdown(result['choices'][name], name))
+    for path in result['files'].values():
+        print(f'wrote {path}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,275 @@
+"""docs/results.md from session records: tables, findings, targets, chooser, figures.
+
+Every number in the document is computed here from the records passed in (and the experiment's
+own ``experiment.json`` when present: command, engine, wall time), nothing is typed in except the
+paper's Table II (a fact quoted from the paper, labelled as such).
+"""
+
+import csv
+import io
+import json
+import math
+import pathlib
+
+import numpy
+
+from hrc_study import figures
+from hrc_study.chooser import choice_markdown, choose, PRESETS
+from hrc_study.findings import evaluate_findings, significance_note
+from hrc_study.sessions import CASES, measures, STRATEGY_SHORT
+from hrc_study.statistics import kaplan_meier, mean_interval
+
+# The paper's Table II (Tao et al.): human-involved, total episodes, total error, human effort.
+PAPER_TABLE2 = {1: (18, 25, 1.61, 0.0075), 2: (6, 31, 0.82, 0.0020), 3: (19, 19, 2.04, 0.0078),
+                4: (14, 14, 1.14, 0.0021), 5: (24, 24, 6.26, 0.0096), 6: (16, 16, 1.24, 0.0023)}
+COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
+           ('total_episodes', 'episodes', 1),
+           ('percentage', 'human %', 0),
+           ('slider_error', 'slider (m)', 3),
+           ('pendulum_error', 'pendulum (rad)', 3),
+           ('ball_error', 'ball (m)', 3),
+           ('total_error', 'total error', 3),
+           ('human_effort', 'human effort', 4),
+           ('robot_effort', 'robot effort', 4)]
+TARGET_HUMAN_EPISODES = 20          # issue #13: case 2 median human-involved episodes
+TARGET_CONVERGED = 8                # of 10 seeds, within the episode limit
+TARGET_EFFORT_RATIO = 3.0           # human effort within 3x of the paper's
+
+
+def cell(interval, decimals: int) -> str:
+    """Return 'mean [low, high]' (or the mean alone, or n/a)."""
+    if interval.count == 0 or math.isnan(interval.estimate):
+        return 'n/a'
+    if interval.count < 2:
+        return f'{interval.estimate:.{decimals}f}'
+    return (f'{interval.estimate:.{decimals}f} [{interval.low:.{decimals}f}, '
+            f'{interval.high:.{decimals}f}]')
+
+
+def case_measures(sessions, profile: str) -> dict:
+    """Return {case_id: [measures of each session]} of one profile."""
+    return {case_id: [measures(member) for member in members]
+            for case_id, members in figures.by_case(sessions, profile).items()}
+
+
+def table2_markdown(rows: dict) -> str:
+    """Return Table II: mean and 95% interval (Student t over seeds) per cell."""
+    header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
+    lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
+    for case_id, values in rows.items():
+        strategy, robot = CASES.get(case_id, ('?', '?'))
+        cells = [str(case_id), STRATEGY_SHORT.get(strategy, strategy), robot, str(len(values))]
+        cells += [cell(mean_interval(value[key] for value in values), decimals)
+                  for key, _, decimals in COLUMNS]
+        lines.append('| ' + ' | '.join(cells) + ' |')
+    return '\n'.join(lines) + '\n'
+
+
+def convergence_markdown(rows: dict) -> str:
+    """Return episodes to convergence per case: converged count, KM median, restricted mean."""
+    lines = ['| case | converged | Kaplan-Meier median [95% CI] | restricted mean | '
+             'paper (episodes) |', '|---|---|---|---|---|']
+    for case_id, values in rows.items():
+        times = [value['total_episodes'] for value in values]
+        events = [value['converged'] for value in values]
+        summary = kaplan_meier(times, events)
+        paper = PAPER_TABLE2.get(case_id)
+        paper_text = (f'{paper[1]}' + (' (failed)' if case_id == 5 else '')) if paper else ''
+        lines.append(f'| {case_id} | {sum(events)}/{len(events)} | {summary.describe()} | '
+                     f'{numpy.mean(times):.1f} | {paper_text} |')
+    return '\n'.join(lines) + '\n'
+
+
+def paper_markdown(rows: dict) -> str:
+    """Return our means beside the paper's Table II values and the effort ratio."""
+    lines = ['| case | human-involved (ours / paper) | episodes (ours / paper) | total error '
+             '(ours / paper) | human effort (ours / paper) | effort ratio |',
+             '|---|---|---|---|---|---|']
+    for case_id, values in rows.items():
+        paper = PAPER_TABLE2.get(case_id)
+        if paper is None:
+            continue
+        ours = {key: numpy.nanmean([value[key] for value in values])
+                for key in ('human_involved_episodes', 'total_episodes', 'total_error',
+                            'human_effort')}
+        lines.append(f'| {case_id} | {ours["human_involved_episodes"]:.1f} / {paper[0]} | '
+                     f'{ours["total_episodes"]:.1f} / {paper[1]} | '
+                     f'{ours["total_error"]:.3f} / {paper[2]} | '
+                     f'{ours["human_effort"]:.4f} / {paper[3]} | '
+                     f'{ours["human_effort"] / paper[3]:.2f}x |')
+    return '\n'.join(lines) + '\n'
+
+
+def targets(rows: dict, experiment: dict) -> list:
+    """Return [(target, measured, met)] of issue #13 (and #12's wall time)."""
+    result = []
+    case2 = rows.get(2, [])
+    if case2:
+        median = float(numpy.median([value['human_involved_episodes'] for value in case2]))
+        result.append((f'case 2: median human-involved episodes <= {TARGET_HUMAN_EPISODES} '
+                       f'(paper: 6)', f'{median:g} over {len(case2)} seeds',
+                       median <= TARGET_HUMAN_EPISODES))
+    converged = {case_id: sum(value['converged'] for value in values)
+                 for case_id, values in rows.items()}
+    counts = {case_id: len(values) for case_id, values in rows.items()}
+    if rows:
+        result.append((f'every case converges in >= {TARGET_CONVERGED}/10 seeds',
+                       ', '.join(f'case {case_id}: {converged[case_id]}/{counts[case_id]}'
+                                 for case_id in rows),
+                       all(converged[case_id] >= TARGET_CONVERGED * counts[case_id] / 10
+                           for case_id in rows)))
+    ratios = {}
+    for case_id, values in rows.items():
+        if case_id in PAPER_TABLE2:
+            ratios[case_id] = numpy.nanmean([value['human_effort'] for value in values]) \
+                / PAPER_TABLE2[case_id][3]
+    if ratios:
+        result.append((f'human effort within {TARGET_EFFORT_RATIO:g}x of the paper per case',
+                       ', '.join(f'case {case_id}: {ratio:.2f}x'
+                                 for case_id, ratio in ratios.items()),
+                       all(1 / TARGET_EFFORT_RATIO <= ratio <= TARGET_EFFORT_RATIO
+                           for ratio in ratios.values())))
+    if experiment.get('wall_seconds'):
+        wall = experiment['wall_seconds']
+        result.append(('the whole experiment on this machine; #12: 6 x 10 in-process < 10 min',
+                       f'{wall / 60:.1f} min wall, {experiment.get("sessions", "?")} sessions, '
+                       f'engine {experiment.get("engine", "?")}, executor '
+                       f'{experiment.get("executor", "?")}',
+                       wall < 600 and experiment.get('engine') == 'inprocess'))
+    return result
+
+
+def findings_markdown(findings) -> str:
+    """Return the findings table."""
+    lines = ['| | claim | comparison | test | effect | p | Holm p | verdict | reason |',
+             '|---|---|---|---|---|---|---|---|---|']
+    for finding in findings:
+        lines.append(f'| ({finding.key}) | {finding.claim} | {finding.comparison} | '
+                     f'{finding.test} | {finding.effect} | {_p(finding.p_value)} | '
+                     f'{_p(finding.p_holm)} | **{finding.verdict}** | {finding.reason} |')
+    return '\n'.join(lines) + '\n'
+
+
+def _p(value: float) -> str:
+    return 'n/a' if math.isnan(value) else f'{value:.3g}'
+
+
+def sessions_csv(sessions) -> str:
+    """Return one CSV row per session: the values behind every table."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    keys = ['human_involved_episodes', 'total_episodes', 'training_only_episodes',
+            'converged', 'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]]
+    writer.writerow(['session_id', 'profile', 'case_id', 'strategy', 'robot_dof', 'seed']
+                    + keys)
+    for session in sessions:
+        values = measures(session)
+        writer.writerow([session.session_id, session.profile, session.case_id,
+                         session.strategy, session.robot_dof, session.seed]
+                        + [values[key] for key in keys])
+    return buffer.getvalue()
+
+
+def read_experiment(paths) -> dict:
+    """Return the experiment.json written by the experiment runner next to the sessions."""
+    for path in map(pathlib.Path, paths):
+        candidate = path / 'experiment.json'
+        if candidate.is_file():
+            try:
+                return json.loads(candidate.read_text())
+            except (OSError, ValueError):
+                return {}
+    return {}
+
+
+def write_results(sessions, out_dir, command: str, experiment: dict = None,
+                  priorities: dict = None, seed: int = 0) -> dict:
+    """Write ``out_dir/results.md`` and ``out_dir/results/*``; return {name: path} and more."""
+    experiment = experiment or {}
+    out_dir = pathlib.Path(out_dir)
+    assets = out_dir / 'results'
+    assets.mkdir(parents=True, exist_ok=True)
+    profiles = sorted({session.profile for session in sessions},
+                      key=lambda name: (name != 'paper', name))
+    primary = profiles[0]
+    rows = case_measures(sessions, primary)
+    findings = evaluate_findings(sessions, primary)
+    files = {}
+    figures.figure_training(sessions, primary, assets / 'fig5_training.png')
+    figures.figure_actions(sessions, primary, assets / 'fig6_actions.png')
+    figures.figure_convergence(sessions, primary, assets / 'convergence.png')
+    choices = {}
+    for name, weights in PRESETS.items():
+        choices[name] = choose(sessions, weights, profile=primary, seed=seed)
+    if priorities:
+        choices['your priorities'] = choose(sessions, priorities, profile=primary, seed=seed)
+    figures.figure_three_factor(choices['balanced'], assets / 'fig7_three_factor.png')
+    (assets / 'sessions.csv').write_text(sessions_csv(sessions))
+    for name in ('fig5_training.png', 'fig6_actions.png', 'convergence.png',
+                 'fig7_three_factor.png', 'sessions.csv'):
+        files[name] = assets / name
+    text = document(sessions, profiles, rows, findings, choices, command, experiment)
+    (out_dir / 'results.md').write_text(text)
+    files['results.md'] = out_dir / 'results.md'
+    return {'files': files, 'findings': findings, 'choices': choices, 'rows': rows,
+            'targets': targets(rows, experiment)}
+
+
+def document(sessions, profiles, rows, findings, choices, command, experiment) -> str:
+    """Return the Markdown of docs/results.md."""
+    primary = profiles[0]
+    seeds = sorted({session.seed for session in sessions})
+    limits = sorted({session.episode_limit for session in sessions if session.episode_limit})
+    parts = ['# Results: the six cases over seeds, with statistics', '',
+             'Generated from the bags by', '', '```bash', command, '```', '']
+    if experiment:
+        parts += ['The sessions were run by', '', '```bash', experiment.get('command', '?'),
+                  '```', '',
+                  f'Engine `{experiment.get("engine", "?")}`, executor '
+                  f'`{experiment.get("executor", "?")}`, {experiment.get("sessions", "?")} '
+                  f'sessions in {experiment.get("wall_seconds", math.nan) / 60:.1f} min wall '
+                  f'on {experiment.get("host_cpus", "?")} CPUs '
+                  f'({experiment.get("started", "?")}, {experiment.get("version", "?")}).', '']
+    parts += [f'{len(sessions)} sessions: simulated-human profiles '
+              f'{", ".join(f"`{profile}`" for profile in profiles)}; seeds '
+              f'{seeds[0]}..{seeds[-1]} (each seed a different simulated person); episode '
+              f'limit {", ".join(map(str, limits)) or "?"}. Tables and findings below are for '
+              f'profile `{primary}` unless named.', '',
+              '## Table II: mean [95% confidence interval] over seeds', '',
+              table2_markdown(rows),
+              'Episodes count every episode until training ended, the evaluation episodes '
+              'that judged convergence included; human-involved episodes count those in which '
+              "the simulated human acted (the person's time). Errors and efforts: mean over "
+              'the final evaluation episodes of the frozen deterministic policy (mean |S_x| m, '
+              '|P_z| rad, |B_y| m per episode, their sum; effort = variance of the '
+              'normalized action). Intervals: Student t over the seeds of a case. Sessions '
+              'that hit the episode limit enter the episode means at the limit (a lower '
+              'bound); the next table treats them as censored.', '',
+              '## Episodes to convergence (censored at the limit)', '',
+              convergence_markdown(rows),
+              'Kaplan-Meier median with the Brookmeyer-Crowley 95% interval (log-log); "not '
+              'reached": fewer than half of the seeds converged by then. Restricted mean: mean '
+              'of min(episodes, limit).', '',
+              '![Convergence](results/convergence.png)', '',
+              "## Beside the paper's Table II", '', paper_markdown(rows),
+              'The paper\'s numbers are one person per case; its error is "cumulative" and not '
+              'defined further, so only the order of the errors compares, not their size.', '',
+              "## Targets of issue #13 (and #12's wall time)", '',
+              '| target | measured | met |', '|---|---|---|']
+    parts += [f'| {target} | {measured} | {"yes" if met else "**no**"} |'
+              for target, measured, met in targets(rows, experiment)]
+    parts += ['', "## The paper's findings", '', findings_markdown(findings), '',
+              significance_note(), '',
+              '## Strategy chooser', '',
+              "Ranks the strategies by the three factors and a user's weights "
+              '(`hrc_results ... --priorities performance=3,human=1,time=1`); each factor is '
+              'scored relative to the worst strategy (1 - value / worst) and the score is the '
+              'weighted mean; intervals and "first in" come from a stratified bootstrap over '
+              'seeds. Both role assignments pooled, as in Fig. 7.', '']
+    for name, choice in choices.items():
+        parts += [choice_markdown(choice, name), '']
+    parts += ['## Figures', '', '![Fig. 5](results/fig5_training.png)', '',
+              '![Fig. 6](results/fig6_actions.png)', '',
+              '![Fig. 7](results/fig7_three_factor.png)', '',
+              'Per-session values: [results/sessions.csv](results/sessions.csv).', '']
+    return '\n'.join(parts)

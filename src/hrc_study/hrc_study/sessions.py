@@ -1,0 +1,126 @@
+"""What the study uses of one session, and the per-session measures (pure, no ROS).
+
+A :class:`SessionRecord` is the list of a session's episode summaries plus what identifies it
+(case, strategy, roles, seed, simulated-human profile). :func:`measures` turns it into the values
+of Table II and the three factors. :func:`load_sessions` (in :mod:`hrc_study.loading`) fills
+records from bags; tests build them directly.
+
+Definitions (the issue #13 rules, see docs/results.md):
+
+* The final evaluation block: the evaluation episodes after training ended (the frozen policy
+  evaluated for Table II's performance and effort). Evaluation episodes run *during* training to
+  judge convergence are part of training: they count in the episode total, and as
+  human-involved whenever the human acted in them (the person's time is the burden metric).
+* Episodes to convergence: every episode before the final block; "converged" when an episode
+  of the strategy's last training step carries the convergence flag. A session that stopped at
+  the episode limit without it is right-censored at its episode count.
+"""
+
+from dataclasses import dataclass, field
+import math
+
+# Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
+STEP_COUNTS = {'responsibility_guided': 2, 'level_guided': 2, 'learn_together': 1}
+STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
+STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
+                  'learn_together': 'together'}
+# The paper's cases: strategy and the degree of freedom the robot drives.
+CASES = {1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided', 'rotation'),
+         3: ('level_guided', 'translation'), 4: ('level_guided', 'rotation'),
+         5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation')}
+ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
+EFFORT_KEYS = ('human_effort', 'robot_effort')
+
+
+@dataclass(frozen=True)
+class EpisodeRecord:
+    """One episode summary (the fields of hrc_msgs/EpisodeSummary the study uses)."""
+
+    episode: int
+    training_step: int
+    human_involved: bool
+    evaluation: bool
+    converged: bool
+    episode_return: float
+    slider_error: float
+    pendulum_error: float
+    ball_error: float
+    total_error: float
+    human_effort: float
+    robot_effort: float
+    final_evaluation: bool = None   # None: unknown, inferred (see final_block)
+
+
+@dataclass
+class SessionRecord:
+    """One session: a case, a seed (a simulated person), its episodes in order."""
+
+    session_id: str
+    case_id: int
+    strategy: str
+    robot_dof: str
+    seed: int
+    profile: str
+    episodes: list                  # EpisodeRecord, ordered by episode
+    step_count: int = 0             # training steps of the strategy (0: from STEP_COUNTS)
+    episode_limit: int = 0          # the agent's max_training_episodes (0: unknown)
+    path: str = ''
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def steps(self) -> int:
+        """Return the number of training steps of the session's strategy."""
+        return self.step_count or STEP_COUNTS.get(self.strategy, 1)
+
+
+def final_block_start(session: SessionRecord) -> int:
+    """Return the index in ``session.episodes`` where the final evaluation block starts.
+
+    When the episodes say which are final evaluation (``final_evaluation`` set), that decides.
+    Otherwise: the trailing run of evaluation episodes, less a leading episode that carries the
+    convergence flag (that one judged convergence during training).
+    """
+    episodes = session.episodes
+    if any(episode.final_evaluation is not None for episode in episodes):
+        flags = [bool(episode.final_evaluation) for episode in episodes]
+        return flags.index(True) if True in flags else len(episodes)
+    start = len(episodes)
+    while start > 0 and episodes[start - 1].evaluation:
+        start -= 1
+    if start < len(episodes) and episodes[start].converged and \
+            episodes[start].training_step == session.steps - 1:
+        start += 1
+    return start
+
+
+def measures(session: SessionRecord) -> dict:
+    """Return the per-session values of Table II and the three factors (NaN: no data).
+
+    Keys: human_involved_episodes, total_episodes (both include evaluation episodes run during
+    training), training_only_episodes, percentage, converged (bool), the four errors and two
+    efforts (means over the final evaluation block), evaluation_episodes.
+    """
+    start = final_block_start(session)
+    training, final = session.episodes[:start], session.episodes[start:]
+    involved = sum(1 for episode in training if episode.human_involved)
+    last_step = session.steps - 1
+    converged = any(episode.converged and episode.training_step == last_step
+                    for episode in training)
+    values = {
+        'human_involved_episodes': float(involved),
+        'total_episodes': float(len(training)),
+        'training_only_episodes': float(sum(1 for episode in training
+                                            if not episode.evaluation)),
+        'percentage': 100.0 * involved / len(training) if training else math.nan,
+        'converged': converged,
+        'evaluation_episodes': float(len(final)),
+    }
+    for key in ERROR_KEYS + EFFORT_KEYS:
+        samples = [getattr(episode, key) for episode in final]
+        values[key] = sum(samples) / len(samples) if samples else math.nan
+    return values
+
+
+def case_label(case_id: int, profile: str = '') -> str:
+    """Return e.g. 'case 2' or 'case 2 (symmetric)'."""
+    return f'case {case_id}' + (f' ({profile})' if profile and profile != 'paper' else '')

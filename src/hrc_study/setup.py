@@ -1,0 +1,25 @@
+from setuptools import find_packages, setup
+
+package_name = 'hrc_study'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='hrc developers',
+    maintainer_email='hrc@example.org',
+    description='The study of the six cases over seeds: statistics, the findings, the results '
+                'document and the strategy chooser.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'hrc_results = hrc_study.results_cli:main',
+        ],
+    },
+)
