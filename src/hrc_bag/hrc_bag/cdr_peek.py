@@ -22,23 +22,11 @@ from hrc_bag import msgdefs
 ENCAPSULATION = 4
 
 
-def fields(type_name: str) -> list:
-    """Return [(type, name), ...] of the fields of ``type_name`` (constants left out)."""
-    result = []
-    for line in msgdefs.message_text(type_name).splitlines():
-        line = line.split('#', 1)[0].strip()
-        parts = line.split()
-        if len(parts) < 2 or '=' in line:       # empty, or a constant (NAME=value)
-            continue
-        result.append((parts[0], parts[1]))
-    return result
-
-
 @functools.lru_cache(maxsize=None)
 def layout(type_name: str) -> tuple:
     """Return (has_header, has_episode): whether the type starts with a header (+ episode)."""
     try:
-        found = fields(type_name)
+        found = msgdefs.fields(type_name)
     except (msgdefs.DefinitionNotFound, ValueError):
         return False, False
     has_header = bool(found) and found[0] == ('std_msgs/Header', 'header')

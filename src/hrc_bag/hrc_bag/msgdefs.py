@@ -45,7 +45,8 @@ def split_type_name(type_name: str) -> tuple:
     return match.group(1), match.group(3)
 
 
-def _share_directory(package: str) -> pathlib.Path:
+def share_directory(package: str) -> pathlib.Path:
+    """Return the installed share directory of ``package`` (DefinitionNotFound if none)."""
     from ament_index_python.packages import (get_package_share_directory,
                                              PackageNotFoundError)
     try:
@@ -59,11 +60,23 @@ def _share_directory(package: str) -> pathlib.Path:
 def message_text(type_name: str) -> str:
     """Return the installed .msg text of ``type_name`` (``pkg/msg/Type`` or ``pkg/Type``)."""
     package, name = split_type_name(type_name)
-    path = _share_directory(package) / 'msg' / f'{name}.msg'
+    path = share_directory(package) / 'msg' / f'{name}.msg'
     try:
         return path.read_text()
     except OSError as error:
         raise DefinitionNotFound(f'no message definition for {type_name}: {error}') from None
+
+
+def fields(type_name: str) -> list:
+    """Return [(type, name), ...] of the fields of ``type_name`` (constants left out)."""
+    result = []
+    for line in message_text(type_name).splitlines():
+        line = line.split('#', 1)[0].strip()
+        parts = line.split()
+        if len(parts) < 2 or '=' in line:       # empty, or a constant (NAME=value)
+            continue
+        result.append((parts[0], parts[1]))
+    return result
 
 
 def field_types(text: str, package: str) -> list:

@@ -27,8 +27,9 @@ from rclpy.serialization import deserialize_message
 import yaml
 
 from hrc_bag.qos_yaml import profile_to_dict
-from hrc_bag.recording import (boundary_event, BOUNDARY_TYPES, EpisodeRecorder, RawMessage,
-                               RecorderParams, RecordingError, TopicDescription)
+from hrc_bag.format import RawMessage, RecordingError, TopicDescription
+from hrc_bag.recorder_params import RecorderParams
+from hrc_bag.recording import boundary_event, BOUNDARY_TYPES, EpisodeRecorder
 
 EXECUTABLE = 'recorder_node'
 SUMMARY = ('Record the hrc topics into one rosbag2-compatible MCAP file per episode under '

@@ -10,11 +10,10 @@ file is complete, so a recovery that is itself interrupted loses nothing.
 import os
 import pathlib
 
-
 from hrc_bag.bag_reader import scan_records
 from hrc_bag.qos_yaml import load_yaml
-from hrc_bag.recording import (describe_error, EpisodeFile, FileInfo, RawMessage,
-                               RecordingError, ROSBAG2_RECORD, TopicDescription)
+from hrc_bag.format import (describe_error, EpisodeFile, FileInfo, RawMessage,
+                            RecordingError, ROSBAG2_RECORD, TopicDescription)
 
 
 def _description(channel, schemas) -> TopicDescription:
@@ -36,9 +35,15 @@ def recover_file(path, compression: str = 'zstd') -> FileInfo:
         raise RecordingError(f'cannot read {path}: {describe_error(error)}') from error
     metadata.pop(ROSBAG2_RECORD, None)
     temporary = path.with_name(f'.{path.name}.recovering')
-    if temporary.exists():
-        temporary.unlink()
-    output = EpisodeFile(temporary, compression, metadata=metadata)
+    try:
+        mode = path.stat().st_mode & 0o777          # a personal file stays owner-only
+        if temporary.exists():
+            temporary.unlink()
+    except OSError as error:
+        raise RecordingError(f'cannot recover {path}: {describe_error(error)}') from error
+    # written under its final name: the embedded rosbag2 record names the file, not the
+    # temporary one
+    output = EpisodeFile(temporary, compression, metadata=metadata, name=path.name, mode=mode)
     descriptions = {}
     for message in sorted(messages, key=lambda message: message.log_time):
         channel = channels.get(message.channel_id)
@@ -57,5 +62,4 @@ def recover_file(path, compression: str = 'zstd') -> FileInfo:
         os.replace(temporary, path)
     except OSError as error:
         raise RecordingError(f'cannot replace {path}: {describe_error(error)}') from error
-    info.name = path.name
     return info

@@ -28,7 +28,7 @@ import yaml
 
 from hrc_bag import bag_reader
 from hrc_bag.qos_yaml import load_yaml
-from hrc_bag.recording import SESSION_RECORD
+from hrc_bag.format import SESSION_RECORD
 
 # Topics are found by type, so remapped recordings are analysed too.
 EPISODE_TYPE = 'hrc_msgs/msg/EpisodeSummary'

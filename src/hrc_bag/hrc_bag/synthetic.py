@@ -268,8 +268,9 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
     from rclpy.serialization import serialize_message
 
     from hrc_bag.qos_yaml import profile_to_dict
-    from hrc_bag.recording import (boundary_event, EpisodeRecorder, RawMessage,
-                                   RecorderParams, TopicDescription)
+    from hrc_bag.format import RawMessage, TopicDescription
+    from hrc_bag.recorder_params import RecorderParams
+    from hrc_bag.recording import boundary_event, EpisodeRecorder
 
     clock = [0.0]
     params = RecorderParams(output_dir=str(output_dir), session_id=session_id)

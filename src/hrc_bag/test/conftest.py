@@ -6,7 +6,7 @@
 import itertools
 import os
 
-from hrc_bag.recording import DEFAULT_TOPICS
+from hrc_bag.recorder_params import DEFAULT_TOPICS
 import pytest
 
 _PREFIXES = itertools.count()

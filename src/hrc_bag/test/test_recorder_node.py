@@ -19,7 +19,8 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.recording import SESSION_RECORD
+from hrc_bag.format import SESSION_RECORD
+from hrc_bag.session_writer import contract_descriptions
 from hrc_bag.synthetic import SyntheticSession
 
 EXIT_RECORDING_FAILED = 3
@@ -134,6 +135,13 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, is
             statistics = reader.get_summary().statistics
             decoded = list(reader.iter_decoded_messages())
             assert statistics.message_count == len(decoded)
+            # what the in-process SessionWriter writes for the graph's publishers
+            descriptions = contract_descriptions()
+            for channel in reader.get_summary().channels.values():
+                expected = descriptions[channel.topic[len(isolation.prefix):]]
+                assert yaml.safe_load(channel.metadata['offered_qos_profiles']) == list(
+                    expected.offered_qos_profiles), channel.topic
+                assert channel.metadata['topic_type_hash'] == expected.type_description_hash
             summaries += [message for _, channel, _, message in decoded
                           if channel.topic == isolation.name('/hrc/episode')]
             record = {metadata.name: metadata.metadata

@@ -14,8 +14,9 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.recording import (boundary_event, EpisodeRecorder, RawMessage, RecorderParams,
-                               RecordingError, SESSION_RECORD, TopicDescription)
+from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
+from hrc_bag.recorder_params import RecorderParams
+from hrc_bag.recording import boundary_event, EpisodeRecorder
 from hrc_bag.synthetic import record_in_process, strategy_plan, type_name_of
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'

@@ -1,0 +1,208 @@
+"""The format layer: an in-process SessionWriter (no rclpy) writes the recorder's bags."""
+
+import json
+import os
+import subprocess
+import sys
+
+from hrc_msgs.msg import SessionStatus
+from mcap.reader import make_reader
+import pytest
+from rclpy.serialization import serialize_message
+from rosbags.rosbag2 import Reader
+import yaml
+
+from hrc_bag import bag_reader, report
+from hrc_bag.format import (contract_description, MessageEncoder, plain_values, RawMessage,
+                            SESSION_RECORD)
+from hrc_bag.recorder_params import RecorderParams
+from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.session_writer import contract_descriptions, TOPIC_TYPES
+from hrc_bag.synthetic import SyntheticSession, type_name_of
+
+START_NS = 1_700_000_000_000_000_000
+CONFIG = {'session_id': 'fmt', 'case': 1, 'strategy': 'responsibility_guided',
+          'roles': {'robot': 'translation', 'human': 'rotation'}, 'seeds': {'session': 7},
+          'package_version': '0.1.0'}
+
+# Runs in a fresh interpreter: reads the messages as JSON, writes them with SessionWriter, and
+# proves that neither the writer nor the encoder imported rclpy.
+WRITER_SCRIPT = r"""
+import json, sys
+from hrc_bag.format import contract_description
+from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
+job = json.load(sys.stdin)
+descriptions = {topic: contract_description(TOPIC_TYPES[topic], *offer)
+                for topic, offer in job['offers'].items()}
+writer = SessionWriter(job['output_dir'], job['session_id'], session_config=job['config'],
+                       descriptions=descriptions)
+for kind, topic, message, log_time in job['events']:
+    if kind == 'begin':
+        writer.begin_episode(message)
+    elif kind == 'end':
+        writer.end_episode()
+    else:
+        writer.write(topic, message, log_time)
+writer.close()
+loaded = sorted(name for name in sys.modules if name.split('.')[0] == 'rclpy')
+print(json.dumps(loaded))
+"""
+
+OFFERS = {  # topic: (reliable, transient_local, deadline ns), as hrc_common.qos offers them
+    '/hrc/state': (True, False, 0), '/hrc/robot/cmd_wrench': (True, False, 1_000_000_000),
+    '/hrc/human/cmd_wrench': (True, False, 1_000_000_000), '/hrc/human/action': (True, False, 0),
+    '/hrc/session': (True, True, 0), '/hrc/episode': (True, True, 0),
+    '/hrc/agent/step': (True, False, 0)}
+
+
+def synthetic_traffic():
+    """Return [(topic, rclpy message, log time ns)] of a 3-episode session (+ a final status)."""
+    traffic = []
+    session = None
+
+    def sink(topic, message):
+        traffic.append((topic, message, START_NS + session.sim_time_ns + len(traffic) * 1000))
+
+    session = SyntheticSession(None, 'fmt', case_id=1, seed=7, sink=sink)
+    for episode in range(3):
+        session.publish_status(episode, human_involved=episode > 0)
+        session.publish_episode(episode, steps=5, human_involved=episode > 0,
+                                evaluation=episode == 2)
+    session.publish_status(3, SessionStatus.PHASE_DONE)
+    return traffic
+
+
+def record_with_the_recorder(traffic, output_dir):
+    """Record ``traffic`` with the recorder core, QoS described as the live graph offers it."""
+    clock = [0.0]
+    params = RecorderParams(output_dir=str(output_dir), session_id='fmt')
+    descriptions = contract_descriptions()
+    recorder = EpisodeRecorder(params, lambda topic, type_name: descriptions[topic],
+                               session_config=CONFIG, clock=lambda: clock[0],
+                               wall_clock=lambda: traffic[-1][2] + 10**10)
+    for sequence, (topic, message, log_time) in enumerate(traffic):
+        type_name = type_name_of(message)
+        recorder.record(RawMessage(topic, type_name, serialize_message(message), log_time,
+                                   log_time, sequence), boundary_event(type_name, message))
+        if type_name.endswith('EpisodeSummary'):
+            clock[0] += params.close_grace + 0.1
+            recorder.tick()
+    recorder.close()
+
+
+def write_without_rclpy(traffic, output_dir):
+    """Write ``traffic`` with SessionWriter in a fresh interpreter; return its rclpy modules."""
+    events = []
+    for topic, message, log_time in traffic:
+        values = plain_values(message)
+        if topic == '/hrc/state' and values['step'] == 0:
+            events.append(['begin', topic, values['episode'], log_time])
+        events.append(['write', topic, values, log_time])
+        if topic == '/hrc/episode':
+            events.append(['end', topic, None, log_time])
+    job = {'output_dir': str(output_dir), 'session_id': 'fmt', 'config': CONFIG,
+           'offers': OFFERS, 'events': events}
+    result = subprocess.run([sys.executable, '-c', WRITER_SCRIPT], input=json.dumps(job),
+                            capture_output=True, text=True, timeout=120, env=dict(os.environ))
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout.splitlines()[-1])
+
+
+@pytest.fixture(scope='module')
+def both(tmp_path_factory):
+    """Write the same session with the recorder core and with SessionWriter (no rclpy)."""
+    traffic = synthetic_traffic()
+    recorder_dir = tmp_path_factory.mktemp('recorder')
+    writer_dir = tmp_path_factory.mktemp('writer')
+    record_with_the_recorder(traffic, recorder_dir)
+    rclpy_modules = write_without_rclpy(traffic, writer_dir)
+    return traffic, recorder_dir / 'fmt', writer_dir / 'fmt', rclpy_modules
+
+
+def test_the_writer_needs_no_rclpy(both):
+    assert both[3] == []
+
+
+def test_rosbags_reads_the_written_session_with_exact_values(both, rosbags_typestore):
+    traffic, _, folder, _ = both
+    with Reader(folder) as reader:
+        decoded = [(connection.topic,
+                    rosbags_typestore.deserialize_cdr(raw, connection.msgtype), time)
+                   for connection, time, raw in reader.messages()]
+        digests = {connection.topic: connection.digest for connection in reader.connections}
+    assert len(decoded) == len(traffic)
+    by_time = {time: (topic, message) for topic, message, time in traffic}
+    for topic, message, time in decoded:
+        assert by_time[time][0] == topic
+        assert plain_values(message) == plain_values(by_time[time][1]), topic
+    assert digests == {topic: contract_descriptions()[topic].type_description_hash
+                       for topic in TOPIC_TYPES}
+    assert all(digest.startswith('RIHS01_') for digest in digests.values())
+
+
+def test_the_report_loader_reads_it(both):
+    session = report.load_session(both[2])
+    assert session.complete and session.session_id == 'fmt'
+    assert (session.case_id, session.strategy, session.robot_dof, session.seed) == (
+        1, 'responsibility_guided', 'translation', '7')
+    assert [(summary.episode, summary.evaluation) for summary in session.summaries] == [
+        (0, False), (1, False), (2, True)]
+    assert sorted(session.files_by_episode) == [0, 1, 2]
+
+
+def _file_layout(path) -> dict:
+    with open(path, 'rb') as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        metadata = {record.name: dict(record.metadata) for record in reader.iter_metadata()}
+        channels = {channel.topic: (summary.schemas[channel.schema_id].name,
+                                    bytes(summary.schemas[channel.schema_id].data),
+                                    channel.message_encoding, dict(channel.metadata))
+                    for channel in summary.channels.values()}
+        return {'profile': reader.get_header().profile, 'channels': channels,
+                'counts': sorted(summary.statistics.channel_message_counts.values()),
+                'compression': {chunk.compression for chunk in summary.chunk_indexes},
+                'records': metadata}
+
+
+def test_the_files_are_the_recorders_files(both):
+    _, recorder_folder, writer_folder, _ = both
+    recorded = bag_reader.read_bag_metadata_yaml(recorder_folder)
+    written = bag_reader.read_bag_metadata_yaml(writer_folder)
+    assert written['relative_file_paths'] == recorded['relative_file_paths'] == [
+        'fmt_ep0000.mcap', 'fmt_ep0001.mcap', 'fmt_ep0002.mcap', 'fmt_end.mcap']
+    for key in ('version', 'storage_identifier', 'message_count', 'topics_with_message_count',
+                'files', 'starting_time', 'duration', 'custom_data'):
+        assert written[key] == recorded[key], key
+    for name in recorded['relative_file_paths']:
+        ours, theirs = _file_layout(writer_folder / name), _file_layout(recorder_folder / name)
+        for key in ('profile', 'channels', 'counts', 'compression'):
+            assert ours[key] == theirs[key], (name, key)
+        assert set(ours['records']) == set(theirs['records']) == {SESSION_RECORD, 'rosbag2'}
+        ours_record, theirs_record = ours['records'][SESSION_RECORD], \
+            theirs['records'][SESSION_RECORD]
+        assert set(ours_record) == set(theirs_record)
+        for key in ('session_id', 'episode', 'case_id', 'strategy', 'roles', 'seeds',
+                    'package_version', 'session_config'):
+            assert ours_record[key] == theirs_record[key], (name, key)
+        assert yaml.safe_load(ours_record['session_status']) == (
+            yaml.safe_load(theirs_record['session_status']))
+        assert ours['records']['rosbag2'] == theirs['records']['rosbag2'], name
+
+
+def test_default_descriptions_are_the_contract_offers():
+    assert contract_descriptions() == {
+        topic: contract_description(TOPIC_TYPES[topic], *offer)
+        for topic, offer in OFFERS.items()}
+
+
+def test_the_encoder_refuses_unknown_fields_and_takes_objects():
+    encoder = MessageEncoder()
+    with pytest.raises(ValueError, match='no field header.stamp.secs'):
+        encoder.encode('hrc_msgs/msg/HumanAction',
+                       {'header': {'stamp': {'secs': 1}}, 'episode': 1})
+    with pytest.raises(ValueError, match='no field epsiode'):
+        encoder.encode('hrc_msgs/msg/HumanAction', {'epsiode': 1})
+    status = SessionStatus(episode=4, session_id='x', robot_subtasks=['slider'])
+    assert encoder.encode('hrc_msgs/msg/SessionStatus', status) == encoder.encode(
+        'hrc_msgs/msg/SessionStatus', plain_values(status))
