@@ -1,49 +1,37 @@
-"""What the person at the joystick sees: the bodies and the instructions, drawn into one frame.
+"""What the person at the joystick and the experimenter see: the words and the data of the pages.
 
 Pure (no rclpy): the display node feeds :class:`DisplayModel` with what arrives on
-``/hrc/state``, ``/hrc/session`` and ``/hrc/episode`` (converted to the plain views below) and
-serves :func:`render_png` of a :meth:`DisplayModel.snapshot` over HTTP.
+``/hrc/state``, ``/hrc/session``, ``/hrc/episode`` and ``/hrc/human/action`` (converted to the
+plain views below); the pages (``hrc_live/web``) draw the scene in the browser from the states
+the node pushes, and show the words computed here:
 
-The frame (``width`` x ``height`` px) has two parts:
+* :func:`overlay`: the person's banner, panel lines, result box and countdown, one place,
+  tested on its own; the numbering is the same everywhere (episode x of y, test episode k of n,
+  episodes with you so far);
+* :func:`scene_geometry`: the sim's geometry and the world box the page fits to the window, so
+  that the whole reachable configuration (beam at either hinge stop, ball at either end stop,
+  slider at either end of the rod) is always in the picture;
+* :func:`console_document`: what the experimenter's console shows (input source and health,
+  the running episode's errors, the totals).
 
-* the scene, left: the system seen from the viewer (world +x), east to the right, up is up,
-  drawn from the state with the sim's own geometry (:func:`hrc_sim_node.physics.body_poses`)
-  and colours (rod grey, slider orange, pendulum blue, ball grey), with the targets marked (the
-  middle of the rod, the level line, the middle of the beam); a banner on top says what the
-  person is asked to do now; between episodes a box shows the result and the countdown;
-* the panel, right: episode x of y, training step, the person's degree of freedom and
-  subtasks, time left in the episode, the last result.
-
-The wording for the person is in :func:`overlay`, one place, tested on its own.
+Non-finite numbers never reach JSON: a state with one is replaced by a notice
+(:func:`state_document`).
 """
 
 from dataclasses import dataclass, replace
-import functools
-import io
 import math
 import threading
 import typing
 
-from hrc_sim_node.physics import (BEAM_HEIGHT, body_poses, PhysicsParams, ROD_RADIUS,
-                                  SLIDER_SIZE)
+from hrc_common.contract import BODY_COLOURS, rgb8
+from hrc_sim_node.physics import (BEAM_HEIGHT, body_poses, PhysicsParams, PhysicsState,
+                                  ROD_RADIUS, SLIDER_SIZE)
+# HumanAction.SOURCE_* order.
+SOURCE_NAMES = ('device', 'joy', 'simulated', 'replay', 'none')
 
-# Phase names in SessionStatus.PHASE_* order.
-PHASES = ('training', 'updating', 'evaluation', 'paused', 'done', 'aborted')
-DOF_NAMES = ('translation', 'rotation')  # SessionStatus.DOF_* order
-
-# The sim's colours (hrc_sim_node.physics.model_urdf), as 8-bit RGB.
-ROD_COLOR = (153, 153, 153)
-SLIDER_COLOR = (255, 140, 26)
-PENDULUM_COLOR = (38, 89, 217)
-BALL_COLOR = (115, 115, 115)
-BACKGROUND_COLOR = (242, 243, 245)
-TARGET_COLOR = (200, 204, 210)
-PANEL_COLOR = (32, 36, 44)
-PANEL_TEXT_COLOR = (235, 238, 242)
-PANEL_DIM_COLOR = (160, 168, 180)
-# Banner colours by what the person should do: act, wait, stop, or nothing yet.
-BANNER_COLORS = {'act': (24, 110, 60), 'wait': (178, 110, 0), 'stop': (170, 32, 32),
-                 'info': (60, 66, 78)}
+# The bodies' colours (hrc_common.contract, as the sim draws them) as 8-bit RGB, and the page's.
+COLORS = {**{name: rgb8(colour) for name, colour in BODY_COLOURS.items()},
+          'background': (242, 243, 245), 'target': (200, 204, 210)}
 
 # What each subtask asks of the person, and what each degree of freedom gives them.
 SUBTASK_WORDS = {'slider': 'keep the slider in the middle of the rod',
@@ -51,9 +39,10 @@ SUBTASK_WORDS = {'slider': 'keep the slider in the middle of the rod',
                  'ball': 'keep the ball in the middle of the pendulum'}
 CONTROL_WORDS = {'translation': 'You move the slider up and down (stick up = up).',
                  'rotation': 'You tilt the pendulum (stick up = right end up).'}
-
-# Fraction of the frame width given to the text panel.
-PANEL_FRACTION = 0.4
+# A human command older than this (s) counts as stale on the console.
+STALE_COMMAND_S = 1.0
+INVALID_STATE_NOTICE = ('The simulation sent an invalid state (not a finite number): the '
+                        'picture is frozen. Operator: see the sim log.')
 
 
 @dataclass(frozen=True)
@@ -66,6 +55,17 @@ class StateView:
     pendulum_angle: float       # P_z (rad)
     ball_position: float        # B_y (m)
     final: bool                 # truncated or terminated: the episode is over
+    slider_velocity: float = 0.0            # m/s
+    pendulum_angular_velocity: float = 0.0  # rad/s
+    ball_velocity: float = 0.0              # m/s
+    human_command_missing: bool = False
+    robot_command_missing: bool = False
+
+    def finite(self) -> bool:
+        """Return whether every number of the state is finite."""
+        return all(math.isfinite(value) for value in (
+            self.slider_position, self.pendulum_angle, self.ball_position,
+            self.slider_velocity, self.pendulum_angular_velocity, self.ball_velocity))
 
 
 @dataclass(frozen=True)
@@ -102,6 +102,17 @@ class ResultView:
 
 
 @dataclass(frozen=True)
+class HumanView:
+    """The newest HumanAction: where the human's command comes from."""
+
+    source: str                 # one of SOURCE_NAMES
+    detail: str                 # e.g. the device path, or why the input is lost
+    engaged: bool
+    command: float              # normalized [-1, 1]
+    received: float             # monotonic s
+
+
+@dataclass(frozen=True)
 class AgentPlan:
     """The agent's parameters the overlay uses (asked from the agent node)."""
 
@@ -111,12 +122,61 @@ class AgentPlan:
 
 
 @dataclass(frozen=True)
+class AloneRun:
+    """The robot practising alone before the person joins (lockstep, no wall time waited)."""
+
+    started: float              # monotonic s of the first status without the human
+    first_episode: int          # training episodes done when it started
+    ended: typing.Optional[float] = None   # monotonic s the human joined
+    episodes: int = 0           # training episodes practised alone
+
+    def words(self, now: float) -> str:
+        """Return "the robot practised alone: N episodes in T s"."""
+        seconds = (self.ended if self.ended is not None else now) - self.started
+        verb = 'practised' if self.ended is not None else 'is practising'
+        return (f'The robot {verb} alone: {self.episodes} episode'
+                f'{"s" if self.episodes != 1 else ""} in {seconds:.0f} s.')
+
+
+@dataclass(frozen=True)
+class EpisodeErrors:
+    """Running mean absolute errors of the current episode (from its states)."""
+
+    episode: int = -1
+    steps: int = 0
+    slider: float = 0.0         # sum |S_x| (m)
+    pendulum: float = 0.0       # sum |P_z| (rad)
+    ball: float = 0.0           # sum |B_y| (m)
+    human_missing: int = 0      # states whose human command did not arrive in time
+    robot_missing: int = 0
+
+    def add(self, state: StateView) -> 'EpisodeErrors':
+        """Return the errors with ``state`` added (a new episode starts them again)."""
+        base = self if state.episode == self.episode else EpisodeErrors(episode=state.episode)
+        if not state.finite():
+            return base
+        return replace(base, steps=base.steps + 1,
+                       slider=base.slider + abs(state.slider_position),
+                       pendulum=base.pendulum + abs(state.pendulum_angle),
+                       ball=base.ball + abs(state.ball_position),
+                       human_missing=base.human_missing + state.human_command_missing,
+                       robot_missing=base.robot_missing + state.robot_command_missing)
+
+    def means(self) -> dict:
+        """Return the mean errors so far (m, rad, m), 0 before the first state."""
+        steps = max(self.steps, 1)
+        return {'slider': self.slider / steps, 'pendulum': self.pendulum / steps,
+                'ball': self.ball / steps}
+
+
+@dataclass(frozen=True)
 class Snapshot:
-    """Everything a frame shows, at one instant (monotonic s ``now``)."""
+    """Everything the pages show, at one instant (monotonic s ``now``)."""
 
     now: float
     physics: PhysicsParams
     state: typing.Optional[StateView] = None
+    invalid_state: bool = False     # the newest state had a non-finite number
     session: typing.Optional[SessionView] = None
     result: typing.Optional[ResultView] = None
     previous_result: typing.Optional[ResultView] = None
@@ -125,28 +185,46 @@ class Snapshot:
     result_time: typing.Optional[float] = None      # monotonic s the last result arrived
     episode_started: typing.Optional[float] = None  # monotonic s step 0 of the episode arrived
     geometry_from_sim: bool = False
+    human: typing.Optional[HumanView] = None
+    errors: EpisodeErrors = EpisodeErrors()
+    alone: typing.Optional[AloneRun] = None
+    evaluation_with_human: frozenset = frozenset()  # evaluation episodes the person played
+    evaluation_done: int = 0                        # evaluation episodes finished
+    session_started: typing.Optional[float] = None  # monotonic s of the first status
+    input_lost: str = ''        # why the person's input is lost ('' = it is not)
 
 
 @dataclass(frozen=True)
 class Overlay:
-    """The words of one frame."""
+    """The words of the person's page at one instant."""
 
     banner: str
-    tone: str                   # a key of BANNER_COLORS
+    tone: str                   # act | wait | stop | info
     lines: tuple                # the panel's lines
     result: tuple = ()          # the result box's lines (empty: no box)
     countdown: typing.Optional[int] = None  # whole seconds to the next episode, if known
     episode_label: str = ''
+    notice: str = ''            # a problem the person must know about (shown over the scene)
+
+
+def is_evaluating(session: SessionView, plan: typing.Optional[AgentPlan]) -> bool:
+    """Return whether the current (or next) episode is a test (evaluation) episode."""
+    if session.phase == 'evaluation':
+        return True
+    return (session.phase in ('paused', 'aborted', 'updating') and plan is not None
+            and session.total_episodes < session.episode)
 
 
 def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str:
-    """Return "Episode x of y" for the current (or next) episode."""
+    """Return "Episode x of y" (or "Test episode k of n") for the current or next episode.
+
+    Training episode x is ``total_episodes + 1``; test episode k counts from the first
+    evaluation episode, whose index is the number of training episodes. The result box uses
+    the same numbers (:func:`result_number`).
+    """
     if session.phase == 'done':
         return f'{session.total_episodes} training episodes done'
-    evaluating = session.phase == 'evaluation' or (
-        session.phase in ('paused', 'done', 'aborted') and plan is not None
-        and session.episode > session.total_episodes)
-    if evaluating:
+    if is_evaluating(session, plan):
         index = session.episode - session.total_episodes + 1
         total = f' of {plan.evaluation_episodes}' if plan is not None else ''
         return f'Test episode {max(index, 1)}{total}'
@@ -154,14 +232,23 @@ def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str
     return f'Episode {session.total_episodes + 1}{total}'
 
 
-def result_lines(result: ResultView, previous: typing.Optional[ResultView]) -> tuple:
+def result_number(result: ResultView, session: typing.Optional[SessionView]) -> str:
+    """Return "Episode x" or "Test episode k" of a finished episode, numbered as the label."""
+    if not result.evaluation:
+        return f'Episode {result.episode + 1}'
+    training = session.total_episodes if session is not None else 0
+    return f'Test episode {result.episode - training + 1}'
+
+
+def result_lines(result: ResultView, previous: typing.Optional[ResultView],
+                 session: typing.Optional[SessionView] = None) -> tuple:
     """Return the short result of an episode, in the person's terms."""
-    kind = 'Test episode' if result.evaluation else 'Episode'
-    lines = [f'{kind} {result.episode + 1} done',
+    lines = [f'{result_number(result, session)} done',
              f'ball off centre: {100 * result.ball_error:.1f} cm on average',
              f'pendulum tilt: {math.degrees(result.pendulum_error):.1f} deg, '
              f'slider: {100 * result.slider_error:.1f} cm']
-    if previous is not None and previous.total_error > 0:
+    if previous is not None and previous.total_error > 0 and (
+            previous.evaluation == result.evaluation):
         change = (result.total_error - previous.total_error) / previous.total_error
         if change < -0.05:
             lines.append('Better than the episode before.')
@@ -174,28 +261,49 @@ def result_lines(result: ResultView, previous: typing.Optional[ResultView]) -> t
     return tuple(lines)
 
 
+def episodes_with_person(snapshot: Snapshot) -> int:
+    """Return the episodes the person has played so far: training and test."""
+    training = snapshot.session.human_involved_episodes if snapshot.session else 0
+    return training + len(snapshot.evaluation_with_human)
+
+
+def countdown_of(snapshot: Snapshot, in_episode: bool) -> typing.Optional[int]:
+    """Return the whole seconds until the next episode starts, if known."""
+    session, plan = snapshot.session, snapshot.plan
+    if (in_episode or plan is None or plan.episode_break <= 0 or snapshot.break_started is None
+            or session.phase not in ('training', 'updating', 'evaluation')):
+        return None
+    return max(0, math.ceil(snapshot.break_started + plan.episode_break - snapshot.now))
+
+
 def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     """Return the banner, panel lines, result box and countdown of ``snapshot``."""
-    session, state, plan, now = snapshot.session, snapshot.state, snapshot.plan, snapshot.now
+    session, state, now = snapshot.session, snapshot.state, snapshot.now
+    notice = INVALID_STATE_NOTICE if snapshot.invalid_state else ''
+    if snapshot.input_lost:
+        notice = (f'Joystick disconnected ({snapshot.input_lost}): the session is paused. '
+                  f'Please wait for the operator.')
     if session is None:
         return Overlay('Please wait: the session is starting', 'info',
-                       ('Waiting for the robot to announce the session.',))
-    label = episode_label(session, plan)
+                       ('Waiting for the robot to announce the session.',), notice=notice)
+    label = episode_label(session, snapshot.plan)
     lines = [label]
     if session.training_step_count > 1:
         lines.append(f'Training step {session.training_step + 1} of '
                      f'{session.training_step_count}')
-    in_episode = state is not None and not state.final
+    in_episode = state is not None and not state.final and state.episode >= session.episode
     if session.human_involved:
         lines.append(CONTROL_WORDS.get(session.human_dof, ''))
         tasks = [SUBTASK_WORDS.get(subtask, subtask) for subtask in session.human_subtasks]
         lines += [f'Your task: {task}.' for task in tasks]
     else:
         lines.append('The robot works alone in this step.')
+    if snapshot.alone is not None and (snapshot.alone.episodes or snapshot.alone.ended is None):
+        lines.append(snapshot.alone.words(now))
     if in_episode:
         steps_left = max(0, snapshot.physics.steps_per_episode - state.step)
         lines.append(f'Time left: {steps_left * snapshot.physics.control_period:.0f} s')
-    lines.append(f'Episodes with you so far: {session.human_involved_episodes}')
+    lines.append(f'Episodes with you so far: {episodes_with_person(snapshot)}')
 
     result = ()
     # The result stays up during the break and the first seconds of the next episode.
@@ -203,33 +311,33 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         not in_episode or (snapshot.episode_started is not None
                            and now - snapshot.episode_started < result_seconds))
     if showing_result:
-        result = result_lines(snapshot.result, snapshot.previous_result)
+        result = result_lines(snapshot.result, snapshot.previous_result, session)
     if snapshot.result is not None:
         lines.append(f'Last episode: ball {100 * snapshot.result.ball_error:.1f} cm off centre')
 
-    countdown = None
-    if (not in_episode and plan is not None and plan.episode_break > 0
-            and snapshot.break_started is not None
-            and session.phase in ('training', 'updating', 'evaluation')):
-        countdown = max(0, math.ceil(snapshot.break_started + plan.episode_break - now))
-
+    countdown = countdown_of(snapshot, in_episode)
     phase = session.phase
+    first_with_person = session.human_involved and episodes_with_person(snapshot) == 0
     if phase == 'aborted':
         banner, tone = 'Stopped by the operator. Please let go of the joystick.', 'stop'
+    elif snapshot.input_lost:
+        banner, tone = 'Joystick disconnected: paused. Please wait for the operator.', 'stop'
     elif phase == 'done':
         banner, tone = 'The session is finished. Thank you!', 'info'
     elif phase == 'paused':
         banner, tone = 'Paused: please wait for the operator', 'wait'
     elif not in_episode:
-        if phase == 'updating':
+        if not session.human_involved:
+            banner = 'The robot is learning alone, please wait'
+        elif phase == 'updating':
             banner = 'The robot is learning from the last episode: please wait'
+        elif first_with_person and countdown:
+            banner = f'Get ready: your first episode starts in {countdown} s'
         elif countdown:
             banner = f'Next episode in {countdown} s'
         else:
             banner = 'The next episode is starting'
         tone = 'wait'
-        if not session.human_involved:
-            lines.insert(1, 'The robot is learning alone, please wait.')
     elif not session.human_involved:
         banner, tone = 'The robot is learning alone, please wait', 'wait'
     else:
@@ -237,11 +345,11 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         banner = ('Your turn: ' + ' and '.join(tasks)) if tasks else 'Your turn'
         tone = 'act'
     return Overlay(banner, tone, tuple(line for line in lines if line), result, countdown,
-                   label)
+                   label, notice)
 
 
 class DisplayModel:
-    """The newest state, session, results and parameters, shared between threads.
+    """The newest state, session, results, human input and parameters, shared between threads.
 
     The ROS executor thread calls the ``on_*`` methods; the HTTP threads call :meth:`snapshot`.
     ``now`` is monotonic seconds, passed in so that tests control time.
@@ -250,17 +358,25 @@ class DisplayModel:
     def __init__(self, physics: PhysicsParams = None):
         self._lock = threading.Lock()
         self._snapshot = Snapshot(now=0.0, physics=physics or PhysicsParams())
-        self.version = 0            # increases with every change (frame cache key)
+        self.version = 0            # increases with every change
 
     def _update(self, **changes) -> None:
         self._snapshot = replace(self._snapshot, **changes)
         self.version += 1
 
     def on_state(self, state: StateView, now: float) -> None:
-        """Take a new state; step 0 starts an episode, a final state starts the break."""
+        """Take a new state; step 0 starts an episode, a final state starts the break.
+
+        A state with a non-finite number is not kept (the picture stays at the last good
+        one) and raises the invalid-state notice until a finite state comes.
+        """
         with self._lock:
+            if not state.finite():
+                self._update(invalid_state=True)
+                return
             previous = self._snapshot.state
-            changes = {'state': state}
+            changes = {'state': state, 'invalid_state': False,
+                       'errors': self._snapshot.errors.add(state)}
             if state.step == 0 or previous is None or previous.episode != state.episode:
                 changes['episode_started'] = now
             if state.final and not (previous is not None and previous.final
@@ -271,12 +387,26 @@ class DisplayModel:
     def on_session(self, session: SessionView, now: float) -> None:
         """Take a new session status; a resume restarts the break (the agent waits again)."""
         with self._lock:
-            previous = self._snapshot.session
+            current = self._snapshot
+            previous = current.session
             changes = {'session': session}
             if previous is not None and previous.session_id != session.session_id:
-                changes['plan'] = None  # another agent: ask again
+                changes.update(plan=None, alone=None, evaluation_with_human=frozenset(),
+                               evaluation_done=0, session_started=now)
+                current = replace(current, alone=None)
+            if current.session_started is None:
+                changes['session_started'] = now
             if previous is not None and previous.phase == 'paused' and session.phase != 'paused':
                 changes['break_started'] = now
+            alone = current.alone
+            if not session.human_involved and session.phase in ('training', 'updating'):
+                if alone is None or alone.ended is not None:
+                    alone = AloneRun(started=now, first_episode=session.total_episodes)
+                changes['alone'] = replace(
+                    alone, episodes=session.total_episodes - alone.first_episode)
+            elif alone is not None and alone.ended is None:
+                changes['alone'] = replace(
+                    alone, ended=now, episodes=session.total_episodes - alone.first_episode)
             self._update(**changes)
 
     def on_result(self, result: ResultView, now: float) -> None:
@@ -285,7 +415,24 @@ class DisplayModel:
             current = self._snapshot.result
             if current is not None and current.episode == result.episode:
                 return
-            self._update(result=result, previous_result=current, result_time=now)
+            changes = {'result': result, 'previous_result': current, 'result_time': now}
+            if result.evaluation:
+                changes['evaluation_done'] = self._snapshot.evaluation_done + 1
+                if result.human_involved:
+                    changes['evaluation_with_human'] = (
+                        self._snapshot.evaluation_with_human | {result.episode})
+            self._update(**changes)
+
+    def on_human(self, human: HumanView) -> None:
+        """Take the newest human action's source."""
+        with self._lock:
+            self._update(human=human)
+
+    def set_input_lost(self, reason: str) -> None:
+        """Set (or clear, with '') the reason the person's input is lost."""
+        with self._lock:
+            if reason != self._snapshot.input_lost:
+                self._update(input_lost=reason)
 
     def set_plan(self, plan: typing.Optional[AgentPlan]) -> None:
         """Set what the agent's parameters say (episodes, break)."""
@@ -309,205 +456,137 @@ class DisplayModel:
             return self._snapshot.plan
 
 
-# ---------------------------------------------------------------------------- drawing
+# ---------------------------------------------------------------------------- geometry
 
-@dataclass(frozen=True)
-class Layout:
-    """Where things go in a frame of ``width`` x ``height`` px (world in m -> pixels)."""
-
-    width: int
-    height: int
-    scene_width: int
-    banner_height: int
-    scale: float                # px per m
-    origin_x: float             # px of world y = 0 (the rod)
-    origin_y: float             # px of world z = 0 (the middle of the rod)
-
-    def to_pixels(self, y: float, z: float) -> tuple:
-        """Return the pixel (column, row) of the world point (y east, z up)."""
-        return (self.origin_x + y * self.scale, self.origin_y - z * self.scale)
-
-
-def layout(physics: PhysicsParams, width: int, height: int) -> Layout:
-    """Fit the rod and the whole beam, level, and tilted up to ~40 deg, into the scene."""
-    scene_width = int(width * (1 - PANEL_FRACTION))
-    banner_height = max(24, height // 10)
-    west, east = 0.12, physics.pendulum_length + 0.06        # m either side of the rod
-    half_height = physics.rod_length / 2 + 0.6 * physics.pendulum_length
-    scene_height = height - banner_height
-    scale = min(scene_width / (west + east), scene_height / (2 * half_height))
-    origin_x = (scene_width - (west + east) * scale) / 2 + west * scale
-    origin_y = banner_height + scene_height / 2
-    return Layout(width, height, scene_width, banner_height, scale, origin_x, origin_y)
+def configuration_points(physics: PhysicsParams, slider: float, angle: float,
+                         ball: float) -> list:
+    """Return the outline points (world y, z in m) of every body in one configuration."""
+    state = PhysicsState(step=0, time=0.0, slider_position=slider, slider_velocity=0.0,
+                         pendulum_angle=angle, pendulum_angular_velocity=0.0,
+                         ball_position=ball, ball_velocity=0.0, applied_force=0.0,
+                         applied_torque=0.0, terminated=False, truncated=False)
+    poses = body_poses(state, physics)
+    cos_a, sin_a = math.cos(angle), math.sin(angle)
+    half_beam = BEAM_HEIGHT / 2
+    points = []
+    # The beam's four corners, from the hinge to the east end.
+    for along in (0.0, physics.pendulum_length):
+        for across in (-half_beam, half_beam):
+            points.append((along * cos_a - across * sin_a, slider + along * sin_a
+                           + across * cos_a))
+    ball_y, ball_z = poses['ball'][0][1], poses['ball'][0][2]
+    radius = physics.ball_radius
+    points += [(ball_y + dy, ball_z + dz) for dy, dz in ((radius, 0), (-radius, 0),
+                                                         (0, radius), (0, -radius))]
+    half_w, half_h = SLIDER_SIZE[1] / 2, SLIDER_SIZE[2] / 2
+    points += [(dy, slider + dz) for dy in (-half_w, half_w) for dz in (-half_h, half_h)]
+    return points
 
 
-@functools.lru_cache(maxsize=32)
-def _font(size: int):
-    """Return the default font at ``size`` px (loading a TrueType font costs milliseconds)."""
-    from PIL import ImageFont
+def scene_bounds(physics: PhysicsParams, margin: float = 0.03) -> dict:
+    """Return the world box (m) holding every reachable configuration, plus ``margin``.
 
-    try:
-        return ImageFont.load_default(size=size)
-    except TypeError:  # Pillow without FreeType: the fixed bitmap font
-        return ImageFont.load_default()
-
-
-def _wrap(draw, text: str, font, width: float) -> list:
-    """Split ``text`` into lines no wider than ``width`` px."""
-    words, lines, line = text.split(), [], ''
-    for word in words:
-        candidate = f'{line} {word}'.strip()
-        if line and draw.textlength(candidate, font=font) > width:
-            lines.append(line)
-            line = word
-        else:
-            line = candidate
-    if line:
-        lines.append(line)
-    return lines
+    Reachable: the slider anywhere on the rod, the beam anywhere between its hinge stops
+    (+-``pendulum_limit``), the ball anywhere between its end stops; the extremes are taken
+    over a fine grid of angles (the box of a rotating beam is not at the stops only).
+    """
+    half_rod = physics.rod_length / 2 + 0.02     # the rod reaches 2 cm beyond the slider stops
+    ys, zs = [-ROD_RADIUS, ROD_RADIUS], [-half_rod, half_rod]
+    limit = physics.pendulum_limit
+    half_travel = physics.pendulum_length / 2
+    for index in range(181):
+        angle = -limit + 2 * limit * index / 180
+        for slider in (-physics.rod_length / 2, physics.rod_length / 2):
+            for ball in (-half_travel, half_travel):
+                for y, z in configuration_points(physics, slider, angle, ball):
+                    ys.append(y)
+                    zs.append(z)
+    return {'y_min': min(ys) - margin, 'y_max': max(ys) + margin,
+            'z_min': min(zs) - margin, 'z_max': max(zs) + margin}
 
 
-def _beam_polygon(start, end, thickness: float) -> list:
-    """Return the corners of a bar of ``thickness`` px from ``start`` to ``end`` (pixels)."""
-    dx, dy = end[0] - start[0], end[1] - start[1]
-    length = math.hypot(dx, dy) or 1.0
-    nx, ny = -dy / length * thickness / 2, dx / length * thickness / 2
-    return [(start[0] + nx, start[1] + ny), (end[0] + nx, end[1] + ny),
-            (end[0] - nx, end[1] - ny), (start[0] - nx, start[1] - ny)]
+def scene_geometry(physics: PhysicsParams) -> dict:
+    """Return what the page needs to draw the scene (m, rad, s; colours as CSS)."""
+    return {
+        'rod_length': physics.rod_length, 'pendulum_length': physics.pendulum_length,
+        'ball_radius': physics.ball_radius, 'beam_height': BEAM_HEIGHT,
+        'rod_radius': ROD_RADIUS, 'slider_width': SLIDER_SIZE[1],
+        'slider_height': SLIDER_SIZE[2], 'pendulum_limit': physics.pendulum_limit,
+        'control_period': physics.control_period,
+        'steps_per_episode': physics.steps_per_episode,
+        'bounds': scene_bounds(physics),
+        'colors': {name: 'rgb({}, {}, {})'.format(*rgb) for name, rgb in COLORS.items()},
+    }
 
 
-def draw_scene(draw, snapshot: Snapshot, frame: Layout) -> None:
-    """Draw the targets, rod, slider, pendulum and ball of the snapshot's state."""
-    physics = snapshot.physics
-    state = snapshot.state or StateView(0, 0, 0.0, 0.0, 0.0, False)
-    to_px = frame.to_pixels
-    # Targets: the level line through the middle of the rod.
-    level_y = frame.origin_y
-    for x in range(0, frame.scene_width, 16):
-        draw.line([(x, level_y), (x + 8, level_y)], fill=TARGET_COLOR, width=2)
-    # Rod (2 cm longer than the slider's travel at each end, as in the sim's model).
-    half_rod = physics.rod_length / 2 + 0.02
-    rod_half_px = max(2.0, ROD_RADIUS * frame.scale)
-    top, bottom = to_px(0.0, half_rod), to_px(0.0, -half_rod)
-    draw.rectangle([top[0] - rod_half_px, top[1], top[0] + rod_half_px, bottom[1]],
-                   fill=ROD_COLOR)
-    middle = to_px(0.0, 0.0)
-    draw.line([(middle[0] - 3 * rod_half_px, middle[1]), (middle[0] + 3 * rod_half_px,
-                                                          middle[1])], fill=(40, 40, 40), width=2)
-    poses = body_poses(_physics_state(state), physics)
-    # Slider: a box centred on the hinge (SLIDER_SIZE: x depth, y width, z height).
-    slider_y, slider_z = poses['slider'][0][1], poses['slider'][0][2]
-    half_w = max(6.0, SLIDER_SIZE[1] / 2 * frame.scale)
-    half_h = max(4.0, SLIDER_SIZE[2] / 2 * frame.scale)
-    centre = to_px(slider_y, slider_z)
-    draw.rectangle([centre[0] - half_w, centre[1] - half_h, centre[0] + half_w,
-                    centre[1] + half_h], fill=SLIDER_COLOR)
-    # Pendulum: from the hinge to its east end.
-    angle = state.pendulum_angle
-    hinge = to_px(0.0, state.slider_position)
-    tip = to_px(physics.pendulum_length * math.cos(angle),
-                state.slider_position + physics.pendulum_length * math.sin(angle))
-    thickness = max(6.0, BEAM_HEIGHT * frame.scale)
-    draw.polygon(_beam_polygon(hinge, tip, thickness), fill=PENDULUM_COLOR)
-    # The beam's middle (the ball's target): a white notch across the beam.
-    half = physics.pendulum_length / 2
-    mid = to_px(half * math.cos(angle), state.slider_position + half * math.sin(angle))
-    normal = (math.sin(angle), math.cos(angle))
-    draw.line([(mid[0] - normal[0] * thickness, mid[1] - normal[1] * thickness),
-               (mid[0] + normal[0] * thickness, mid[1] + normal[1] * thickness)],
-              fill=(255, 255, 255), width=2)
-    # Ball on top of the beam.
-    ball = to_px(poses['ball'][0][1], poses['ball'][0][2])
-    radius = max(5.0, physics.ball_radius * frame.scale)
-    draw.ellipse([ball[0] - radius, ball[1] - radius, ball[0] + radius, ball[1] + radius],
-                 fill=BALL_COLOR)
+# ---------------------------------------------------------------------------- documents
+
+def state_document(state: StateView, sent_ms: float) -> dict:
+    """Return the page's state event (finite numbers only), stamped with the wall send time."""
+    if not state.finite():
+        return {'valid': False, 'episode': state.episode, 'step': state.step,
+                'sent_ms': sent_ms}
+    return {'valid': True, 'episode': state.episode, 'step': state.step,
+            'slider': state.slider_position, 'angle': state.pendulum_angle,
+            'ball': state.ball_position, 'slider_velocity': state.slider_velocity,
+            'angular_velocity': state.pendulum_angular_velocity,
+            'ball_velocity': state.ball_velocity, 'final': state.final, 'sent_ms': sent_ms}
 
 
-def _physics_state(state: StateView):
-    """Return the PhysicsState-like object body_poses reads."""
-    from hrc_sim_node.physics import PhysicsState
-
-    return PhysicsState(step=state.step, time=0.0, slider_position=state.slider_position,
-                        slider_velocity=0.0, pendulum_angle=state.pendulum_angle,
-                        pendulum_angular_velocity=0.0, ball_position=state.ball_position,
-                        ball_velocity=0.0, applied_force=0.0, applied_torque=0.0,
-                        terminated=False, truncated=state.final)
+def overlay_document(words: Overlay) -> dict:
+    """Return the page's words event."""
+    return {'banner': words.banner, 'tone': words.tone, 'lines': list(words.lines),
+            'result': list(words.result), 'countdown': words.countdown,
+            'episode_label': words.episode_label, 'notice': words.notice}
 
 
-def draw_overlay(draw, words: Overlay, frame: Layout) -> None:
-    """Draw the banner, the panel and (between episodes) the result box."""
-    height = frame.height
-    banner_font = _font(max(12, frame.banner_height // 2))
-    draw.rectangle([0, 0, frame.scene_width, frame.banner_height],
-                   fill=BANNER_COLORS.get(words.tone, BANNER_COLORS['info']))
-    banner_lines = _wrap(draw, words.banner, banner_font, frame.scene_width - 20)[:2]
-    if len(banner_lines) > 1:
-        banner_font = _font(max(10, frame.banner_height // 3))
-        banner_lines = _wrap(draw, words.banner, banner_font, frame.scene_width - 20)[:2]
-    line_height = frame.banner_height / (len(banner_lines) + 0.4)
-    for index, line in enumerate(banner_lines):
-        draw.text((10, line_height * (index + 0.2)), line, fill=(255, 255, 255),
-                  font=banner_font)
-    # Panel.
-    draw.rectangle([frame.scene_width, 0, frame.width, height], fill=PANEL_COLOR)
-    size = max(10, height // 26)
-    font, small = _font(size), _font(max(9, int(size * 0.8)))
-    x, y = frame.scene_width + 14, 12
-    panel_width = frame.width - frame.scene_width - 24
-    for index, text in enumerate(words.lines):
-        use = font if index == 0 else small
-        color = PANEL_TEXT_COLOR if index == 0 else PANEL_DIM_COLOR
-        for line in _wrap(draw, text, use, panel_width):
-            if y <= height - size:
-                draw.text((x, y), line, fill=color, font=use)
-            y += int(size * (1.35 if index == 0 else 1.15))
-        y += int(size * 0.35)
-    # The result box: at the bottom of the panel, between episodes and a little after.
-    if words.result:
-        box_font = _font(size)
-        wrapped = [line for text in words.result
-                   for line in _wrap(draw, text, box_font, panel_width - 16)]
-        box_height = int(size * 1.3 * len(wrapped) + size)
-        left, right, bottom = frame.scene_width + 8, frame.width - 8, height - 8
-        top = max(y, bottom - box_height)
-        draw.rectangle([left, top, right, bottom], fill=(255, 255, 255),
-                       outline=BANNER_COLORS['info'], width=2)
-        for index, line in enumerate(wrapped):
-            row = top + size * 0.5 + index * size * 1.3
-            if row > bottom - size:
-                break
-            draw.text((left + 8, row), line, fill=(20, 24, 30), font=box_font)
-
-
-def render(snapshot: Snapshot, width: int, height: int, result_seconds: float = 5.0):
-    """Return the frame of ``snapshot`` as a PIL image (RGB) and its Overlay."""
-    from PIL import Image, ImageDraw
-
-    frame = layout(snapshot.physics, width, height)
-    image = Image.new('RGB', (width, height), BACKGROUND_COLOR)
-    draw = ImageDraw.Draw(image)
-    draw_scene(draw, snapshot, frame)
-    words = overlay(snapshot, result_seconds)
-    draw_overlay(draw, words, frame)
-    return image, words
-
-
-def render_png(snapshot: Snapshot, width: int, height: int, result_seconds: float = 5.0):
-    """Return (PNG bytes, Overlay) of the frame of ``snapshot``."""
-    image, words = render(snapshot, width, height, result_seconds)
-    buffer = io.BytesIO()
-    # Fast compression: a frame is re-encoded up to frame_rate times a second.
-    image.save(buffer, format='PNG', compress_level=1)
-    return buffer.getvalue(), words
+def console_document(snapshot: Snapshot) -> dict:
+    """Return what the experimenter's console shows (JSON-safe)."""
+    session, human, now = snapshot.session, snapshot.human, snapshot.now
+    source = {'source': 'unknown', 'detail': 'no human command received yet', 'age_s': None,
+              'engaged': False, 'healthy': False}
+    if human is not None:
+        age = max(0.0, now - human.received)
+        source = {'source': human.source, 'detail': human.detail, 'age_s': round(age, 2),
+                  'engaged': human.engaged,
+                  'healthy': (age < STALE_COMMAND_S and human.source != 'none'
+                              and not snapshot.input_lost)}
+    if snapshot.input_lost:
+        source['detail'] = f'joystick disconnected: {snapshot.input_lost}'
+    errors = snapshot.errors
+    means = errors.means()
+    totals = {'elapsed_s': (round(now - snapshot.session_started, 1)
+                            if snapshot.session_started is not None else 0.0)}
+    if session is not None:
+        totals.update(training_episodes=session.total_episodes,
+                      with_person=episodes_with_person(snapshot),
+                      test_episodes=snapshot.evaluation_done,
+                      training_step=f'{session.training_step + 1} of '
+                      f'{max(session.training_step_count, 1)}')
+    return {
+        'session': None if session is None else {
+            'session_id': session.session_id, 'case_id': session.case_id,
+            'strategy': session.strategy, 'phase': session.phase,
+            'human_involved': session.human_involved, 'message': session.message,
+            'label': episode_label(session, snapshot.plan)},
+        'input': source, 'input_lost': snapshot.input_lost,
+        'episode': {'episode': errors.episode, 'steps': errors.steps,
+                    'slider_error_m': round(means['slider'], 4),
+                    'pendulum_error_rad': round(means['pendulum'], 4),
+                    'ball_error_m': round(means['ball'], 4),
+                    'human_missing': errors.human_missing,
+                    'robot_missing': errors.robot_missing},
+        'totals': totals,
+        'alone': (snapshot.alone.words(now) if snapshot.alone is not None else ''),
+        'invalid_state': snapshot.invalid_state,
+    }
 
 
 def status_document(snapshot: Snapshot, words: Overlay) -> dict:
-    """Return the /status.json document: the overlay's words and the newest inputs."""
+    """Return the /status.json document: the words, the newest inputs and the console's data."""
     session, state = snapshot.session, snapshot.state
-    return {
-        'banner': words.banner, 'tone': words.tone, 'lines': list(words.lines),
-        'result': list(words.result), 'countdown': words.countdown,
-        'episode_label': words.episode_label,
+    document = overlay_document(words)
+    document.update({
         'session': None if session is None else {
             'session_id': session.session_id, 'case_id': session.case_id,
             'strategy': session.strategy, 'phase': session.phase,
@@ -520,10 +599,12 @@ def status_document(snapshot: Snapshot, words: Overlay) -> dict:
             'episode': state.episode, 'step': state.step,
             'slider_position': state.slider_position, 'pendulum_angle': state.pendulum_angle,
             'ball_position': state.ball_position, 'final': state.final},
+        'invalid_state': snapshot.invalid_state,
         'geometry_from_sim': snapshot.geometry_from_sim,
         'plan': None if snapshot.plan is None else {
             'max_training_episodes': snapshot.plan.max_training_episodes,
             'evaluation_episodes': snapshot.plan.evaluation_episodes,
             'episode_break': snapshot.plan.episode_break},
-    }
-
+        'console': console_document(snapshot),
+    })
+    return document

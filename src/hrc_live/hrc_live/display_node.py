@@ -1,83 +1,91 @@
-"""The display node (``display``): what the person sees, served as a page on localhost.
+"""The display node (``display``): the person's page and the experimenter's console, on localhost.
 
-Subscribes ``/hrc/state``, ``/hrc/session`` and ``/hrc/episode``; serves on
-``http://127.0.0.1:<port>/`` (localhost only):
+Subscribes ``/hrc/state``, ``/hrc/session``, ``/hrc/episode`` and ``/hrc/human/action``; serves
+on ``http://127.0.0.1:<port>/`` (localhost only; from another machine use ``ssh -L``):
 
-* ``/``: a page showing the frame, refreshed ``frame_rate`` times a second;
-* ``/frame.png``: the frame: the slider, rod, pendulum and ball drawn from the newest state,
-  with the overlay (what the person is asked to do, "the robot is learning alone, please wait",
-  the countdown to the next episode, episode x of y, the result of the last episode);
-* ``/status.json``: the overlay's words and the newest inputs, for tests and other tools.
+* ``/``: the person's page: the scene drawn in the browser (canvas) from the states pushed on
+  ``/events``, the banner (what to do now), the panel (episode x of y, the task, time left),
+  the result of the last episode, the countdown, and after a condition the NASA-TLX form;
+* ``/console``: the experimenter's console: input source and health (command age, missing
+  commands), the running episode's errors, the totals, pause / resume / abort buttons;
+* ``/events``: Server-Sent Events: ``geometry`` (once per client and when the sim's geometry
+  is read), ``state`` (every state, at the control rate, stamped with the wall send time),
+  ``words`` and ``console`` (when they change, checked ``words_rate`` times a second), ``tlx``;
+* ``/status.json``: the words, the newest inputs and the console's data, for tests and tools;
+* ``POST /control/<pause|resume|abort>``: the agent's operator services (as ``operator``);
+* ``POST /tlx``: the raw NASA-TLX of the condition just finished, appended to ``tlx_file``.
 
 The geometry and timing come from the sim's own parameters and the episode counts and break
 from the agent's, asked through their parameter services (``sim_node``, ``agent_node``), so
-nothing is configured twice; until they answer the display uses the physics defaults and
-leaves out "of y" and the countdown. Frames are drawn on request, at most once per change of
-the inputs (or per second, for the countdown): nobody watching costs nothing.
+nothing is configured twice. A lost input of the person (``input_lost_topic``, set by the
+session runner) shows "joystick disconnected" on both pages.
 """
 
 from dataclasses import dataclass, fields
+import datetime
 import http.server
 import json
-import math
+import os
+import pathlib
+import queue
 import threading
 import time
 
 from hrc_common import qos, topics
+from hrc_common.contract import atomic_write, dof_name, PERSONAL_FILE_MODE, phase_label
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, param, ParameterError, with_overrides
-from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
+from hrc_common.session_control import OPERATOR_SERVICES
+from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
 from rcl_interfaces.srv import GetParameters
 from rclpy.node import Node
 from rclpy.parameter import parameter_value_to_python
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+import yaml
 
-from hrc_live.display_core import (AgentPlan, DisplayModel, DOF_NAMES, PHASES, render_png,
-                                   ResultView, SessionView, StateView, status_document)
+from hrc_live.display_core import (AgentPlan, console_document, DisplayModel, HumanView,
+                                   overlay, overlay_document, ResultView, scene_geometry,
+                                   SessionView, SOURCE_NAMES, state_document, StateView,
+                                   status_document)
+from hrc_live.tlx import check_tlx, raw_tlx
 
-SUMMARY = ('The display of a live hrc session: the slider, pendulum and ball with what the '
-           'person is asked to do, served on http://127.0.0.1:<port>/ (frame.png, status.json).')
+SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the person's page "
+           '(scene drawn in the browser from a pushed state stream) and /console for the '
+           'experimenter (input health, errors, pause/resume/abort).')
+WEB = pathlib.Path(__file__).resolve().parent / 'web'
+FILES = {'/': ('person.html', 'text/html; charset=utf-8'),
+         '/index.html': ('person.html', 'text/html; charset=utf-8'),
+         '/console': ('console.html', 'text/html; charset=utf-8'),
+         '/scene.js': ('scene.js', 'text/javascript; charset=utf-8')}
 
 # The sim's parameters the drawing needs, and the agent's the overlay needs.
 SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limit',
                   'control_period', 'episode_duration')
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
-
-PAGE = """<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>hrc live</title>
-<style>body{{margin:0;background:#20242c}}img{{display:block;margin:auto;max-width:100vw;
-max-height:100vh}}</style></head>
-<body><img id="frame" src="/frame.png" alt="hrc session" width="{width}" height="{height}">
-<noscript><meta http-equiv="refresh" content="1"></noscript>
-<script>
-const frame = document.getElementById('frame');
-const period = {period_ms};
-function next() {{
-  const started = Date.now();
-  const image = new Image();
-  image.onload = () => {{ frame.src = image.src;
-    setTimeout(next, Math.max(0, period - (Date.now() - started))); }};
-  image.onerror = () => setTimeout(next, 1000);
-  image.src = '/frame.png?t=' + started;
-}}
-setTimeout(next, period);
-</script></body></html>
-"""
+# Events kept per client before the oldest are dropped (a stalled browser must not grow memory).
+CLIENT_QUEUE = 200
+# Topic on which the session runner says why the person's input is lost ('' = it is back).
+INPUT_LOST_TOPIC = '/hrc/session/input_lost'
 
 
 @dataclass
 class DisplayParams:
     """Parameters of the display node (mirrored in params/display.yaml)."""
 
-    port: int = param(8765, 'TCP port of the page on 127.0.0.1 (localhost only); 0 = any free '
+    port: int = param(8765, 'TCP port of the pages on 127.0.0.1 (localhost only); 0 = any free '
                       'port (logged)', low=0, high=65535)
-    frame_rate: float = param(5.0, 'how often the page asks for a new frame (Hz); the sim '
-                              'changes every control period (5 Hz)', low=0.2, high=30.0)
-    width: int = param(800, 'frame width (px)', low=320, high=3840)
-    height: int = param(480, 'frame height (px)', low=200, high=2160)
+    words_rate: float = param(5.0, 'how often the words and the console are recomputed and '
+                              'pushed when changed (Hz); states are pushed as they come',
+                              low=0.5, high=30.0)
     result_seconds: float = param(5.0, 'the result of an episode stays up during the break '
                                   'and this long into the next episode (s)', low=0.0,
                                   high=600.0)
+    tlx_file: str = param('', 'file the raw NASA-TLX answers are appended to (YAML, mode '
+                          '0600); empty = no questionnaire on the page')
+    tlx_title: str = param('', 'what the questionnaire asks about, shown above it (e.g. the '
+                           'condition without naming the case)')
     sim_node: str = param('sim', 'node whose parameters give the geometry and timing')
     agent_node: str = param('agent', 'node whose parameters give the episode counts and the '
                             'break between episodes')
@@ -89,19 +97,20 @@ def state_view(message: TaskState) -> StateView:
     """Convert a TaskState."""
     return StateView(int(message.episode), int(message.step), float(message.slider_position),
                      float(message.pendulum_angle), float(message.ball_position),
-                     bool(message.truncated or message.terminated))
+                     bool(message.truncated or message.terminated),
+                     float(message.slider_velocity), float(message.pendulum_angular_velocity),
+                     float(message.ball_velocity), bool(message.human_command_missing),
+                     bool(message.robot_command_missing))
 
 
 def session_view(message: SessionStatus) -> SessionView:
     """Convert a SessionStatus."""
-    phase = PHASES[message.phase] if message.phase < len(PHASES) else f'phase {message.phase}'
-    human_dof = DOF_NAMES[message.human_dof] if message.human_dof < len(DOF_NAMES) else ''
     return SessionView(message.session_id, int(message.case_id), message.strategy,
                        int(message.training_step), int(message.training_step_count),
-                       human_dof, bool(message.human_involved),
+                       dof_name(message.human_dof, ''), bool(message.human_involved),
                        tuple(message.human_subtasks), int(message.episode),
                        int(message.total_episodes), int(message.human_involved_episodes),
-                       phase, message.message)
+                       phase_label(message.phase, f'phase {message.phase}'), message.message)
 
 
 def result_view(message: EpisodeSummary) -> ResultView:
@@ -112,86 +121,171 @@ def result_view(message: EpisodeSummary) -> ResultView:
                       float(message.total_error), bool(message.converged))
 
 
-class FrameServer:
-    """The HTTP side: renders frames of the model on request, caches them, serves them."""
+def human_view(message: HumanAction, now: float) -> HumanView:
+    """Convert a HumanAction."""
+    source = SOURCE_NAMES[message.source] if message.source < len(SOURCE_NAMES) else '?'
+    return HumanView(source, message.source_detail, bool(message.engaged),
+                     float(message.command), now)
 
-    def __init__(self, model: DisplayModel, params: DisplayParams, logger):
-        self.model = model
-        self.params = params
-        self.logger = logger
+
+def event_bytes(name: str, document) -> bytes:
+    """Return one Server-Sent Event (strict JSON: no NaN)."""
+    return f'event: {name}\ndata: {json.dumps(document, allow_nan=False)}\n\n'.encode()
+
+
+class EventHub:
+    """Fan-out of server-sent events to every connected page; the newest of each kept."""
+
+    KEPT = ('geometry', 'words', 'console', 'tlx')   # sent to a page as soon as it connects
+
+    def __init__(self):
         self._lock = threading.Lock()
-        self._cache_key = None
-        self._cache = (b'', None, None)   # PNG, Overlay, Snapshot
-        self.frames_rendered = 0
+        self._clients = []
+        self._latest = {}
+
+    def publish(self, name: str, document) -> None:
+        """Send an event to every client (a full client queue drops its oldest event)."""
+        data = event_bytes(name, document)
+        with self._lock:
+            if name in self.KEPT:
+                self._latest[name] = data
+            clients = list(self._clients)
+        for client in clients:
+            try:
+                client.put_nowait(data)
+            except queue.Full:
+                try:
+                    client.get_nowait()
+                    client.put_nowait(data)
+                except (queue.Empty, queue.Full):
+                    pass
+
+    def connect(self) -> queue.Queue:
+        """Return a new client queue, primed with the newest kept events."""
+        client = queue.Queue(CLIENT_QUEUE)
+        with self._lock:
+            for name in self.KEPT:
+                if name in self._latest:
+                    client.put_nowait(self._latest[name])
+            self._clients.append(client)
+        return client
+
+    def disconnect(self, client) -> None:
+        """Forget a client."""
+        with self._lock:
+            if client in self._clients:
+                self._clients.remove(client)
+
+    @property
+    def client_count(self) -> int:
+        """Return the number of connected pages."""
+        with self._lock:
+            return len(self._clients)
+
+
+class PageServer:
+    """The HTTP side: files, the event stream, status.json, the controls and the TLX form."""
+
+    def __init__(self, node: 'DisplayNode', port: int):
+        self.node = node
+        self.closing = threading.Event()
         server = self
 
         class Handler(http.server.BaseHTTPRequestHandler):
+            protocol_version = 'HTTP/1.1'
+
             def do_GET(self):  # noqa: N802 (the name http.server calls)
-                server.handle(self)
+                server.get(self)
+
+            def do_POST(self):  # noqa: N802
+                server.post(self)
 
             def log_message(self, format, *args):  # noqa: A002
-                pass  # one line per frame would flood the log
+                pass  # one line per request would flood the log
 
-        self.httpd = http.server.ThreadingHTTPServer(('127.0.0.1', params.port), Handler)
+        self.httpd = http.server.ThreadingHTTPServer(('127.0.0.1', port), Handler)
         self.httpd.daemon_threads = True
         self.port = self.httpd.server_address[1]
         self.thread = threading.Thread(target=self.httpd.serve_forever, name='display-http',
                                        daemon=True)
         self.thread.start()
 
-    def frame(self):
-        """Return (PNG, Overlay, Snapshot), drawn again only when something changed."""
-        now = time.monotonic()
-        with self._lock:
-            # The overlay changes with the inputs (version) and, for the countdown and the
-            # result's timeout, with the second.
-            key = (self.model.version, math.floor(now))
-            if key != self._cache_key:
-                snapshot = self.model.snapshot(now)
-                png, words = render_png(snapshot, self.params.width, self.params.height,
-                                        self.params.result_seconds)
-                self._cache, self._cache_key = (png, words, snapshot), key
-                self.frames_rendered += 1
-            return self._cache
+    @staticmethod
+    def answer(request, code: int, body: bytes, content_type: str) -> None:
+        """Send a whole answer."""
+        request.send_response(code)
+        request.send_header('Content-Type', content_type)
+        request.send_header('Content-Length', str(len(body)))
+        request.send_header('Cache-Control', 'no-store')
+        request.end_headers()
+        request.wfile.write(body)
 
-    def handle(self, request) -> None:
+    def get(self, request) -> None:
         """Answer one GET request."""
         path = request.path.split('?', 1)[0]
         try:
-            if path in ('/', '/index.html'):
-                body = PAGE.format(width=self.params.width, height=self.params.height,
-                                   period_ms=int(1000 / self.params.frame_rate)).encode()
-                content_type = 'text/html; charset=utf-8'
-            elif path == '/frame.png':
-                body, _, _ = self.frame()
-                content_type = 'image/png'
+            if path in FILES:
+                name, content_type = FILES[path]
+                self.answer(request, 200, (WEB / name).read_bytes(), content_type)
+            elif path == '/events':
+                self.stream(request)
             elif path == '/status.json':
-                _, words, snapshot = self.frame()
-                document = status_document(snapshot, words)
-                document['frames_rendered'] = self.frames_rendered
-                body = json.dumps(document, indent=1).encode()
-                content_type = 'application/json'
+                body = json.dumps(self.node.status(), indent=1, allow_nan=False).encode()
+                self.answer(request, 200, body, 'application/json')
             else:
-                request.send_error(404, 'not here: try /, /frame.png or /status.json')
-                return
-            request.send_response(200)
-            request.send_header('Content-Type', content_type)
-            request.send_header('Content-Length', str(len(body)))
-            request.send_header('Cache-Control', 'no-store')
-            request.end_headers()
-            request.wfile.write(body)
+                self.answer(request, 404, b'not here: try /, /console or /status.json',
+                            'text/plain; charset=utf-8')
         except (BrokenPipeError, ConnectionResetError):
             pass  # the browser went away mid-answer
-        except Exception as error:  # a drawing bug must not kill the server thread
-            self.logger.error(f'GET {path} failed: {type(error).__name__}: {error}',
-                              throttle_duration_sec=5.0)
+        except Exception as error:  # a bug must not kill the server thread; say it plainly
+            self.node.get_logger().error(f'GET {path} failed: {type(error).__name__}: {error}',
+                                         throttle_duration_sec=5.0)
             try:
-                request.send_error(500, f'{type(error).__name__}: {error}')
+                self.answer(request, 503, f'the display could not answer: {error}'.encode(),
+                            'text/plain; charset=utf-8')
             except OSError:
                 pass
 
+    def stream(self, request) -> None:
+        """Push the events to one page until it goes away."""
+        request.send_response(200)
+        request.send_header('Content-Type', 'text/event-stream')
+        request.send_header('Cache-Control', 'no-store')
+        request.send_header('Connection', 'keep-alive')
+        request.end_headers()
+        client = self.node.hub.connect()
+        try:
+            request.wfile.write(b'retry: 1000\n\n')
+            request.wfile.flush()
+            while not self.closing.is_set():
+                try:
+                    data = client.get(timeout=1.0)
+                except queue.Empty:
+                    data = b': keep-alive\n\n'
+                request.wfile.write(data)
+                request.wfile.flush()
+        finally:
+            self.node.hub.disconnect(client)
+
+    def post(self, request) -> None:
+        """Answer one POST request: a control button or the TLX form."""
+        path = request.path.split('?', 1)[0]
+        length = min(int(request.headers.get('Content-Length') or 0), 10_000)
+        body = request.rfile.read(length) if length else b''
+        try:
+            if path.startswith('/control/') and path[len('/control/'):] in OPERATOR_SERVICES:
+                code, text = self.node.control(path[len('/control/'):])
+            elif path == '/tlx':
+                code, text = self.node.store_tlx(body)
+            else:
+                code, text = 404, 'not here: POST /control/<pause|resume|abort> or /tlx'
+            self.answer(request, code, text.encode(), 'text/plain; charset=utf-8')
+        except (BrokenPipeError, ConnectionResetError):
+            pass
+
     def close(self) -> None:
         """Stop serving and release the port."""
+        self.closing.set()
         self.httpd.shutdown()
         self.httpd.server_close()
 
@@ -237,31 +331,44 @@ class ParameterQuery:
 
 
 class DisplayNode(Node):
-    """Feeds a DisplayModel from the topics and serves its frames (see the module docstring)."""
+    """Feeds a DisplayModel from the topics and serves the pages (see the module docstring)."""
 
     def __init__(self):
         super().__init__('display')
         self.params = params = declare_parameters(self, DisplayParams)
         self.model = DisplayModel()
+        self.hub = EventHub()
         self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS)
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS)
         self.create_subscription(EpisodeSummary, topics.EPISODE, self.on_episode,
                                  qos.EPISODE_QOS)
+        self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human,
+                                 qos.HUMAN_ACTION_QOS)
+        self.create_subscription(String, INPUT_LOST_TOPIC, self.on_input_lost,
+                                 qos.SESSION_QOS)
+        self.controls = {command: self.create_client(Trigger, service)
+                         for command, service in OPERATOR_SERVICES.items()}
         self.sim_query = ParameterQuery(self, params.sim_node, SIM_PARAMETERS, self.on_sim)
         self.agent_query = ParameterQuery(self, params.agent_node, AGENT_PARAMETERS,
                                           self.on_agent)
         self.create_timer(params.query_period, self.poll_queries)
+        self.create_timer(1.0 / params.words_rate, self.push_words)
         self.session_id = None
+        self.tlx_stored = set()       # session ids whose questionnaire was answered
+        self._pushed = {}             # event name -> the JSON last pushed
+        self.hub.publish('geometry', scene_geometry(PhysicsParams()))
         try:
-            self.server = FrameServer(self.model, params, self.get_logger())
+            self.server = PageServer(self, params.port)
         except OSError as error:
             raise ParameterError(f'DisplayParams rejected: port: cannot serve on '
                                  f'127.0.0.1:{params.port}: {error.strerror}') from None
         self.get_logger().info(
-            f'serving the display on http://127.0.0.1:{self.server.port}/ (frame.png, '
-            f'status.json), {params.width}x{params.height} px at {params.frame_rate} Hz; '
+            f"serving the display on http://127.0.0.1:{self.server.port}/ (the person's "
+            f'page) and http://127.0.0.1:{self.server.port}/console (the experimenter); '
             f'geometry from /{params.sim_node}, episodes from /{params.agent_node}')
+
+    # ------------------------------------------------------------------ inputs
 
     def poll_queries(self):
         """Ask the sim and the agent for their parameters until they answer."""
@@ -278,6 +385,7 @@ class DisplayNode(Node):
             self.get_logger().warning(f'/{self.params.sim_node} parameters unusable: {error}')
             return
         self.model.set_physics(physics)
+        self.hub.publish('geometry', scene_geometry(physics))
         self.get_logger().info(f'geometry from /{self.params.sim_node}: ' + ', '.join(
             f'{name} {values[name]}' for name in SIM_PARAMETERS))
 
@@ -293,8 +401,10 @@ class DisplayNode(Node):
                                f'{episode_break} s')
 
     def on_state(self, message: TaskState):
-        """Take a new state."""
-        self.model.on_state(state_view(message), time.monotonic())
+        """Take a new state and push it to the pages at once."""
+        state = state_view(message)
+        self.model.on_state(state, time.monotonic())
+        self.hub.publish('state', state_document(state, time.time() * 1000.0))
 
     def on_session(self, message: SessionStatus):
         """Take a new session status; a new session id means a new agent: ask it again."""
@@ -306,10 +416,93 @@ class DisplayNode(Node):
             self.get_logger().info(f'showing session {message.session_id!r} (case '
                                    f'{message.case_id}, {message.strategy})')
         self.model.on_session(session_view(message), time.monotonic())
+        self.push_words()
 
     def on_episode(self, message: EpisodeSummary):
         """Take the summary of a finished episode."""
         self.model.on_result(result_view(message), time.monotonic())
+
+    def on_human(self, message: HumanAction):
+        """Take the newest human action (its source and health)."""
+        self.model.on_human(human_view(message, time.monotonic()))
+
+    def on_input_lost(self, message: String):
+        """Take the session runner's word that the person's input is lost ('' = back)."""
+        self.model.set_input_lost(message.data)
+        self.push_words()
+
+    # ------------------------------------------------------------------ outputs
+
+    def push_words(self):
+        """Recompute the words, the console and the TLX request; push what changed."""
+        snapshot = self.model.snapshot(time.monotonic())
+        words = overlay(snapshot, self.params.result_seconds)
+        session = snapshot.session
+        wanted = bool(self.params.tlx_file and session is not None and session.phase == 'done'
+                      and session.session_id not in self.tlx_stored)
+        documents = {'words': overlay_document(words), 'console': console_document(snapshot),
+                     'tlx': {'wanted': wanted, 'condition': session.session_id if session
+                             else '', 'title': self.params.tlx_title}}
+        for name, document in documents.items():
+            text = json.dumps(document, sort_keys=True)
+            if self._pushed.get(name) != text:
+                self._pushed[name] = text
+                self.hub.publish(name, document)
+
+    def status(self) -> dict:
+        """Return the /status.json document."""
+        snapshot = self.model.snapshot(time.monotonic())
+        document = status_document(snapshot, overlay(snapshot, self.params.result_seconds))
+        document['pages_connected'] = self.hub.client_count
+        return document
+
+    def control(self, command: str, timeout: float = 10.0):
+        """Call the agent's operator service ``command``; return (HTTP code, answer)."""
+        client = self.controls[command]
+        if not client.wait_for_service(timeout_sec=2.0):
+            return 503, (f'{command}: no agent serves {OPERATOR_SERVICES[command]}: is the '
+                         f'session running?')
+        done = threading.Event()
+        future = client.call_async(Trigger.Request())
+        future.add_done_callback(lambda _: done.set())
+        if not done.wait(timeout):
+            return 504, f'{command}: no answer from the agent within {timeout:.0f} s'
+        response = future.result()
+        self.get_logger().info(f'console {command}: {response.message}')
+        if not response.success:
+            return 409, f'{command} refused: {response.message}'
+        return 200, f'{command}: {response.message}'
+
+    def store_tlx(self, body: bytes):
+        """Check and append one raw NASA-TLX answer; return (HTTP code, answer)."""
+        if not self.params.tlx_file:
+            return 404, 'no questionnaire in this session (tlx_file is empty)'
+        try:
+            answer = json.loads(body or b'{}')
+        except ValueError:
+            return 400, 'not JSON'
+        scores, reasons = check_tlx(answer)
+        if reasons:
+            return 400, 'rejected: ' + '; '.join(reasons)
+        snapshot = self.model.snapshot(time.monotonic())
+        session = snapshot.session
+        record = {'session_id': session.session_id if session else '',
+                  'case': session.case_id if session else 0,
+                  'answered': datetime.datetime.now().isoformat(timespec='seconds'),
+                  'scales': scores,
+                  'raw_tlx': round(raw_tlx(scores), 2)}
+        path = pathlib.Path(self.params.tlx_file)
+        existing = []
+        if path.is_file():
+            existing = yaml.safe_load(path.read_text()) or []
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(path, yaml.safe_dump(existing + [record], sort_keys=False),
+                     mode=PERSONAL_FILE_MODE)
+        os.chmod(path, PERSONAL_FILE_MODE)
+        self.tlx_stored.add(record['session_id'])
+        self.get_logger().info(f'NASA-TLX stored in {path}: raw TLX {record["raw_tlx"]}')
+        self.push_words()
+        return 200, f'Thank you. Stored (raw TLX {record["raw_tlx"]}).'
 
     def close(self):
         """Stop the HTTP server."""

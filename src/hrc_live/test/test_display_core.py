@@ -1,14 +1,16 @@
-"""The display's pure core: the words for the person in each situation, and the drawing."""
+"""The display's pure core: words, numbering, the scene's box, console data, valid JSON.
 
-import io
+The words for the person in each situation, the numbering that agrees everywhere, the box of
+the whole reachable configuration, the console's data and the documents the pages get.
+"""
+
+import json
 import math
 
-from hrc_live.display_core import (AgentPlan, BACKGROUND_COLOR, BALL_COLOR, DisplayModel,
-                                   layout, overlay, PENDULUM_COLOR, render, render_png,
-                                   ResultView, ROD_COLOR, SessionView, SLIDER_COLOR, StateView,
-                                   status_document)
-from hrc_sim_node.physics import body_poses, PhysicsParams, PhysicsState
-from PIL import Image
+from hrc_live.display_core import (AgentPlan, configuration_points, console_document,
+                                   DisplayModel, HumanView, overlay, ResultView, scene_bounds,
+                                   SessionView, state_document, StateView, status_document)
+from hrc_sim_node.physics import PhysicsParams
 import pytest
 
 WIDTH, HEIGHT = 800, 480
@@ -31,10 +33,6 @@ def model_in_episode(state=StateView(6, 12, 0.04, 0.15, 0.1, False), **session_c
     model.on_state(StateView(state.episode, 0, 0.0, 0.0, 0.0, False), now=1.0)
     model.on_state(state, now=3.4)
     return model
-
-
-def close_to(pixel, color, tolerance=12):
-    return all(abs(int(a) - int(b)) <= tolerance for a, b in zip(pixel, color))
 
 
 def test_the_person_is_told_their_task_and_their_control_during_an_episode():
@@ -115,49 +113,87 @@ def test_without_session_or_plan_the_display_still_says_something_sensible():
     assert model.plan is None
 
 
-def pixel_of(frame, physics, y, z):
-    column, row = frame.to_pixels(y, z)
-    return int(round(column)), int(round(row))
+def test_numbering_agrees_between_the_label_and_the_result_in_evaluation():
+    # 10 training episodes (0..9); test episodes are 10, 11, 12 of 3.
+    plan = AgentPlan(max_training_episodes=30, evaluation_episodes=3, episode_break=2.0)
+    model = DisplayModel()
+    model.set_plan(plan)
+    model.on_session(session(phase='evaluation', episode=12, total_episodes=10,
+                             human_involved_episodes=10), now=0.0)
+    for episode in (10, 11):
+        model.on_result(ResultView(episode, True, True, 0.01, 0.05, 0.02, 0.08, False),
+                        now=1.0)
+    model.on_state(StateView(11, 200, 0.0, 0.0, 0.0, True), now=1.0)
+    words = overlay(model.snapshot(now=1.5))
+    assert words.episode_label == 'Test episode 3 of 3'
+    assert words.result[0] == 'Test episode 2 done'
+    # The person played 10 training and 2 test episodes so far.
+    assert 'Episodes with you so far: 12' in words.lines
 
 
-@pytest.mark.parametrize('slider, angle, ball', [(0.04, 0.15, 0.1), (-0.07, -0.3, -0.15),
-                                                 (0.0, 0.0, 0.2)])
-def test_the_bodies_are_drawn_where_the_state_puts_them(slider, angle, ball):
+def test_the_robot_practising_alone_is_told_and_the_first_episode_is_counted_down():
+    model = DisplayModel()
+    model.set_plan(PLAN)
+    model.on_session(session(human_involved=False, human_subtasks=(), training_step=0,
+                             episode=0, total_episodes=0, human_involved_episodes=0), now=0.0)
+    model.on_session(session(human_involved=False, human_subtasks=(), training_step=0,
+                             episode=50, total_episodes=50, human_involved_episodes=0), now=20.0)
+    words = overlay(model.snapshot(now=20.0))
+    assert 'The robot is practising alone: 50 episodes in 20 s.' in words.lines
+    assert words.banner == 'The robot is learning alone, please wait'
+    # The last lonely episode ends at 39.6 s; the person joins with a 4 s break.
+    model.on_state(StateView(107, 200, 0.0, 0.0, 0.0, True), now=39.6)
+    model.on_session(session(episode=108, total_episodes=108, human_involved_episodes=0),
+                     now=40.0)
+    words = overlay(model.snapshot(now=40.1))
+    assert 'The robot practised alone: 108 episodes in 40 s.' in words.lines
+    assert words.banner == 'Get ready: your first episode starts in 4 s'
+    assert words.countdown == 4
+
+
+def test_the_whole_reachable_configuration_is_inside_the_scene_box():
     physics = PhysicsParams()
-    model = model_in_episode(StateView(6, 12, slider, angle, ball, False))
-    image, _ = render(model.snapshot(now=3.5), WIDTH, HEIGHT)
-    frame = layout(physics, WIDTH, HEIGHT)
-    state = PhysicsState(12, 2.4, slider, 0.0, angle, 0.0, ball, 0.0, 0.0, 0.0, False, False)
-    poses = body_poses(state, physics)
-    # Ball: at its centre.
-    ball_y, ball_z = poses['ball'][0][1], poses['ball'][0][2]
-    assert close_to(image.getpixel(pixel_of(frame, physics, ball_y, ball_z)), BALL_COLOR)
-    # Pendulum: a quarter of the way along the beam (away from the ball and the slider).
-    along = 0.25 * physics.pendulum_length if ball > 0 else 0.8 * physics.pendulum_length
-    beam = pixel_of(frame, physics, along * math.cos(angle), slider + along * math.sin(angle))
-    assert close_to(image.getpixel(beam), PENDULUM_COLOR)
-    # Slider: west of the hinge, where the beam is not.
-    assert close_to(image.getpixel(pixel_of(frame, physics, -0.018, slider)), SLIDER_COLOR)
-    # Rod: beyond the slider's far side.
-    rod_z = -0.1 if slider > 0 else 0.1
-    assert close_to(image.getpixel(pixel_of(frame, physics, 0.0, rod_z)), ROD_COLOR)
-    # Empty space stays background.
-    empty_z = -0.3 if angle >= 0 else 0.25  # on the side the beam does not point to
-    assert close_to(image.getpixel(pixel_of(frame, physics, 0.4, empty_z)), BACKGROUND_COLOR)
+    box = scene_bounds(physics)
+    for slider in (-0.1, 0.0, 0.1):
+        for angle in (-math.pi / 2, -1.0, -0.3, 0.0, 0.7, math.pi / 2):
+            for ball in (-0.25, 0.0, 0.25):
+                for y, z in configuration_points(physics, slider, angle, ball):
+                    assert box['y_min'] < y < box['y_max'] and box['z_min'] < z < box['z_max']
+    # Not padded beyond the 3 cm margin: the top is the ball at the beam's end near +90 deg
+    # (slider 0.1 m up, the ball's centre 0.5 m along and 0.025 m above the beam, radius 0.02).
+    assert box['z_max'] == pytest.approx(0.1 + math.hypot(0.5, 0.025) + 0.02 + 0.03, abs=1e-3)
 
 
-def test_the_overlay_regions_carry_text():
+def test_a_non_finite_state_gives_a_notice_and_valid_json():
     model = model_in_episode()
-    png, words = render_png(model.snapshot(now=3.5), WIDTH, HEIGHT)
-    image = Image.open(io.BytesIO(png)).convert('RGB')
-    assert image.size == (WIDTH, HEIGHT)
-    frame = layout(PhysicsParams(), WIDTH, HEIGHT)
-    banner = image.crop((0, 0, frame.scene_width, frame.banner_height))
-    panel = image.crop((frame.scene_width, 0, WIDTH, HEIGHT // 2))
-    # Text makes many distinct colours (anti-aliased glyphs) over a flat fill.
-    for region in (banner, panel):
-        assert len(region.getcolors(maxcolors=100000)) > 20
-    assert close_to(banner.getpixel((frame.scene_width - 3, 3)), (24, 110, 60))  # act: green
-    document = status_document(model.snapshot(now=3.5), words)
-    assert document['episode_label'] == 'Episode 7 of at most 30'
-    assert document['state']['step'] == 12 and document['session']['phase'] == 'training'
+    model.on_state(StateView(6, 13, float('nan'), 0.0, float('inf'), False), now=4.0)
+    snapshot = model.snapshot(now=4.1)
+    words = overlay(snapshot)
+    assert 'invalid state' in words.notice
+    assert snapshot.state.step == 12  # the last good state stays
+    json.dumps(status_document(snapshot, words), allow_nan=False)
+    document = state_document(StateView(6, 13, float('nan'), 0.0, 0.0, False), 1.0)
+    assert document == {'valid': False, 'episode': 6, 'step': 13, 'sent_ms': 1.0}
+    model.on_state(StateView(6, 14, 0.0, 0.0, 0.0, False), now=4.2)
+    assert overlay(model.snapshot(now=4.3)).notice == ''
+
+
+def test_console_reports_input_health_errors_and_totals():
+    model = model_in_episode()
+    model.on_state(StateView(6, 13, -0.02, 0.1, 0.04, False, human_command_missing=True),
+                   now=3.6)
+    model.on_human(HumanView('device', '/dev/input/js0', True, 0.3, received=3.0))
+    document = console_document(model.snapshot(now=3.5))
+    assert document['input']['source'] == 'device' and document['input']['healthy']
+    # Three states of episode 6: |S_x| 0, 0.04, 0.02 -> mean 0.02 m.
+    assert document['episode']['steps'] == 3
+    assert document['episode']['slider_error_m'] == pytest.approx(0.02)
+    assert document['episode']['human_missing'] == 1
+    assert document['totals']['training_episodes'] == 6
+    stale = console_document(model.snapshot(now=4.5))
+    assert stale['input']['age_s'] == 1.5 and not stale['input']['healthy']
+    model.set_input_lost('/dev/input/js0 unplugged')
+    snapshot = model.snapshot(now=3.5)
+    assert not console_document(snapshot)['input']['healthy']
+    words = overlay(snapshot)
+    assert words.tone == 'stop' and words.banner.startswith('Joystick disconnected')

@@ -1,32 +1,45 @@
-"""The display node in its own process over DDS: a headless "screenshot" fetched over HTTP.
+"""The display node in its own process over DDS, its pages in a real headless Chromium.
 
-The test plays the agent (its topics and its parameters) and runs a real sim node with a
-non-default pendulum length that is never reset: it only answers the display's parameter query,
-so the frame must be drawn with the sim's geometry, not the defaults.
+The test plays the agent (its topics, its parameters and its operator services) and runs a real
+sim node with a non-default pendulum length that is never reset: it only answers the display's
+parameter query, so the page must draw with the sim's geometry, not the defaults. Screenshots
+at known states are checked for the bodies' colours where the state puts them, at full HD and
+at a phone's size, including the extreme configurations (beam at a hinge stop, ball at an end
+stop, slider at an end of the rod).
 """
 
 from dataclasses import fields
-import io
 import json
 import math
+import os
 import pathlib
 import re
 import socket
+import sys
+import threading
+import time
 import urllib.request
 
 from hrc_common import qos, topics
+from hrc_common.contract import BODY_COLOURS, rgb8
 from hrc_common.params import as_dict, load_yaml
 from hrc_common.testing import wait_for
-from hrc_live.display_core import (BACKGROUND_COLOR, BALL_COLOR, layout, PENDULUM_COLOR,
-                                   ROD_COLOR, SLIDER_COLOR)
+from hrc_live.display_core import COLORS
 from hrc_live.display_node import DisplayParams
-from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
+from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import body_poses, PhysicsParams, PhysicsState
-from PIL import Image
+import pytest
+from std_srvs.srv import Trigger
 import yaml
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from browser import open_browser, screenshot, set_viewport  # noqa: E402
 
 PARAMS_FILE = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'display.yaml'
 PENDULUM_LENGTH = 0.4  # not the default 0.5: the display must take it from the sim
+PHYSICS = PhysicsParams(pendulum_length=PENDULUM_LENGTH)
+BALL, PENDULUM, SLIDER, ROD = (rgb8(BODY_COLOURS[name]) for name in
+                               ('ball', 'pendulum', 'slider', 'rod'))
 
 
 def test_params_yaml_mirrors_the_dataclass_defaults():
@@ -60,7 +73,7 @@ def served_port(process) -> int:
 
 def fetch(port, path):
     with urllib.request.urlopen(f'http://127.0.0.1:{port}{path}', timeout=10) as answer:
-        return answer.headers.get('Content-Type'), answer.read()
+        return answer.status, answer.read()
 
 
 def status(port) -> dict:
@@ -86,103 +99,199 @@ def session_status(**values):
     return message
 
 
-def close_to(pixel, color, tolerance=12):
+def close_to(pixel, color, tolerance=14):
     return all(abs(int(a) - int(b)) <= tolerance for a, b in zip(pixel, color))
 
 
-def test_headless_screenshot_shows_the_bodies_and_the_overlay(start_node, rclpy_context,
-                                                              tmp_path):
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
+class FakeAgent:
+    """The agent's side of the display: parameters, topics, operator services; spun in a thread."""
 
+    def __init__(self, context):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+
+        self.node = rclpy.create_node('agent', context=context)
+        for name, value in (('max_training_episodes', 30), ('evaluation_episodes', 2),
+                            ('episode_break', 4.0), ('mode', 'realtime')):
+            self.node.declare_parameter(name, value)
+        self.session = self.node.create_publisher(SessionStatus, topics.SESSION,
+                                                  qos.SESSION_QOS)
+        self.state = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
+        self.episode = self.node.create_publisher(EpisodeSummary, topics.EPISODE,
+                                                  qos.EPISODE_QOS)
+        self.human = self.node.create_publisher(HumanAction, topics.HUMAN_ACTION,
+                                                qos.HUMAN_ACTION_QOS)
+        self.calls = []
+
+        def serve(name):
+            def answer(request, response):
+                self.calls.append(name)
+                response.success, response.message = True, f'{name} requested (test agent)'
+                return response
+            return answer
+
+        for name in ('pause', 'resume', 'abort'):
+            self.node.create_service(Trigger, f'/hrc/agent/{name}', serve(name))
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+        self.thread = threading.Thread(target=self.spin, daemon=True)
+        self.running = True
+        self.thread.start()
+
+    def spin(self):
+        while self.running:
+            self.executor.spin_once(timeout_sec=0.05)
+
+    def close(self):
+        self.running = False
+        self.thread.join(5)
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+
+@pytest.fixture
+def graph(start_node, rclpy_context, tmp_path):
     start_node('hrc_sim_node', 'sim_node', parameters={
         'pendulum_length': PENDULUM_LENGTH, 'marker_rate': 0.0})
-    display = start_node('hrc_live', 'display_node', parameters={'port': 0, 'width': 800,
-                                                                  'height': 480})
-    # The test is the agent: the display reads these parameters through /agent.
-    agent = rclpy.create_node('agent', context=rclpy_context)
-    for name, value in (('max_training_episodes', 30), ('evaluation_episodes', 2),
-                        ('episode_break', 4.0), ('mode', 'realtime')):
-        agent.declare_parameter(name, value)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(agent)
-
-    def spin():
-        executor.spin_once(timeout_sec=0.05)
-
-    session_pub = agent.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
-    state_pub = agent.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
-    episode_pub = agent.create_publisher(EpisodeSummary, topics.EPISODE, qos.EPISODE_QOS)
+    display = start_node('hrc_live', 'display_node', parameters={
+        'port': 0, 'tlx_file': str(tmp_path / 'tlx.yaml'), 'tlx_title': 'the part you played'})
+    agent = FakeAgent(rclpy_context)
     port = served_port(display)
-    content_type, page = fetch(port, '/')
-    assert content_type.startswith('text/html') and b'/frame.png' in page
+    agent.session.publish(session_status())
+    assert wait_for(lambda: (status(port)['geometry_from_sim'] and status(port)['plan']
+                             and status(port)['session']), 60, 0.2), display.output
+    browser = open_browser(1920, 1080)
+    yield agent, port, browser, display
+    browser.quit()
+    agent.close()
 
+
+def show(agent, browser, episode, step, slider, angle, ball):
+    """Publish a state until the page has drawn it, then let the smoothing settle."""
+    def drawn():
+        agent.state.publish(task_state(episode, step, slider, angle, ball))
+        stats = browser.execute_script('return window.hrcStats(1)')
+        return stats['lastDrawnStep'] == step and stats['lastDrawnEpisode'] == episode
+    assert wait_for(drawn, 30, 0.2)
+    time.sleep(0.4)  # the correction towards a new state decays in ~60 ms
+
+
+def page_pixel(browser, image, y, z):
+    column, row = browser.execute_script(f'return window.hrcPagePixel({y}, {z})')
+    return (int(round(column)), int(round(row))), image.getpixel((int(round(column)),
+                                                                  int(round(row))))
+
+
+def check_bodies(browser, image, slider, angle, ball, where):
+    """Assert the ball, beam, slider and rod are drawn where the state puts them."""
+    state = PhysicsState(0, 0.0, slider, 0.0, angle, 0.0, ball, 0.0, 0.0, 0.0, False, False)
+    poses = body_poses(state, PHYSICS)
+    width, height = image.size
+    for name, (y, z), colour in (
+            ('ball', (poses['ball'][0][1], poses['ball'][0][2]), BALL),
+            ('beam', (0.3 * PENDULUM_LENGTH * math.cos(angle),
+                      slider + 0.3 * PENDULUM_LENGTH * math.sin(angle)), PENDULUM),
+            ('beam end', (0.97 * PENDULUM_LENGTH * math.cos(angle),
+                          slider + 0.97 * PENDULUM_LENGTH * math.sin(angle)), PENDULUM),
+            ('slider', (-0.018, slider), SLIDER)):
+        ball_y, ball_z = poses['ball'][0][1], poses['ball'][0][2]
+        if name != 'ball' and math.hypot(y - ball_y, z - ball_z) < 1.5 * PHYSICS.ball_radius:
+            continue  # the ball is drawn over this point
+        (column, row), pixel = page_pixel(browser, image, y, z)
+        assert 0 <= column < width and 0 <= row < height, (where, name, column, row)
+        assert close_to(pixel, colour), (where, name, pixel, colour)
+
+
+def test_the_page_draws_the_state_at_full_hd_and_phone_size(graph, tmp_path):
+    agent, port, browser, display = graph
+    browser.get(f'http://127.0.0.1:{port}/')
+    assert wait_for(lambda: browser.execute_script(
+        'return window.hrcScene.geometry && window.hrcScene.geometry.pendulum_length') ==
+        PENDULUM_LENGTH, 30, 0.2)
+    saved = pathlib.Path(os.environ.get('HRC_SCREENSHOTS', tmp_path))
     slider, angle, ball = 0.05, 0.2, 0.12
-    session_pub.publish(session_status())
+    show(agent, browser, 3, 7, slider, angle, ball)
+    image = screenshot(browser)
+    image.save(saved / 'page-1920x1080.png')
+    check_bodies(browser, image, slider, angle, ball, 'full HD')
+    # With the default 0.5 m beam its end would be here; with the sim's 0.4 m it is background.
+    _, pixel = page_pixel(browser, image, 0.47 * math.cos(angle), slider + 0.47 * math.sin(angle))
+    assert close_to(pixel, COLORS['background']), pixel
+    banner = browser.find_element('id', 'banner')
+    assert banner.text == ('Your turn: keep the slider in the middle of the rod and keep the '
+                           'ball in the middle of the pendulum')
+    assert browser.find_element('id', 'label').text == 'Episode 4 of at most 30'
+    # The reachable extremes stay in the picture, at full HD and at a phone's size.
+    limit = PHYSICS.pendulum_limit
+    extremes = [(0.1, limit, PENDULUM_LENGTH / 2), (-0.1, -limit, -PENDULUM_LENGTH / 2),
+                (0.1, -limit, PENDULUM_LENGTH / 2), (-0.1, limit, -PENDULUM_LENGTH / 2)]
+    for size in ((1920, 1080), (390, 844)):
+        set_viewport(browser, *size)
+        for step, (slider, angle, ball) in enumerate(extremes, start=8 + 10 * (size[0] < 1000)):
+            show(agent, browser, 3, step, slider, angle, ball)
+            image = screenshot(browser)
+            assert image.size == size
+            check_bodies(browser, image, slider, angle, ball, f'{size} {slider, angle, ball}')
+        image.save(saved / f'page-{size[0]}x{size[1]}-extreme.png')
+        box = browser.find_element('id', 'banner').rect
+        assert box['y'] >= 0 and box['y'] + box['height'] <= size[1]
+        panel = browser.find_element('id', 'label').rect
+        assert 0 <= panel['y'] and panel['y'] + panel['height'] <= size[1], panel
 
-    def showing(step):
-        spin()
-        document = status(port)
-        return (document['state'] is not None and document['state']['step'] == step
-                and document['geometry_from_sim'] and document['plan'] is not None
-                and document['session'] is not None)
+    # A non-finite state: a clear notice on the page, status.json still answers.
+    agent.state.publish(task_state(3, 30, float('nan'), 0.0, 0.0))
+    notice = browser.find_element('id', 'notice')
+    assert wait_for(lambda: notice.is_displayed(), 20, 0.2)
+    assert 'invalid state' in notice.text
+    code, body = fetch(port, '/status.json')
+    assert code == 200 and json.loads(body)['invalid_state'] is True
+    agent.state.publish(task_state(3, 31, 0.0, 0.0, 0.0))
+    assert wait_for(lambda: not notice.is_displayed(), 20, 0.2)
 
-    assert wait_for(lambda: (state_pub.publish(task_state(3, 7, slider, angle, ball)),
-                             showing(7))[1], timeout=60, interval=0.2), display.output
-    document = status(port)
-    assert document['banner'] == ('Your turn: keep the slider in the middle of the rod and '
-                                  'keep the ball in the middle of the pendulum')
-    assert document['episode_label'] == 'Episode 4 of at most 30'
-    assert 'You move the slider up and down (stick up = up).' in document['lines']
 
-    content_type, png = fetch(port, '/frame.png')
-    assert content_type == 'image/png'
-    image = Image.open(io.BytesIO(png)).convert('RGB')
-    assert image.size == (800, 480)
-    image.save(tmp_path / 'display.png')  # the screenshot, kept with the test's files
-    physics = PhysicsParams(pendulum_length=PENDULUM_LENGTH)
-    frame = layout(physics, 800, 480)
+def test_console_shows_input_health_and_its_buttons_call_the_agent(graph):
+    agent, port, browser, display = graph
+    browser.get(f'http://127.0.0.1:{port}/console')
+    action = HumanAction(source=HumanAction.SOURCE_SIMULATED, source_detail='profile default',
+                         engaged=True, command=0.1)
 
-    def at(y, z):
-        column, row = frame.to_pixels(y, z)
-        return image.getpixel((int(round(column)), int(round(row))))
+    def showing_source():
+        agent.human.publish(action)
+        agent.state.publish(task_state(3, 5, 0.02, 0.1, 0.05))
+        return 'simulated (profile default)' in browser.find_element('id', 'input').text
+    assert wait_for(showing_source, 30, 0.2), browser.find_element('tag name', 'body').text
+    assert 'case 2' in browser.find_element('id', 'title').text
+    browser.find_element('id', 'pause').click()
+    answer = browser.find_element('id', 'answer')
+    assert wait_for(lambda: 'pause requested (test agent)' in answer.text, 30, 0.2), answer.text
+    assert agent.calls == ['pause']
+    # The input goes quiet: the command's age grows and it is no longer healthy.
+    assert wait_for(lambda: float(status(port)['console']['input']['age_s']) > 1.0, 10, 0.2)
+    assert status(port)['console']['input']['healthy'] is False
+    # The session runner says the joystick is gone: both pages say so.
+    from std_msgs.msg import String
+    lost = agent.node.create_publisher(String, '/hrc/session/input_lost', qos.SESSION_QOS)
+    lost.publish(String(data='/dev/input/js0 unplugged'))
+    assert wait_for(lambda: 'joystick disconnected' in browser.find_element(
+        'id', 'input').text, 20, 0.2)
+    assert status(port)['banner'].startswith('Joystick disconnected')
 
-    state = PhysicsState(7, 1.4, slider, 0.0, angle, 0.0, ball, 0.0, 0.0, 0.0, False, False)
-    poses = body_poses(state, physics)
-    assert close_to(at(poses['ball'][0][1], poses['ball'][0][2]), BALL_COLOR)
-    along = 0.2 * PENDULUM_LENGTH
-    assert close_to(at(along * math.cos(angle), slider + along * math.sin(angle)),
-                    PENDULUM_COLOR)
-    assert close_to(at(-0.018, slider), SLIDER_COLOR)
-    assert close_to(at(0.0, -0.1), ROD_COLOR)
-    # With the default 0.5 m beam the tip would be here; with the sim's 0.4 m it is background.
-    assert close_to(at(0.47 * math.cos(angle), slider + 0.47 * math.sin(angle)),
-                    BACKGROUND_COLOR)
-    # The overlay: the banner and the panel carry text (many anti-aliased colours).
-    banner = image.crop((0, 0, frame.scene_width, frame.banner_height))
-    panel = image.crop((frame.scene_width, 0, 800, 240))
-    assert len(banner.getcolors(100000)) > 20 and len(panel.getcolors(100000)) > 20
 
-    # The episode ends: the result and the countdown to the next one.
-    state_pub.publish(task_state(3, 200, slider, angle, ball, final=True))
-    summary = EpisodeSummary(session_id='display-test', case_id=2, episode=3, steps=200,
-                             human_involved=True, slider_error=0.012, pendulum_error=0.05,
-                             ball_error=0.021, total_error=0.083, truncated=True)
-    episode_pub.publish(summary)
-    session_pub.publish(session_status(episode=4, total_episodes=4, human_involved_episodes=2))
-
-    def result_shown():
-        spin()
-        document = status(port)
-        return document['result'] and document['session']['total_episodes'] == 4
-
-    assert wait_for(result_shown, timeout=30, interval=0.2), display.output
-    document = status(port)
-    assert document['result'][:2] == ['Episode 4 done', 'ball off centre: 2.1 cm on average']
-    assert document['episode_label'] == 'Episode 5 of at most 30'
-    if document['countdown']:  # a busy machine may have taken the whole 4 s break
-        assert document['banner'] == f'Next episode in {document["countdown"]} s'
-    else:
-        assert document['banner'] == 'The next episode is starting'
-    executor.shutdown()
-    agent.destroy_node()
+def test_the_tlx_form_after_a_condition_is_stored_0600(graph, tmp_path):
+    agent, port, browser, display = graph
+    browser.get(f'http://127.0.0.1:{port}/')
+    agent.session.publish(session_status(phase=SessionStatus.PHASE_DONE))
+    form = browser.find_element('id', 'tlx')
+    assert wait_for(lambda: form.is_displayed(), 30, 0.2)
+    assert 'the part you played' in form.text
+    slider = browser.find_element('name', 'effort')
+    browser.execute_script('arguments[0].value = 80; '
+                           "arguments[0].dispatchEvent(new Event('input'))", slider)
+    form.find_element('tag name', 'button').click()
+    assert wait_for(lambda: not form.is_displayed(), 20, 0.2)
+    stored = tmp_path / 'tlx.yaml'
+    records = yaml.safe_load(stored.read_text())
+    assert records[0]['session_id'] == 'display-test'
+    assert records[0]['scales']['effort'] == 80 and records[0]['scales']['mental'] == 50
+    assert records[0]['raw_tlx'] == pytest.approx((5 * 50 + 80) / 6, abs=0.01)
+    assert stored.stat().st_mode & 0o777 == 0o600
