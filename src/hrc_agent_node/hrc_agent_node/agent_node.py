@@ -149,6 +149,8 @@ class AgentNode(Node):
                     self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
                                f'{self.params.reset_timeout} s')
                 return
+            if self.missing_subscribers(now):
+                return
             self.start_episode()
         if self.pending_state is not None \
                 and now - self.pending_since > self.params.human_action_timeout:
@@ -159,6 +161,25 @@ class AgentNode(Node):
                 f'{self.params.human_action_timeout} s: acting on 0 '
                 f'({self.human_timeouts} timeouts so far)', throttle_duration_sec=5.0)
             self.act(state, 0.0)
+
+    def missing_subscribers(self, now: float) -> bool:
+        """Return True while a node of ``wait_for_subscribers`` does not subscribe to the state.
+
+        Checked before the first episode of this process only; after ``reset_timeout`` the
+        session aborts with the names, rather than run with a recorder that misses the start.
+        """
+        wanted = {name for name in self.params.wait_for_subscribers if name}
+        if not wanted or getattr(self, 'subscribers_seen', False):
+            return False
+        present = {info.node_name for info in self.get_subscriptions_info_by_topic(topics.STATE)}
+        missing = sorted(wanted - present)
+        if not missing:
+            self.subscribers_seen = True
+            return False
+        if now - self.waiting_since > self.params.reset_timeout:
+            self.abort(f'{", ".join(missing)} did not subscribe to {topics.STATE} within '
+                       f'{self.params.reset_timeout} s')
+        return True
 
     def start_episode(self):
         """Begin the next episode in the core and ask the sim to reset for it."""

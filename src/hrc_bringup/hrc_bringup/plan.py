@@ -139,6 +139,8 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
         recorder = parameters['recorder']
         recorder['session_id'] = settings.session_id
         recorder['output_dir'] = settings.bags_dir
+        # The first state of the session is recorded whatever the start-up order or network.
+        agent['wait_for_subscribers'] = ['recorder']
     return parameters
 
 

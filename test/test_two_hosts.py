@@ -1,0 +1,192 @@
+"""Two hosts: the person's station apart from the trainer, over an emulated lab network.
+
+Two network namespaces of this machine joined by an emulated link (hrc_bringup.netlab): the
+**station** runs the human node reading a joystick (a FIFO fed with js_event records, as the
+kernel's joystick driver writes them); the **trainer** runs sim, agent and recorder, and keeps
+the bags. Discovery as docs/two_hosts.md recommends: LOCALHOST range plus the other host as a
+static peer, Fast DDS on UDPv4 only (so nothing bypasses the link through shared memory).
+
+A short realtime session (case 5: the human acts from the first episode) runs on each link
+(no added delay, a 2 ms wired lab, a poor Wi-Fi of 30 +- 10 ms and 1% loss). From the bag
+(recorder on the trainer, beside the sim) the test measures the human command's age at the
+trainer (reception of the state's answer minus reception of the state), the commands missing at
+the sim, and the state period jitter, prints them, and checks that the session stays correct:
+every episode complete in the bag, every missing command counted in the states.
+
+It needs root for the namespaces; without it the test fails with the reason (it skips nothing).
+"""
+
+import os
+import pathlib
+import signal
+import statistics
+import struct
+import subprocess
+import threading
+import time
+
+from hrc_bringup import netlab
+from hrc_bringup.plan import compose, SessionSettings, write_session_files
+from hrc_common.testing import executable_path
+import pytest
+
+STEPS = 20                       # control steps per episode (episode_duration 4 s)
+EPISODES = 3
+REPO = pathlib.Path(__file__).resolve().parents[1]
+JS_EVENT_AXIS = 0x02
+
+
+def js_event(time_ms: int, value: int, kind: int, number: int) -> bytes:
+    """One Linux js_event record: u32 time (ms), s16 value, u8 type, u8 number."""
+    return struct.pack('<IhBB', time_ms & 0xFFFFFFFF, value, kind, number)
+
+
+class StickFeeder(threading.Thread):
+    """The person's hand: a slow sine on axis 1 written to the joystick FIFO at 50 Hz."""
+
+    def __init__(self, fifo: str):
+        super().__init__(daemon=True)
+        self.fd = os.open(fifo, os.O_RDWR)   # plugged in (O_RDWR never blocks on a FIFO)
+        self.stop = threading.Event()
+
+    def run(self):
+        start = time.monotonic()
+        while not self.stop.is_set():
+            elapsed = time.monotonic() - start
+            value = int(12000 * __import__('math').sin(elapsed))
+            try:
+                os.write(self.fd, js_event(int(elapsed * 1000), value, JS_EVENT_AXIS, 1))
+            except OSError:
+                return
+            time.sleep(0.02)
+
+    def close(self):
+        self.stop.set()
+        self.join(timeout=1.0)
+        os.close(self.fd)
+
+
+def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, domain_id: int,
+                         label: str) -> dict:
+    """Run one short realtime session across the two namespaces; return bag-derived figures."""
+    settings = SessionSettings(
+        case=5, seed=0, mode='realtime', human_input='device', training_episodes=EPISODES,
+        evaluation_episodes=0, session_id=f'twohost-{label}', bags_dir=str(tmp_path / 'bags'),
+        runs_dir=str(tmp_path / 'runs'),
+        overrides={'sim.episode_duration': STEPS * 0.2, 'agent.episode_break': 0.5,
+                   'agent.horizon': 64})
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    fifo = str(tmp_path / f'js-{label}')
+    os.mkfifo(fifo)
+    settings.overrides.update({'human.device': fifo, 'human.reopen_period': 0.2})
+    parameters = compose(settings, REPO / 'params')
+    params_path, _ = write_session_files(settings, parameters,
+                                         tmp_path / 'runs' / settings.session_id)
+    feeder = StickFeeder(fifo)
+    feeder.start()
+    processes, logs = {}, {}
+    with netlab.TwoHostLab(name=f'h{os.getpid() % 10000}{label[:2]}', profile=profile,
+                           seed=1) as lab:
+        try:
+            for host, package, executable, node in (
+                    ('trainer', 'hrc_bag', 'recorder_node', 'recorder'),
+                    ('trainer', 'hrc_sim_node', 'sim_node', 'sim'),
+                    ('station', 'hrc_joystick_node', 'human_node', 'human'),
+                    ('trainer', 'hrc_agent_node', 'agent_node', 'agent')):
+                env = dict(os.environ)
+                env.update(lab.ros_environment(host, domain_id))
+                env.pop('ROS_LOCALHOST_ONLY', None)
+                logs[node] = open(tmp_path / f'{label}-{node}.log', 'w+')
+                argv = [str(executable_path(package, executable)), '--ros-args', '-r',
+                        f'__node:={node}', '--params-file', str(params_path)]
+                processes[node] = subprocess.Popen(lab.command(host, argv), env=env,
+                                                   stdout=logs[node], stderr=subprocess.STDOUT)
+            code = processes['agent'].wait(timeout=40 + EPISODES * (STEPS * 0.2 + 4))
+        finally:
+            for node in ('agent', 'human', 'sim', 'recorder'):
+                process = processes.get(node)
+                if process is not None and process.poll() is None:
+                    process.send_signal(signal.SIGINT)
+                    try:
+                        process.wait(timeout=15)
+                    except subprocess.TimeoutExpired:
+                        process.kill()
+                        process.wait()
+            feeder.close()
+        counts = dict(lab.link.counts)
+
+    def log_of(node):
+        logs[node].seek(0)
+        return logs[node].read()[-3000:]
+
+    assert code == 0, f'agent exit {code}\n' + '\n'.join(
+        f'--- {node}\n{log_of(node)}' for node in logs)
+    return {'counts': counts, 'bag': tmp_path / 'bags' / settings.session_id}
+
+
+def figures(bag: dict) -> dict:
+    """Return command age, missing commands and state period jitter from a read bag."""
+    state_times = {}
+    for time_ns, state in bag['timed']['/hrc/state']:
+        stamp = (state.header.stamp.sec, state.header.stamp.nanosec)
+        state_times.setdefault(stamp, time_ns)
+    ages = []
+    for time_ns, command in bag['timed']['/hrc/human/cmd_wrench']:
+        stamp = (command.header.stamp.sec, command.header.stamp.nanosec)
+        if stamp in state_times:
+            ages.append((time_ns - state_times[stamp]) / 1e6)
+    states = [state for _, state in bag['timed']['/hrc/state']]
+    times = [time_ns for time_ns, state in bag['timed']['/hrc/state'] if state.step > 0]
+    periods = [(b - a) / 1e6 for a, b in zip(times, times[1:]) if 0 < (b - a) / 1e6 < 400]
+    jitter = sorted(abs(period - 200.0) for period in periods)
+    missing = sum(state.human_command_missing for state in states if state.step > 0)
+    return {'age_p50_ms': statistics.median(ages), 'age_p99_ms': ages and sorted(ages)[
+        min(len(ages) - 1, int(0.99 * len(ages)))], 'answered': len(ages),
+        'missing': missing, 'steps': sum(1 for state in states if state.step > 0),
+        'jitter_p99_ms': jitter[min(len(jitter) - 1, int(0.99 * len(jitter)))],
+        'states': states}
+
+
+@pytest.fixture
+def read_timed_rosbag(rosbags_typestore):
+    """Return a reader of a bag folder: {'timed': {topic: [(log time ns, message)]}}."""
+    from rosbags.rosbag2 import Reader
+
+    def read(folder):
+        timed = {}
+        with Reader(folder) as reader:
+            for connection, time_ns, raw in reader.messages():
+                timed.setdefault(connection.topic, []).append(
+                    (time_ns, rosbags_typestore.deserialize_cdr(raw, connection.msgtype)))
+        return {'timed': timed}
+    return read
+
+
+def test_two_hosts_on_three_links(tmp_path, ros_domain_id, read_timed_rosbag):
+    reasons = netlab.check_possible()
+    assert not reasons, 'the two-host test needs: ' + '; '.join(reasons)
+    results = {}
+    for label, profile in (('local', netlab.LOCAL), ('wired', netlab.WIRED_LAB),
+                           ('wifi', netlab.POOR_WIFI)):
+        run = run_two_host_session(tmp_path / label, profile, ros_domain_id, label)
+        bag = read_timed_rosbag(run['bag'])
+        result = figures(bag)
+        result['counts'] = run['counts']
+        results[label] = result
+        states = result.pop('states')
+        # Correct whatever the link: every episode complete (STEPS + 1 states), ends truncated.
+        per_episode = {}
+        for state in states:
+            per_episode[state.episode] = per_episode.get(state.episode, 0) + 1
+        assert per_episode == {episode: STEPS + 1 for episode in range(EPISODES)}, per_episode
+        summaries = [time_and.episode for _, time_and in bag['timed']['/hrc/episode']]
+        assert summaries == list(range(EPISODES))
+        # The human's commands crossed the link and reached the trainer's recorder.
+        assert result['answered'] >= result['steps'] // 2, result
+        assert run['counts']['carried'] > 0, run['counts']
+        print(f"[two hosts] {label:5s} ({profile.describe()}): command age p50 "
+              f"{result['age_p50_ms']:.1f} ms, p99 {result['age_p99_ms']:.1f} ms; missing "
+              f"{result['missing']}/{result['steps']}; state period jitter p99 "
+              f"{result['jitter_p99_ms']:.1f} ms; link {run['counts']}")
+    # The link really is in the path: the Wi-Fi's 30 ms each way shows in the command age.
+    assert results['wifi']['age_p50_ms'] > results['local']['age_p50_ms'] + 40.0, results
