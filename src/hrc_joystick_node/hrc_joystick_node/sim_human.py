@@ -51,13 +51,30 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    larger and fall exponentially with the episodes the person has practiced (involved in at
    least one step), time constant ``learning_episodes``; the lead time and the prediction grow
    correspondingly from a fraction to their trained values.
-6. **Fatigue.** Time on task (the steps acted so far in the session) raises the motor noise,
-   the lapse rate and the delay by ``fatigue_per_minute`` per minute (a vigilance decrement).
+6. **Fatigue, bounded and recovering** (:mod:`hrc_joystick_node.fatigue`). Time on task
+   raises the delay, the motor noise and the lapse rate towards a ceiling (a saturating
+   exponential approach, ``fatigue_onset_minutes``, ``fatigue_*_ceiling``); rest restores it
+   (``recovery_minutes``). The clock is the simulation's: :meth:`SimulatedHuman.act` takes the
+   state's stamp (``now``, s on the session clock) and counts one control period per state as
+   time on task and any longer gap (episodes the person sat out) as rest; every episode
+   boundary adds the declared break ``rest_between_episodes``. Without ``now`` (older
+   callers) only the periods acted and the declared breaks count. Never wall time, so a
+   lockstep graph and an in-process run see the same person.
+7. **Adaptation to the partner** (:mod:`hrc_joystick_node.adaptation`). A two-rate state-space
+   model learns, trial by trial (episode by episode), a feedforward stick offset from the error
+   the team left on the person's own level-2 subtask, as the person corrected it (the mean
+   feedback correction of the hold, :attr:`SimulatedHuman.episode_correction`; ``fast_*``,
+   ``slow_*``), so a partner who keeps pushing the person's subtask off is compensated over
+   episodes and re-learned when the partner changes.
+8. **A person of a population.** :func:`hrc_joystick_node.population.sample_person` draws a
+   person around a profile (delay, noises, gains, constant perceptual offsets, learning rates),
+   reproducibly from a seed; the ``*_offset`` fields are such a person's constant misjudgement
+   of the zero (0 in the profiles themselves).
 
 Determinism: every random draw comes from a numpy Generator seeded with ``(seed, episode)`` at
 each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the episode index,
-the practice and time on task so far (``practiced_episodes``, ``steps_on_task``) and the
-sequence of states.
+the person's state so far (``practiced_episodes``, the fatigue and the adaptation, see
+:meth:`SimulatedHuman.snapshot`) and the sequence of states (and stamps).
 
 Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 --------------------------------------------------------------------------
@@ -72,8 +89,18 @@ Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 * Motor noise grows with the command (signal-dependent noise, Harris & Wolpert 1998; Schmidt
   et al. 1979); a person moves a joystick through its range in ~0.2-0.4 s (bandwidth).
 * Practice improves performance roughly exponentially for an individual (Heathcote, Brown &
-  Mewhort 2000); vigilance and performance decline with time on task (Mackworth 1948); the
-  paper kept episodes to 40 s for that reason.
+  Mewhort 2000); vigilance and performance decline with time on task by a few tens of percent
+  over tens of minutes, most of it early, and rest restores it (Mackworth 1948; Grier et al.
+  2003; Warm, Parasuraman & Matthews 2008; see :mod:`hrc_joystick_node.fatigue`); the paper
+  kept episodes to 40 s for that reason.
+* People adapt to a systematic disturbance trial by trial, with a fast and a slow process
+  (Thoroughman & Shadmehr 2000; Smith, Ghazizadeh & Shadmehr 2006; see
+  :mod:`hrc_joystick_node.adaptation`).
+
+What is fact and what is a modelling choice: the structure (delay, PD(+I) control in crossover
+terms, signal-dependent noise, exponential practice, saturating fatigue, two-rate adaptation)
+follows the sources above; every number is a profile parameter chosen to match their orders
+of magnitude (marked per module), not fitted to data of this task.
 """
 
 from dataclasses import dataclass, fields
@@ -86,6 +113,8 @@ import yaml
 
 from hrc_common.dof import check_dof, ROTATION, TRANSLATION
 from hrc_common.params import from_dict, param, ParameterError
+from hrc_joystick_node.adaptation import TwoRateAdaptation
+from hrc_joystick_node.fatigue import Fatigue
 
 SLIDER = 'slider'
 PENDULUM = 'pendulum'
@@ -158,13 +187,42 @@ class HumanProfile:
                                      low=0.0, high=1.0)
     lapse_probability: float = param(0.01, 'chance per step that the stick is held unchanged',
                                      low=0.0, high=1.0)
-    # learning and fatigue
+    # learning curve
     untrained_factor: float = param(1.2, 'noises, biases and lapses of the first episode, '
                                     'relative to the trained person', low=1.0, high=20.0)
     learning_episodes: float = param(4.0, 'time constant of the learning curve (episodes)',
                                      low=0.1, high=10000.0)
-    fatigue_per_minute: float = param(0.01, 'growth of motor noise, lapses and delay per '
-                                      'minute on task (relative)', low=0.0, high=10.0)
+    # fatigue (hrc_joystick_node.fatigue)
+    fatigue_onset_minutes: float = param(20.0, 'time on task (simulation min) that takes '
+                                         'fatigue 63 % of the way to its ceiling', low=0.01,
+                                         high=100000.0)
+    recovery_minutes: float = param(5.0, 'rest (simulation min) that removes 63 % of the '
+                                    'fatigue', low=0.01, high=100000.0)
+    fatigue_delay_ceiling: float = param(0.15, 'largest relative increase of the reaction '
+                                         'delay with fatigue', low=0.0, high=10.0)
+    fatigue_noise_ceiling: float = param(0.3, 'largest relative increase of the motor noise '
+                                         'with fatigue', low=0.0, high=10.0)
+    fatigue_lapse_ceiling: float = param(1.0, 'largest relative increase of the lapse '
+                                         'probability with fatigue', low=0.0, high=100.0)
+    rest_between_episodes: float = param(10.0, 'declared break between two episodes (s of '
+                                         'simulation time: reset, countdown, the update)',
+                                         low=0.0, high=100000.0)
+    # adaptation to the partner (hrc_joystick_node.adaptation)
+    fast_retention: float = param(0.6, 'retention per episode of the fast adaptation process',
+                                  low=0.0, high=0.9999)
+    fast_learning_rate: float = param(0.2, 'learning rate per episode of the fast process '
+                                      '(share of the episode error)', low=0.0, high=2.0)
+    slow_retention: float = param(0.97, 'retention per episode of the slow adaptation process',
+                                  low=0.0, high=0.9999)
+    slow_learning_rate: float = param(0.05, 'learning rate per episode of the slow process',
+                                      low=0.0, high=2.0)
+    # a person of the population (hrc_joystick_node.population); 0 in the profiles
+    slider_offset: float = param(0.0, "this person's constant misjudgement of the middle of "
+                                 'the rod (m)', low=-0.1, high=0.1)
+    pendulum_offset: float = param(0.0, "this person's constant misjudgement of the "
+                                   'horizontal (rad)', low=-1.0, high=1.0)
+    ball_offset: float = param(0.0, "this person's constant misjudgement of the middle of the "
+                               'beam (m)', low=-0.25, high=0.25)
 
 
 def default_profiles_path() -> pathlib.Path:
@@ -242,25 +300,47 @@ class SimulatedHuman:
         self.seed = int(seed)
         self.control_period = float(control_period)
         self.practiced_episodes = int(practiced_episodes)
-        self.steps_on_task = 0  # steps acted in the whole session (fatigue)
+        self.steps_on_task = 0  # steps acted in the whole session
+        self.fatigue = Fatigue(profile.fatigue_onset_minutes * 60.0,
+                               profile.recovery_minutes * 60.0, profile.fatigue_delay_ceiling,
+                               profile.fatigue_noise_ceiling, profile.fatigue_lapse_ceiling)
+        self.adaptation = TwoRateAdaptation(profile.fast_retention, profile.fast_learning_rate,
+                                            profile.slow_retention, profile.slow_learning_rate)
         self.episode = None
+        self._last_time = None  # simulation time (s) of the last state acted on
         self._acted_this_episode = False
+        self._error_sum = 0.0  # this episode's own-subtask error (normalized), for adaptation
+        self._error_steps = 0
         self.reset(0)
 
     # -- episode -------------------------------------------------------------------------
-    def reset(self, episode: int) -> None:
-        """Start episode ``episode``: reseed, draw the episode's biases, clear the memory."""
+    def reset(self, episode: int, rest_seconds: typing.Optional[float] = None) -> None:
+        """Start episode ``episode``: learn from the last one, rest, reseed, clear the memory.
+
+        Each episode boundary passed since the last episode rests the person for
+        ``rest_seconds`` (default: the profile's ``rest_between_episodes``), simulation time.
+        """
         if self._acted_this_episode:
             self.practiced_episodes += 1
+            if self._error_steps:
+                self.adaptation.update(self.episode_correction)
+        if self.episode is not None and int(episode) != self.episode:
+            boundaries = max(1, int(episode) - self.episode)
+            rest = self.profile.rest_between_episodes if rest_seconds is None else rest_seconds
+            self.fatigue.rest(boundaries * float(rest))
         self._acted_this_episode = False
+        self._error_sum, self._error_steps = 0.0, 0
         self.episode = int(episode)
         self._rng = numpy.random.default_rng([self.seed, self.episode])
         profile, practice = self.profile, self.practice_factor
         self._bias = _Percept(
-            slider=self._rng.normal(0.0, profile.slider_bias * practice), slider_velocity=0.0,
-            pendulum=self._rng.normal(0.0, profile.pendulum_bias * practice),
+            slider=profile.slider_offset + self._rng.normal(0.0, profile.slider_bias * practice),
+            slider_velocity=0.0,
+            pendulum=profile.pendulum_offset + self._rng.normal(0.0,
+                                                                profile.pendulum_bias * practice),
             pendulum_velocity=0.0,
-            ball=self._rng.normal(0.0, profile.ball_bias * practice), ball_velocity=0.0)
+            ball=profile.ball_offset + self._rng.normal(0.0, profile.ball_bias * practice),
+            ball_velocity=0.0)
         self._history: typing.List[_Percept] = []
         self._stick = 0.0  # where the stick is (normalized), before motor noise
         self._intent = 0.0  # where the arm is heading (after the rate limit)
@@ -275,22 +355,62 @@ class SimulatedHuman:
 
     @property
     def fatigue_factor(self) -> float:
-        """Multiplier (>= 1) of motor noise, lapses and delay from time on task."""
-        minutes = self.steps_on_task * self.control_period / 60.0
-        return 1.0 + self.profile.fatigue_per_minute * minutes
+        """Multiplier (>= 1) of the motor noise from fatigue (delay and lapses: ``fatigue``)."""
+        return self.fatigue.noise_factor
+
+    @property
+    def episode_correction(self) -> float:
+        """Mean feedback correction of the own subtask so far this episode (stick units).
+
+        The error the team leaves on the person's subtask as the person corrects it: what the
+        adaptation learns from when the episode ends (0 before any step on the subtask).
+        """
+        return self._error_sum / self._error_steps if self._error_steps else 0.0
+
+    def snapshot(self) -> dict:
+        """Return the person's state carried between episodes, as plain values."""
+        return {'practiced_episodes': self.practiced_episodes,
+                'steps_on_task': self.steps_on_task, 'last_time': self._last_time,
+                'fatigue': self.fatigue.snapshot(), 'adaptation': self.adaptation.snapshot()}
+
+    def restore(self, snapshot: dict) -> None:
+        """Take a state of :meth:`snapshot` (call :meth:`reset` afterwards)."""
+        self.practiced_episodes = int(snapshot['practiced_episodes'])
+        self.steps_on_task = int(snapshot['steps_on_task'])
+        self._last_time = snapshot['last_time']
+        self.fatigue.restore(snapshot['fatigue'])
+        self.adaptation.restore(snapshot['adaptation'])
+        self._acted_this_episode = False
+
+    def _advance_clock(self, now: typing.Optional[float]) -> None:
+        """Count the time since the last state acted on: one period on task, the rest rest."""
+        period = self.control_period
+        if now is None:
+            now = period if self._last_time is None else self._last_time + period
+        gap = period if self._last_time is None else float(now) - self._last_time
+        if gap > 0.0:
+            self.fatigue.work(min(gap, period))
+            self.fatigue.rest(gap - period)
+        self._last_time = float(now)
 
     # -- one step ------------------------------------------------------------------------
-    def act(self, state, subtasks) -> float:
-        """Return the stick command in [-1, 1] for ``state`` given the assigned subtasks."""
+    def act(self, state, subtasks, now: typing.Optional[float] = None) -> float:
+        """Return the stick command in [-1, 1] for ``state`` given the assigned subtasks.
+
+        ``now``: the simulation time of ``state`` on the session clock (s; the TaskState
+        stamp), for fatigue and rest; None counts one control period per call.
+        """
         subtasks, _ = normalize_subtasks(subtasks)
         profile, rng = self.profile, self._rng
-        practice, fatigue = self.practice_factor, self.fatigue_factor
+        practice = self.practice_factor
+        self._advance_clock(now)
+        fatigue = self.fatigue
         self._acted_this_episode = True
         self.steps_on_task += 1
 
         self._history.append(self._perceive(state, practice))
         del self._history[:-HISTORY_LENGTH]
-        delay = profile.reaction_delay * fatigue
+        delay = profile.reaction_delay * fatigue.delay_factor
         seen = self._delayed(delay / self.control_period)
         # Extrapolate the delayed percept over the compensated share of the delay; a novice
         # (practice > 1) anticipates less.
@@ -319,7 +439,7 @@ class SimulatedHuman:
                 intent += (angle - target_angle) / profile.coupling_full_scale
         intent = max(-1.0, min(1.0, intent))
 
-        lapse = profile.lapse_probability * practice * fatigue
+        lapse = profile.lapse_probability * practice * fatigue.lapse_factor
         if rng.random() >= lapse:
             # Bandwidth: a slew-rate limit, then the neuromuscular lag toward that point.
             step_limit = profile.max_rate * self.control_period
@@ -330,12 +450,17 @@ class SimulatedHuman:
                 follow = 1.0
             self._stick += follow * (self._intent - self._stick)
         noise_std = (profile.motor_noise * abs(self._stick)
-                     + profile.motor_noise_floor) * practice * fatigue
+                     + profile.motor_noise_floor) * practice * fatigue.noise_factor
         command = self._stick + rng.normal(0.0, noise_std)
         return max(-1.0, min(1.0, float(command)))
 
     def _hold(self, error: float, rate: float, lead: float, full_scale: float) -> float:
-        """Return the normalized push against ``error`` of the level-2 hold (PID in effect)."""
+        """Return the normalized push against ``error`` of the level-2 hold (PID in effect).
+
+        Plus the learned feedforward against the partner (adaptation); the feedback part is
+        the error as the person corrects it (stick units), which the adaptation learns from
+        at the end of the episode (feedback-error learning).
+        """
         push = (error + lead * rate) / full_scale
         if self.profile.integral_time > 0.0:
             self._hold_integral += error / full_scale * (self.control_period
@@ -343,7 +468,9 @@ class SimulatedHuman:
             # Anti-windup: the integral alone never asks for more than the full stick.
             self._hold_integral = max(-1.0, min(1.0, self._hold_integral))
             push += self._hold_integral
-        return push
+        self._error_sum += push
+        self._error_steps += 1
+        return push + self.adaptation.compensation
 
     def _perceive(self, state, practice: float) -> _Percept:
         profile, rng, bias = self.profile, self._rng, self._bias
