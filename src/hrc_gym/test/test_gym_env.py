@@ -1,0 +1,156 @@
+"""The Gymnasium and PettingZoo environments: API checks, seeding, reward identity, bad input."""
+
+import warnings
+
+import gymnasium
+from gymnasium.utils.env_checker import check_env
+import numpy as np
+from pettingzoo.test import parallel_api_test
+import pytest
+
+import hrc_gym
+from hrc_common.params import ParameterError
+from hrc_gym.compare import train_ours
+from hrc_gym.env import SliderPendulumBallEnv
+
+
+def _checked(env):
+    """Run check_env and fail on any warning it raises (a warning is a finding)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        check_env(env)
+
+
+def test_make_finds_the_registered_id_and_check_env_passes():
+    env = gymnasium.make(hrc_gym.ENV_ID, case=2, training_step=0, preset='tuned',
+                         render_mode='rgb_array')
+    try:
+        assert isinstance(env.unwrapped, SliderPendulumBallEnv)
+        _checked(env.unwrapped)
+        env.reset(seed=0)
+        image = env.render()
+        assert image.shape == (240, 320, 3) and image.dtype == np.uint8
+        assert image.std() > 0  # something is drawn
+    finally:
+        env.close()
+
+
+def test_check_env_passes_with_the_human_and_rates():
+    env = gymnasium.make(hrc_gym.ENV_ID, case=2, training_step=-1, human='paper',
+                         observe_rates=True, render_mode='rgb_array')
+    try:
+        _checked(env.unwrapped)
+        assert env.observation_space.shape == (7,)
+    finally:
+        env.close()
+
+
+def _trajectory(env, seed, actions):
+    observation, _ = env.reset(seed=seed)
+    rows = [observation]
+    for episode in range(2):
+        if episode:
+            rows.append(env.reset()[0])
+        for action in actions:
+            observation, reward, terminated, truncated, info = env.step(action)
+            rows.append(np.concatenate([observation, [reward, info['human_action']]]))
+            if terminated or truncated:
+                break
+    return np.concatenate([np.ravel(row) for row in rows])
+
+
+def test_same_seed_same_trajectory_with_the_simulated_human():
+    # The whole task: physics starts, human noise and the human's practice all from the seed.
+    actions = [np.array([np.sin(0.1 * k)], dtype=np.float32) for k in range(200)]
+    env = SliderPendulumBallEnv(case=6, human='paper', preset='tuned')
+    other = SliderPendulumBallEnv(case=6, human='paper', preset='tuned')
+    try:
+        first = _trajectory(env, 7, actions)
+        again = _trajectory(other, 7, actions)
+        np.testing.assert_array_equal(first, again)
+        assert not np.array_equal(first, _trajectory(env, 8, actions))
+        # The human acted (nonzero commands) and the episode ended by truncation at 200 steps.
+        env.reset(seed=7)
+        for action in actions:
+            _, _, terminated, truncated, info = env.step(action)
+        assert truncated and not terminated and info['step'] == 200
+        assert set(info['episode_errors']) == {'ball', 'slider', 'pendulum'}
+    finally:
+        env.close()
+        other.close()
+
+
+def test_robot_alone_step_gives_the_human_nothing_to_do_and_rewards_level_two_only():
+    env = SliderPendulumBallEnv(case=2, training_step=0, human='paper', preset='tuned')
+    try:
+        observation, _ = env.reset(seed=1)
+        _, reward, _, _, info = env.step(np.array([0.3], dtype=np.float32))
+        assert info['human_action'] == 0.0 and observation[3] == 0.0
+        assert set(info['reward_components']) == {'slider', 'pendulum'}
+        assert reward == pytest.approx(sum(info['reward_components'].values()))
+    finally:
+        env.close()
+
+
+def test_a_human_model_object_is_asked_with_its_subtasks():
+    class Constant:
+        def __init__(self):
+            self.calls, self.resets = [], []
+
+        def reset(self, episode):
+            self.resets.append(episode)
+
+        def act(self, state, subtasks):
+            self.calls.append(tuple(subtasks))
+            return 0.5
+
+    model = Constant()
+    env = SliderPendulumBallEnv(case=2, training_step=1, human_model=model)
+    try:
+        env.reset(seed=0)
+        observation, _, _, _, info = env.step(np.zeros(1, dtype=np.float32))
+        env.reset()
+        # Case 2: the human translates; it holds the slider (its direct subtask) and the ball.
+        assert model.calls == [('ball', 'slider')] and model.resets == [0, 1]
+        assert info['human_action'] == 0.5
+        assert observation[3] == pytest.approx(0.5)  # a_h: the applied command, normalized
+    finally:
+        env.close()
+
+
+def test_our_ppo_earns_exactly_the_environment_reward():
+    # train_ours raises if AgentCore's own return of an episode differs from the env's.
+    records = train_ours('whole', 3, 2)
+    assert len(records) == 2 and all(record['return'] > 0 for record in records)
+
+
+def test_parallel_api_test_passes():
+    env = hrc_gym.parallel_env(case=6, preset='tuned', render_mode='rgb_array')
+    try:
+        parallel_api_test(env, num_cycles=210)
+        observations, _ = env.reset(seed=0)
+        assert set(observations) == {'robot', 'human'}
+        _, rewards, _, _, infos = env.step({'robot': np.array([0.1], dtype=np.float32),
+                                            'human': np.array([-0.2], dtype=np.float32)})
+        # Case 6: the robot's reward is all three subtasks; the human's its own two.
+        assert set(infos['robot']['reward_components']) == {'ball', 'slider', 'pendulum'}
+        assert set(infos['human']['reward_components']) == {'ball', 'slider'}
+        assert rewards['robot'] > rewards['human'] > 0
+        assert env.render().shape == (240, 320, 3)
+    finally:
+        env.close()
+
+
+def test_bad_parameters_are_refused_with_every_reason():
+    with pytest.raises(ParameterError) as caught:
+        SliderPendulumBallEnv(case=9, observe_rates='yes', colour='red')
+    assert 'colour' in str(caught.value)
+    with pytest.raises(ParameterError) as caught:
+        SliderPendulumBallEnv(case=9, observe_rates='yes')
+    assert 'case' in str(caught.value) and 'observe_rates' in str(caught.value)
+    with pytest.raises(ParameterError, match='training_step 3'):
+        SliderPendulumBallEnv(case=2, training_step=3)
+    with pytest.raises(ParameterError, match='martian'):
+        SliderPendulumBallEnv(human='martian')
+    with pytest.raises(ParameterError, match='does not involve the human'):
+        hrc_gym.parallel_env(case=2, training_step=0)
