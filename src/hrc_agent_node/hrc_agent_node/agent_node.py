@@ -142,7 +142,8 @@ class AgentNode(Node):
         if self.core.phase in ('done', 'paused'):
             return
         if not self.core.in_episode and self.reset_future is None:
-            if self.core.phase == 'updating' or now < self.next_episode_at:
+            if self.core.phase == 'updating' or (now < self.next_episode_at and
+                                                 self.next_clock_mode() == 'realtime'):
                 return
             if not self.reset_client.service_is_ready():
                 if now - self.waiting_since > self.params.reset_timeout:
@@ -187,7 +188,8 @@ class AgentNode(Node):
         self.stamps = {}
         self.pending_state = None
         self.human_actions.clear()
-        request = ResetEpisode.Request(seed=plan.seed, episode=plan.episode)
+        request = ResetEpisode.Request(seed=plan.seed, episode=plan.episode,
+                                       clock_mode=self.next_clock_mode())
         self.reset_future = self.reset_client.call_async(request)
         self.reset_future.add_done_callback(self.on_reset_done)
         self.publish_session(f'episode {plan.episode} '
@@ -298,6 +300,14 @@ class AgentNode(Node):
         """Return the path of the episode-end checkpoint ('' without checkpoints)."""
         return os.path.join(self.checkpoint_dir, LATEST_CHECKPOINT) if self.checkpoint_dir \
             else ''
+
+    def next_clock_mode(self) -> str:
+        """Return the sim's clock for the next episode (ResetEpisode.clock_mode).
+
+        The session's mode while the person acts; lockstep, without a break, while the robot
+        practises alone, so the person does not wait for it (issue 14, hrc_live).
+        """
+        return self.params.mode if self.core.human_involved else 'lockstep'
 
     def break_seconds(self) -> float:
         """Return the wall seconds of the break between episodes (realtime only)."""
