@@ -1,0 +1,303 @@
+"""A whole headless hrc session in one process, from the same pure cores as the nodes.
+
+The graph runs four processes talking over DDS; the engine calls the same cores directly, in
+the order the lockstep graph makes them act, and writes the same bags:
+
+* sim: :class:`~hrc_sim_node.physics.SliderPendulumBall` and the step protocol
+  :class:`~hrc_sim_node.protocol.StepProtocol` (stamps, command reading and clamping, per-DOF
+  dispatch, counters), with the sim's parameters;
+* agent: :class:`~hrc_agent_node.agent_core.AgentCore` (strategy steps, PPO, evaluation) with
+  the agent's parameters, checkpoints as the agent node writes them;
+* human: the simulated human (``hrc_joystick_node.sim_human``) answering each state as the
+  human node does with ``input: sim``;
+* recording: one MCAP file per episode, ``metadata.yaml``, the ``hrc_session`` record, QoS
+  metadata and type hashes (``hrc_bag.session_writer``), so ``hrc_report`` and rosbags read
+  the bags of both engines alike.
+
+For the same parameters and seed, the states, actions and rewards equal those of the graph in
+lockstep (test/test_engine_equivalence.py). What differs: log and SessionStatus times are the
+engine's wall clock, and nothing waits (no lockstep timeout can fire, nothing is missing).
+
+API (picklable, for Ray or a process pool)::
+
+    from hrc_engine.engine import EngineConfig, run_session
+    result = run_session(EngineConfig(case=2, seed=0, training_episodes=30,
+                                      bags_dir='bags', runs_dir='runs'))
+    result.evaluation['total_error'], result.bag_dir
+"""
+
+from dataclasses import asdict, dataclass, field
+import os
+import pathlib
+import time
+import typing
+
+import yaml
+
+from hrc_engine import messages
+from hrc_engine.human import SimulatedHumanSide
+
+# The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns):
+# hrc_common.qos without rclpy (a test checks that both agree).
+COMMAND_DEADLINE_NS = 1_000_000_000
+OFFERED_QOS = {
+    '/hrc/state': (True, False, 0),
+    '/hrc/robot/cmd_wrench': (True, False, COMMAND_DEADLINE_NS),
+    '/hrc/human/cmd_wrench': (True, False, COMMAND_DEADLINE_NS),
+    '/hrc/human/action': (True, False, 0),
+    '/hrc/session': (True, True, 0),
+    '/hrc/episode': (True, True, 0),
+    '/hrc/agent/step': (True, False, 0),
+}
+LATEST_CHECKPOINT = 'latest.pt'
+FINAL_CHECKPOINT = 'final.pt'
+
+
+@dataclass
+class EngineConfig:
+    """One session to run in process: what a user gives ``session`` (plain values, picklable)."""
+
+    case: int = 2                       # paper case 1..6
+    seed: int = 0                       # session seed (agent, sim, human)
+    training_episodes: int = 0          # > 0: max training episodes (else agent.yaml's)
+    evaluation_episodes: int = -1       # >= 0: evaluation episodes (else agent.yaml's)
+    session_id: str = ''                # '' = case<N>-seed<S>-<time>
+    bags_dir: str = 'bags'              # bags land in <bags_dir>/<session_id>/
+    runs_dir: str = 'runs'              # session.yaml and checkpoints in <runs_dir>/...
+    record: bool = True                 # write the bags
+    checkpoints: bool = True            # write latest.pt after each episode, final.pt
+    human_profile: str = ''             # simulated-human profile ('' = human.yaml's)
+    overrides: dict = field(default_factory=dict)   # {'sim.episode_duration': 8.0, ...}
+    params_dir: str = ''                # '' = ./params in a checkout, else the installed ones
+    resume_from: str = ''               # a checkpoint to continue from
+    parameters: typing.Optional[dict] = None  # composed {node: {...}}; None = compose here
+    quiet: bool = True                  # False: one line per episode on stdout
+
+
+@dataclass
+class SessionResult:
+    """What a session produced (plain values, picklable)."""
+
+    session_id: str
+    case: int
+    seed: int
+    strategy: str
+    training_episodes: int
+    human_involved_episodes: int
+    converged: bool
+    evaluation: dict                    # Table II metrics over the evaluation episodes
+    episodes: list                      # one dict per episode (EpisodeSummary fields)
+    steps: int                          # control steps run
+    wall_seconds: float
+    bag_dir: str = ''                   # '' when not recorded
+    run_dir: str = ''
+    counters: dict = field(default_factory=dict)  # the sim's command events (all zero here)
+
+
+def compose_parameters(config: EngineConfig) -> tuple:
+    """Return (SessionSettings, {node: parameters}) exactly as ``session`` composes them."""
+    from hrc_bringup.plan import compose, new_session_id, SessionSettings
+    from hrc_bringup.session import default_params_dir
+
+    settings = SessionSettings(
+        case=config.case, seed=config.seed, mode='lockstep', human_input='sim',
+        human_profile=config.human_profile, training_episodes=config.training_episodes,
+        evaluation_episodes=config.evaluation_episodes, session_id=config.session_id,
+        bags_dir=config.bags_dir, runs_dir=config.runs_dir, record=config.record,
+        resume_from=config.resume_from, overrides=dict(config.overrides))
+    if not settings.session_id:
+        settings.session_id = new_session_id(settings)
+    params_dir = pathlib.Path(config.params_dir) if config.params_dir else default_params_dir()
+    parameters = config.parameters or compose(settings, params_dir)
+    return settings, parameters
+
+
+def topic_descriptions() -> dict:
+    """Return {topic: TopicDescription} as the graph's publishers offer them (no rclpy)."""
+    from hrc_bag.format import contract_description
+    from hrc_bag.session_writer import TOPIC_TYPES
+    return {topic: contract_description(TOPIC_TYPES[topic], *OFFERED_QOS[topic])
+            for topic in OFFERED_QOS}
+
+
+class WallClock:
+    """Strictly increasing wall time (ns since the epoch) for log times."""
+
+    def __init__(self):
+        self._last = 0
+
+    def __call__(self) -> int:
+        self._last = max(self._last + 1, time.time_ns())
+        return self._last
+
+
+class InProcessSession:
+    """One session: the cores wired as the lockstep graph wires the nodes."""
+
+    def __init__(self, config: EngineConfig):
+        from hrc_agent_node.agent_core import AgentCore
+        from hrc_agent_node.config import AgentParams
+        from hrc_common.params import from_dict
+        from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+        from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
+        from hrc_sim_node.sim_params import LOCKSTEP, SimParams
+
+        self.config = config
+        self.settings, self.parameters = compose_parameters(config)
+        self.session_id = self.settings.session_id
+        sim_values = dict(self.parameters['sim'], mode=LOCKSTEP)
+        self.sim_params = from_dict(SimParams, sim_values)
+        self.agent_params = from_dict(AgentParams, self.parameters['agent'])
+        self.physics = SliderPendulumBall(physics_params_of(self.sim_params))
+        self.protocol = StepProtocol(ProtocolSettings.of(self.sim_params))
+        self.core = AgentCore(self.agent_params)
+        if self.agent_params.resume_from:
+            from hrc_agent_node.checkpoint import load_into
+            load_into(self.core, self.agent_params.resume_from,
+                      resume=not self.agent_params.evaluation_only)
+        self.human = SimulatedHumanSide(self.parameters['human'])
+        self.clock = WallClock()
+        self.run_dir = pathlib.Path(self.settings.runs_dir) / self.session_id
+        checkpoint_root = self.agent_params.checkpoint_dir
+        self.checkpoint_dir = (pathlib.Path(checkpoint_root) / self.core.session_id
+                               if checkpoint_root and config.checkpoints else None)
+        self.writer = None
+        self.episodes = []
+        self.steps = 0
+        self._stamps = {}                # step -> stamp (ns) of the running episode's states
+
+    # -- recording --------------------------------------------------------------------------
+    def _open_bags(self) -> None:
+        from hrc_bag.session_writer import SessionWriter
+        from hrc_bringup.plan import write_session_files
+
+        _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
+        text = config_path.read_text()
+        self.writer = SessionWriter(self.settings.bags_dir, self.session_id,
+                                    session_config=yaml.safe_load(text),
+                                    session_config_text=text,
+                                    descriptions=topic_descriptions())
+
+    def _write(self, topic: str, message: dict) -> None:
+        if self.writer is not None:
+            self.writer.write(topic, message, self.clock())
+
+    def _announce(self, text: str) -> None:
+        """Publish a SessionStatus as the agent does (and tell the human the roles)."""
+        core = self.core
+        self.human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
+        self._write('/hrc/session', messages.session_status(core, text, self.clock()))
+
+    # -- the session ------------------------------------------------------------------------
+    def run(self) -> SessionResult:
+        """Run the session to its end (phase done); return its result."""
+        started = time.perf_counter()
+        if self.config.record:
+            self._open_bags()
+        core = self.core
+        try:
+            self._announce('session starting: ' + core.status_line())
+            while core.phase not in ('done', 'aborted'):
+                self._episode()
+            summary = core.evaluation_summary()
+            self._save_checkpoint(FINAL_CHECKPOINT)
+            self._announce('session done: ' + core.status_line())
+        finally:
+            if self.writer is not None:
+                self.writer.close()
+            self.physics.close()
+        return SessionResult(
+            self.session_id, core.case.case_id, self.agent_params.seed, core.case.strategy,
+            core.total_episodes, core.human_involved_episodes, bool(core.progress.finished),
+            summary, self.episodes, self.steps, time.perf_counter() - started,
+            str(pathlib.Path(self.settings.bags_dir) / self.session_id)
+            if self.writer is not None else '', str(self.run_dir),
+            dict(self.protocol.totals))
+
+    def _episode(self) -> None:
+        """One episode: reset, the lockstep steps, the episode's end as the agent handles it."""
+        from hrc_sim_node.commands import HUMAN, ROBOT
+
+        core, protocol, physics = self.core, self.protocol, self.physics
+        plan = core.start_episode()
+        self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
+                       f'starting: ' + core.status_line())
+        state = physics.reset(seed=plan.seed)
+        protocol.start_episode(plan.episode)
+        if self.writer is not None:
+            self.writer.begin_episode(plan.episode)
+        stamp = self._publish_state(state, {})
+        while not (state.truncated or state.terminated):
+            answer = self.human.answer(plan.episode, state)
+            human_wrench = messages.wrench_on(answer.dof, answer.wrench)
+            # The human's answer to the same state only when the core asks for it (same_step).
+            decision = core.act(state, answer.command if core.needs_human_action else None)
+            robot_wrench = messages.wrench_on(core.robot_dof, decision.wrench)
+            self._write('/hrc/robot/cmd_wrench', messages.wrench_stamped(stamp, robot_wrench))
+            if decision.previous is not None:
+                self._write_step(decision.previous)
+            self._write('/hrc/human/action',
+                        messages.human_action(stamp, plan.episode, state.step, answer))
+            self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(stamp, human_wrench))
+            now = time.monotonic()
+            protocol.on_command(ROBOT, stamp, robot_wrench, now)
+            order = protocol.on_command(HUMAN, stamp, human_wrench, now).order
+            if order is None:  # cannot happen: both actors answered the awaited stamp
+                raise RuntimeError(f'step {state.step}: the protocol did not step')
+            state = physics.step(order.force, order.torque)
+            stamp = self._publish_state(state, order.missing)
+            self.steps += 1
+        self._finish_episode(state, stamp)
+
+    def _publish_state(self, state, missing: dict) -> int:
+        stamp = self.protocol.next_stamp(state.step, state.truncated or state.terminated)
+        self._stamps[state.step] = stamp
+        self._write('/hrc/state', messages.task_state(state, self.protocol.episode, stamp,
+                                                      missing))
+        return stamp
+
+    def _write_step(self, record) -> None:
+        self._write('/hrc/agent/step', messages.agent_step(record, self._stamps[record.step]))
+
+    def _finish_episode(self, final, stamp: int) -> None:
+        core = self.core
+        result = core.end_episode(final)
+        if result.last_record is not None:
+            self._write_step(result.last_record)
+        summary = messages.episode_summary(core, result, stamp)
+        self._write('/hrc/episode', summary)
+        self.episodes.append({key: value for key, value in summary.items() if key != 'header'})
+        if not self.config.quiet:
+            kind = ' (evaluation)' if result.evaluation else ''
+            print(f'[engine] episode {result.episode}{kind}: return '
+                  f'{result.episode_return:.2f}, total error '
+                  f'{result.total_error:.4f}{", converged" if result.converged else ""}',
+                  flush=True)
+        if core.phase == 'updating':
+            self._announce(f'updating the policy after episode {result.episode} '
+                           f'({len(core.buffer)} samples)')
+            core.update()
+        self._save_checkpoint(LATEST_CHECKPOINT)
+        if core.phase != 'done':
+            self._announce(core.status_line())
+        if self.writer is not None:
+            # The recorder closes an episode's file close_grace after its summary; here it
+            # closes at once, after the SessionStatus that follows the episode.
+            self.writer.end_episode()
+        self._stamps = {}
+
+    def _save_checkpoint(self, name: str) -> None:
+        if self.checkpoint_dir is None:
+            return
+        from hrc_agent_node.checkpoint import save_checkpoint
+        save_checkpoint(self.core, os.path.join(self.checkpoint_dir, name))
+
+
+def run_session(config: EngineConfig) -> SessionResult:
+    """Run one session in this process (see the module docstring); return its result."""
+    return InProcessSession(config).run()
+
+
+def config_dict(config: EngineConfig) -> dict:
+    """Return the config as plain values (for logs and experiment tables)."""
+    return asdict(config)

@@ -1,0 +1,93 @@
+"""``ros2 run hrc_engine inprocess_session``: one headless session in one process, no DDS.
+
+The same session as ``ros2 run hrc_bringup session --mode lockstep`` (same parameter files,
+same ``--set`` overrides, same bags and report), computed in one process from the nodes'
+cores: several times faster, and nothing to start or stop. A person at a joystick, realtime,
+live display or replay need the graph.
+"""
+
+import argparse
+import json
+import sys
+
+from hrc_engine.engine import EngineConfig, run_session
+
+
+def parse_args(argv=None) -> EngineConfig:
+    """Parse the command line into an EngineConfig (exit code 2 with every reason if bad)."""
+    parser = argparse.ArgumentParser(
+        prog='inprocess_session', description='Run one hrc session (one case, one seed) in '
+        'one process: physics, step protocol, PPO agent, simulated human, evaluation, '
+        'checkpoints and the bags of the graph, without ROS communication.')
+    parser.add_argument('--case', type=int, default=2, help='paper case 1..6 (default 2)')
+    parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
+    parser.add_argument('--episodes', type=int, default=0,
+                        help='max training episodes (default: params/agent.yaml)')
+    parser.add_argument('--eval-episodes', type=int, default=-1,
+                        help='evaluation episodes (default: params/agent.yaml)')
+    parser.add_argument('--session-id', default='', help='default: case<N>-seed<S>-<time>')
+    parser.add_argument('--bags-dir', default='bags', help='bags land in <bags-dir>/<id>/')
+    parser.add_argument('--runs-dir', default='runs',
+                        help='session.yaml and checkpoints in <runs-dir>/ (default runs)')
+    parser.add_argument('--no-record', action='store_true', help='write no bags')
+    parser.add_argument('--no-checkpoints', action='store_true', help='write no checkpoints')
+    parser.add_argument('--human-profile', default='', help='simulated-human profile')
+    parser.add_argument('--params-dir', default='', help='parameter files (default: ./params '
+                        'in a checkout, else the installed ones)')
+    parser.add_argument('--resume-from', default='', help='continue from this checkpoint')
+    parser.add_argument('--set', action='append', default=[], metavar='NODE.NAME=VALUE',
+                        help='override a node parameter (YAML value), as with session')
+    parser.add_argument('--json', action='store_true', help='print the result as JSON')
+    options = parser.parse_args(argv)
+
+    from hrc_bringup.plan import parse_override
+
+    reasons, overrides = [], {}
+    for text in options.set:
+        try:
+            node, name, value = parse_override(text)
+            overrides[f'{node}.{name}'] = value
+        except ValueError as error:
+            reasons.append(str(error))
+    if options.episodes < 0:
+        reasons.append(f'--episodes must be >= 0, got {options.episodes}')
+    if reasons:
+        parser.exit(2, 'inprocess_session: ' + '; '.join(reasons) + '\n')
+    return EngineConfig(
+        case=options.case, seed=options.seed, training_episodes=options.episodes,
+        evaluation_episodes=options.eval_episodes, session_id=options.session_id,
+        bags_dir=options.bags_dir, runs_dir=options.runs_dir, record=not options.no_record,
+        checkpoints=not options.no_checkpoints, human_profile=options.human_profile,
+        overrides=overrides, params_dir=options.params_dir,
+        resume_from=options.resume_from, quiet=options.json), options.json
+
+
+def main(argv=None) -> int:
+    """Run the session; print its result; exit 0, or 2 for bad parameters."""
+    from hrc_common.params import ParameterError
+
+    config, as_json = parse_args(argv)
+    try:
+        result = run_session(config)
+    except (ParameterError, ValueError, OSError) as error:
+        print(f'inprocess_session: {error}', file=sys.stderr)
+        return 2
+    if as_json:
+        print(json.dumps(vars(result), indent=2, default=str))
+        return 0
+    metrics = ', '.join(f'{name} {value:.4f}' if isinstance(value, float) else f'{name} {value}'
+                        for name, value in result.evaluation.items())
+    print(f'[inprocess_session] {result.session_id}: case {result.case} ({result.strategy}), '
+          f'seed {result.seed}: {result.training_episodes} training episodes '
+          f'({result.human_involved_episodes} with the human), '
+          f'{"converged" if result.converged else "not converged"}, {result.steps} steps in '
+          f'{result.wall_seconds:.1f} s ({result.steps / result.wall_seconds:.0f} steps/s)')
+    print(f'[inprocess_session] evaluation: {metrics or "none"}')
+    if result.bag_dir:
+        print(f'[inprocess_session] bags in {result.bag_dir}; report: ros2 run hrc_bag '
+              f'hrc_report {result.bag_dir}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,22 @@
+from setuptools import find_packages, setup
+
+package_name = 'hrc_engine'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='hrc developers',
+    maintainer_email='hrc@example.org',
+    description='The in-process engine of hrc: a whole headless session in one process.',
+    license='Apache-2.0',
+    entry_points={'console_scripts': [
+        'inprocess_session = hrc_engine.inprocess_session:main',
+    ]},
+)
