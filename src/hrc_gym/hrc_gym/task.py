@@ -3,7 +3,8 @@
 Nothing here is a second implementation: :class:`TaskRun` only wires the cores the nodes use.
 
 * physics: ``hrc_sim_node.physics.SliderPendulumBall`` (PyBullet), stepped with the normalized
-  command of each degree of freedom;
+  command of each degree of freedom, dispatched by the sim's ``protocol.per_dof`` and
+  ``protocol.roles``;
 * roles, training steps, reward: ``hrc_agent_node`` (``params/cases.yaml`` resolved by
   ``strategies.load_cases``; the reward is ``TaskTree.reward`` of the step's subtasks on the
   state reached, eq. 2-5, exactly as ``AgentCore`` computes it);
@@ -24,10 +25,10 @@ from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.params import checked, param, ParameterError, with_overrides
+from hrc_common.dof import ROTATION, TRANSLATION
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+from hrc_sim_node.protocol import HUMAN, per_dof, roles, ROBOT
 
-ROBOT = 'robot'
-HUMAN = 'human'
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
 
@@ -73,27 +74,18 @@ def make_human(spec: str, dof: str, seed: int, control_period: float):
     """Return the simulated human named by ``spec`` on ``dof``, seeded with ``seed``, or None.
 
     ``spec``: 'none', a profile name, or 'population:<profile>' (a member of the population
-    around that profile, ``hrc_joystick_node.sim_human.sample_person``).
+    around that profile, ``hrc_joystick_node.population.sample_person``, person ``seed``).
     """
     if spec == NO_HUMAN:
         return None
     from hrc_joystick_node import sim_human
+    from hrc_joystick_node.population import sample_person
 
     if spec.startswith(POPULATION_PREFIX):
-        sample_person = getattr(sim_human, 'sample_person', None)
-        if sample_person is None:
-            raise ParameterError('human: population members need '
-                                 'hrc_joystick_node.sim_human.sample_person (not available)')
         profile = sample_person(sim_human.load_profile(spec[len(POPULATION_PREFIX):]), seed)
     else:
         profile = sim_human.load_profile(spec)
     return sim_human.SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
-
-
-def step_physics(physics: SliderPendulumBall, commands: dict):
-    """Step ``physics`` one control period with {dof: normalized command}; return the state."""
-    return physics.step_normalized(commands.get('translation', 0.0),
-                                   commands.get('rotation', 0.0))
 
 
 class TaskRun:
@@ -112,7 +104,7 @@ class TaskRun:
         # The strategies' judge of an episode (satisfied subtasks, the step's criterion).
         self.progress = StrategyProgress(self.case, self.tree)
         self.progress.step_index = self.step_spec.index
-        self.dofs = {ROBOT: self.case.robot_dof, HUMAN: self.case.human_dof}
+        self.dofs = roles(self.case.robot_dof)
         self.subtasks = {ROBOT: self.step_spec.robot_subtasks,
                          HUMAN: self.step_spec.human_subtasks}
         self.physics = SliderPendulumBall(physics_params)
@@ -149,8 +141,10 @@ class TaskRun:
         """
         if not self.human_involved:
             commands = dict(commands, **{HUMAN: 0.0})
-        self.state = step_physics(self.physics, {self.dofs[actor]: float(command)
-                                                 for actor, command in commands.items()})
+        # The sim's own per-DOF dispatch (hrc_sim_node.protocol.per_dof).
+        wrench = per_dof({actor: float(command) for actor, command in commands.items()},
+                         self.dofs)
+        self.state = self.physics.step_normalized(wrench[TRANSLATION], wrench[ROTATION])
         for subtask_id in self.tree.subtasks:
             self._error_sums[subtask_id] += self.tree.error(subtask_id, self.state)
         self._states_reached += 1

@@ -154,3 +154,17 @@ def test_bad_parameters_are_refused_with_every_reason():
         SliderPendulumBallEnv(human='martian')
     with pytest.raises(ParameterError, match='does not involve the human'):
         hrc_gym.parallel_env(case=2, training_step=0)
+
+
+def test_a_population_member_is_drawn_by_the_reset_seed():
+    env = SliderPendulumBallEnv(case=6, human='population:paper')
+    try:
+        env.reset(seed=0)
+        first = env.human.profile
+        env.reset(seed=1)
+        second = env.human.profile
+        env.reset(seed=0)
+        assert env.human.profile == first and second != first
+        assert first.reaction_delay != second.reaction_delay
+    finally:
+        env.close()
