@@ -8,11 +8,25 @@ starts) with one parameter file composed from ``params/*.yaml`` (see hrc_bringup
 progress line per episode, and stops everything when the agent finishes, a node dies, or on
 Ctrl-C / SIGTERM, the recorder last so its bags are closed. Then it runs the report.
 
-Live sessions (hrc_live): ``--display`` also starts the display node (a page on localhost);
-``--params FILE`` merges a parameter file such as the one ``joystick_setup`` writes; the
-operator pauses, resumes or aborts with ``ros2 run hrc_live operator ...``. An operator abort
-is a clean stop: the bags are closed, the runner prints the command that resumes the session
-from its last checkpoint (counters continue), and exits with code 3 (EXIT_OPERATOR_ABORT).
+Live sessions (hrc_live, docs/live_study.md): ``--display`` also starts the display node (the
+person's page and the experimenter's console on localhost); ``--params FILE`` merges a
+parameter file such as the one ``joystick_setup`` writes; the operator pauses, resumes or
+aborts with ``ros2 run hrc_live operator ...`` or the console's buttons. An operator abort is a
+clean stop: the bags are closed, the runner prints the command that resumes the session from
+its last checkpoint (counters continue), and exits with code 3 (EXIT_OPERATOR_ABORT).
+
+The person's time only when needed: in a realtime session the agent runs the training steps
+without the person in lockstep (as fast as the graph goes) and switches the sim to realtime
+for the episodes with the person (``ResetEpisode.clock_mode``); the runner prints how long the
+robot practised alone and when the person joined.
+
+Never a silent stand-in: in realtime with ``--human device`` or ``joy`` the runner does not
+start until the input is there (it lists the joystick devices it sees and says how to fix it);
+the human node holds zero when its input is lost (``on_input_lost: zero``) and the runner then
+pauses the session at once (the agent is stopped mid-episode: zero commands, the sim holds;
+the page, the console and ``operator status`` say "joystick disconnected"); after the input is
+back the operator resumes (``operator resume`` or the console) and the agent continues from
+the last finished episode. ``--stand-in sim`` asks for the simulated human instead.
 
 Exit codes: 0 done, 1 a node failed, 2 bad arguments, 3 aborted by the operator, 124 timeout,
 130/143 SIGINT/SIGTERM.
@@ -27,8 +41,11 @@ import subprocess
 import sys
 import time
 
-from hrc_common.contract import phase_label
-from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
+from hrc_common.contract import Phase, phase_label
+from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
+                                        OPERATOR_SERVICES)
+from hrc_live.input_check import (device_missing_message, device_presence, joy_missing_message,
+                                  joystick_devices, lost_reason)
 import yaml
 
 from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, SessionSettings,
@@ -85,7 +102,21 @@ def parse_args(argv=None):
                         '--set wins)')
     parser.add_argument('--display', action='store_true',
                         help='also start the display node (hrc_live): the page for the person '
-                        'on http://127.0.0.1:<port>/ (params/display.yaml)')
+                        'on http://127.0.0.1:<port>/ and the console on /console '
+                        '(params/display.yaml)')
+    parser.add_argument('--display-port', type=int, default=None, metavar='PORT',
+                        help='port of the pages (default: params/display.yaml; 0 = any free)')
+    parser.add_argument('--tlx', action='store_true',
+                        help='with --display: ask the raw NASA-TLX on the page when the '
+                        'session is done; stored in <runs-dir>/<session>/tlx.yaml (0600)')
+    parser.add_argument('--stand-in', choices=('none', 'sim'), default='none',
+                        help='realtime with --human device|joy: what drives the human side '
+                        'when the input is lost: none (default) = the session pauses until '
+                        'the operator resumes; sim = the simulated human (its episodes are '
+                        'marked simulated in the bags)')
+    parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
+                        help='realtime with --human device|joy: wait this long for the input '
+                        'before refusing to start (default 120 s)')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
     parser.add_argument('--no-report', dest='report', action='store_false',
@@ -124,9 +155,20 @@ def parse_args(argv=None):
     if settings.subject_id and settings.subject_id.lower() in settings.session_id.lower():
         # Bag and run folders are named after the session id: no personal data in file names.
         reasons.append('the session id must not contain the subject id (it names files)')
+    if options.tlx and not options.display:
+        reasons.append('--tlx needs --display (the questionnaire is on the page)')
+    if options.input_wait < 0:
+        reasons.append('--input-wait must be >= 0')
     if reasons:
         parser.error('; '.join(reasons))
     return settings, options
+
+
+def person_input(settings: SessionSettings, options) -> str:
+    """Return 'device' or 'joy' when a person's input must be there, else ''."""
+    if settings.mode == 'realtime' and settings.human_input in ('device', 'joy'):
+        return settings.human_input
+    return ''
 
 
 def file_overrides(path) -> dict:
@@ -173,6 +215,9 @@ class Progress:
         self.interactive = interactive
         self.status = None
         self.episodes = []
+        self.started = time.monotonic()
+        self.alone_since = None     # (monotonic s, training episodes done) the robot went alone
+        self.person_joined = None   # monotonic s the person's first training step was announced
         self.node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                       qos.SESSION_QOS)
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self._on_episode,
@@ -188,6 +233,7 @@ class Progress:
 
         changed = self.status is None or milestone(status) != milestone(self.status)
         self.status = status
+        self._track_person_time(status)
         if changed:
             self._print(f'[session] case {status.case_id} {status.strategy}: training step '
                         f'{status.training_step + 1}/{max(status.training_step_count, 1)}, '
@@ -195,6 +241,25 @@ class Progress:
                         f'{"involved" if status.human_involved else "not involved"}, robot '
                         f'subtasks {list(status.robot_subtasks)}, human subtasks '
                         f'{list(status.human_subtasks)}', permanent=True)
+
+    def _track_person_time(self, status):
+        """Note when the robot practises alone and when the person joins; say so once."""
+        now = time.monotonic()
+        if not status.human_involved and phase_label(status.phase, '') in ('training',
+                                                                            'updating'):
+            if self.alone_since is None:
+                self.alone_since = (now, status.total_episodes)
+            return
+        if status.human_involved and self.person_joined is None and status.phase in (
+                Phase.TRAINING, Phase.UPDATING):
+            self.person_joined = now
+            alone = ''
+            if self.alone_since is not None:
+                alone = (f'; the robot practised alone: '
+                         f'{status.total_episodes - self.alone_since[1]} episodes in '
+                         f'{now - self.alone_since[0]:.0f} s')
+            self._print(f'[session] the person joins at episode {status.total_episodes + 1}, '
+                        f'{now - self.started:.0f} s after the start{alone}', permanent=True)
 
     def _on_episode(self, summary):
         if any(seen.episode == summary.episode for seen in self.episodes):
@@ -224,6 +289,154 @@ class Progress:
         self.node.destroy_node()
 
 
+class InputGuard:
+    """Pauses the session at once when the person's input is lost; resumes on the operator's word.
+
+    Watches ``/hrc/human/action``: an answer holding zero because the input is lost
+    (:func:`hrc_live.input_check.lost_reason`) while the person is involved makes the runner
+    stop the agent mid-episode (its abort service: zero commands, the sim holds, the last
+    checkpoint kept), say "joystick disconnected" on ``/hrc/session/input_lost`` (the pages) and
+    on ``/hrc/session`` (phase paused, for ``operator status``), and serve the operator services
+    itself until the operator resumes after the input is back; then the agent is started again
+    from the last finished episode.
+    """
+
+    def __init__(self, node, kind: str, device: str):
+        from hrc_common import qos, topics
+        from hrc_msgs.msg import HumanAction, SessionStatus
+        from std_msgs.msg import String
+        from std_srvs.srv import Trigger
+
+        self.node, self.kind, self.device = node, kind, device
+        self.lost = ''                  # why the input is lost ('' = it is not)
+        self.involved = False           # the person acts in the current training step
+        self.agent_down = False         # the agent was stopped for the loss and has exited
+        self.resume_requested = False
+        self.abort_requested = False
+        self.last_status = None
+        self._services = []
+        self._status_pub = None
+        self._string = String
+        self._trigger = Trigger
+        self._session_status = SessionStatus
+        self._topics, self._qos = topics, qos
+        self.lost_pub = node.create_publisher(String, '/hrc/session/input_lost',
+                                              qos.SESSION_QOS)
+        self.lost_pub.publish(String(data=''))
+        self.abort_client = node.create_client(Trigger, ABORT_SERVICE)
+        node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
+                                 qos.HUMAN_ACTION_QOS)
+        node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
+                                 qos.SESSION_QOS)
+
+    def present(self) -> tuple:
+        """Return (present, why) of the person's input now."""
+        if self.kind == 'joy':
+            publishers = self.node.count_publishers(self._topics.JOY)
+            return publishers > 0, joy_missing_message(publishers)
+        present, why = device_presence(self.device)
+        return present, why if present else device_missing_message(self.device, why,
+                                                                     joystick_devices())
+
+    def _on_status(self, status):
+        if self._status_pub is None:   # the agent's, not our own stand-in status
+            self.last_status = status
+            self.involved = bool(status.human_involved)
+
+    def _on_action(self, action):
+        if self.lost:
+            return
+        reason = lost_reason(action.source, action.source_detail, self.involved)
+        if not reason:
+            return
+        self.lost = reason
+        print(f'[session] joystick disconnected ({reason}): pausing the session now (the '
+              f'agent stops mid-episode, the sim holds, zero commands); resume with '
+              f'"ros2 run hrc_live operator resume" or the console once it is back',
+              flush=True)
+        self.lost_pub.publish(self._string(data=reason))
+        if self.abort_client.service_is_ready():
+            self.abort_client.call_async(self._trigger.Request())
+
+    def on_agent_exit(self) -> None:
+        """Stand in for the agent stopped for the loss: operator services, phase paused."""
+        self.agent_down = True
+        self._services = [self.node.create_service(self._trigger, OPERATOR_SERVICES[name],
+                                                    getattr(self, f'_serve_{name}'))
+                          for name in ('pause', 'resume', 'abort')]
+        self._status_pub = self.node.create_publisher(self._session_status,
+                                                      self._topics.SESSION,
+                                                      self._qos.SESSION_QOS)
+        if self.last_status is not None:
+            status = self.last_status
+            status.phase = int(Phase.PAUSED)
+            status.message = (f'joystick disconnected ({self.lost}): paused; resume after it '
+                              f'is back')
+            self._status_pub.publish(status)
+
+    def _serve_pause(self, request, response):
+        response.success, response.message = True, f'already paused: joystick disconnected ' \
+            f'({self.lost})'
+        return response
+
+    def _serve_resume(self, request, response):
+        present, why = self.present()
+        if not present:
+            response.success = False
+            response.message = f'the joystick is still disconnected: {why}'
+            return response
+        self.resume_requested = True
+        response.success = True
+        response.message = ('resuming: the agent continues from the last finished episode '
+                            '(the interrupted one runs again)')
+        return response
+
+    def _serve_abort(self, request, response):
+        self.abort_requested = True
+        response.success, response.message = True, 'aborted while paused (joystick ' \
+            'disconnected); resume from the last checkpoint'
+        return response
+
+    def resumed(self) -> None:
+        """Stop standing in for the agent (it is starting again)."""
+        for service in self._services:
+            self.node.destroy_service(service)
+        self._services = []
+        if self._status_pub is not None:
+            self.node.destroy_publisher(self._status_pub)
+            self._status_pub = None
+        self.lost, self.agent_down, self.resume_requested = '', False, False
+        self.lost_pub.publish(self._string(data=''))
+
+
+def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: list) -> bool:
+    """Wait until the person's input is there; say what is missing and how to fix it."""
+    deadline = time.monotonic() + timeout
+    said = ''
+    while True:
+        present, why = guard.present()
+        if present:
+            if said:
+                print(f'[session] the input is there now: {why}', flush=True)
+            return True
+        if why != said:
+            print(f"[session] waiting for the person's input (up to {timeout:.0f} s): {why}",
+                  flush=True)
+            said = why
+        if time.monotonic() > deadline or stop_reason:
+            print(f'[session] not started: {why}', file=sys.stderr, flush=True)
+            return False
+        executor.spin_once(timeout_sec=0.2)
+
+
+def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
+    """Write a ROS 2 parameter file with a section per node."""
+    path.write_text(yaml.safe_dump(
+        {node: {'ros__parameters': values} for node, values in parameters.items()},
+        sort_keys=False))
+    return path
+
+
 def run_session(settings: SessionSettings, options) -> int:
     """Run one session; return the exit code (0 = the agent finished the session)."""
     import rclpy
@@ -240,6 +453,10 @@ def run_session(settings: SessionSettings, options) -> int:
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
     if settings.record:
         parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
+    live_input = person_input(settings, options)
+    if live_input:
+        # Never a silent stand-in: the simulated human only when the operator asked for it.
+        parameters['human']['on_input_lost'] = 'sim' if options.stand_in == 'sim' else 'zero'
     params_path, _ = write_session_files(settings, parameters, run_dir)
 
     env = dict(os.environ)
@@ -266,9 +483,17 @@ def run_session(settings: SessionSettings, options) -> int:
     progress = Progress(context, sys.stdout.isatty())
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(progress.node)
+    guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''))
+             if live_input and options.stand_in == 'none' else None)
     code = 0
     start = time.monotonic()
+    restarts = 0
     try:
+        if live_input and not wait_for_input(
+                guard or InputGuard(progress.node, live_input,
+                                    parameters['human'].get('device', '')),
+                executor, options.input_wait, stop_reason):
+            return 2
         # The recorder first, so it sees the first state; the sim before the agent resets it.
         for node in ('recorder', 'sim', 'human', 'agent'):
             if node not in parameters:
@@ -278,21 +503,43 @@ def run_session(settings: SessionSettings, options) -> int:
                                     '--params-file', str(params_path)],
                              niceness=options.recorder_niceness if node == 'recorder' else 0)
         if options.display:
-            display_params = params_dir / 'display.yaml'
-            supervisor.start('display', [str(executable_path('hrc_live', 'display_node'))] + (
-                ['--ros-args', '--params-file', str(display_params)]
-                if display_params.is_file() else []))
+            supervisor.start('display', display_command(options, params_dir, run_dir))
             print(f'[session] display: see {run_dir / logs / "display.log"} for its address '
-                  f'(http://127.0.0.1:<port>/)', flush=True)
+                  f'(http://127.0.0.1:<port>/ for the person, /console for the experimenter)',
+                  flush=True)
         while True:
             executor.spin_once(timeout_sec=0.1)
             if stop_reason:
                 print(f'[session] {stop_reason[0]} received: stopping the session', flush=True)
                 code = 130 if stop_reason[0] == 'SIGINT' else 143
                 break
+            if guard is not None and guard.agent_down:
+                if guard.abort_requested:
+                    print('[session] the operator aborted the session while it was paused '
+                          '(joystick disconnected)', flush=True)
+                    code = EXIT_OPERATOR_ABORT
+                    break
+                if guard.resume_requested:
+                    restarts += 1
+                    restart_agent(supervisor, parameters, settings, run_dir, restarts)
+                    guard.resumed()
+                    print('[session] resumed by the operator: the agent continues from the '
+                          'last finished episode', flush=True)
+                    continue
             finished = supervisor.exited()
             if finished:
                 first = finished[0]
+                if (guard is not None and guard.lost and first.name == 'agent'
+                        and first.returncode == EXIT_OPERATOR_ABORT and not guard.agent_down):
+                    guard.on_agent_exit()
+                    print('[session] paused (joystick disconnected): waiting for the input and '
+                          "the operator's resume", flush=True)
+                    continue
+                if guard is not None and guard.agent_down and first.name == 'agent':
+                    finished = finished[1:]
+                    if not finished:
+                        continue
+                    first = finished[0]
                 if first.name == 'agent' and first.returncode == 0:
                     print('[session] the agent finished the session', flush=True)
                 elif first.name == 'agent' and first.returncode == EXIT_OPERATOR_ABORT:
@@ -337,6 +584,40 @@ def run_session(settings: SessionSettings, options) -> int:
     if settings.record and options.report and (code == 0 or progress.episodes):
         report(settings, run_dir)
     return code
+
+
+def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) -> list:
+    """Return the command line of the display node of this session."""
+    from hrc_common.executables import executable_path
+
+    command = [str(executable_path('hrc_live', 'display_node')), '--ros-args']
+    display_params = params_dir / 'display.yaml'
+    if display_params.is_file():
+        command += ['--params-file', str(display_params)]
+    if options.display_port is not None:
+        command += ['-p', f'port:={options.display_port}']
+    if options.tlx:
+        command += ['-p', f'tlx_file:={(run_dir / "tlx.yaml").resolve()}']
+    return command
+
+
+def restart_agent(supervisor: Supervisor, parameters: dict, settings: SessionSettings,
+                  run_dir: pathlib.Path, restarts: int) -> None:
+    """Start the agent again from the session's last checkpoint (after a paused input loss)."""
+    from hrc_common.executables import executable_path
+
+    checkpoint = (pathlib.Path(parameters['agent']['checkpoint_dir']) / settings.session_id
+                  / LATEST_CHECKPOINT)
+    resumed = {node: dict(values) for node, values in parameters.items()}
+    if checkpoint.is_file():
+        resumed['agent']['resume_from'] = str(checkpoint)
+    path = write_parameters(resumed, run_dir / f'parameters-resume-{restarts}.yaml')
+    old_log = supervisor.log_dir / 'agent.log'
+    if old_log.is_file():
+        old_log.rename(supervisor.log_dir / f'agent-before-resume-{restarts}.log')
+    package, executable, _ = NODES['agent']
+    supervisor.start('agent', [str(executable_path(package, executable)), '--ros-args',
+                               '--params-file', str(path)])
 
 
 def report(settings: SessionSettings, run_dir: pathlib.Path) -> None:

@@ -1,0 +1,91 @@
+"""Is the person's input there? Checks the session runner makes before and during a live session.
+
+Pure (no rclpy). A joystick device counts as present when it opens for reading; a FIFO (the
+tests' joystick, written in the kernel's js_event format) only while a writer holds it open. The
+check reads nothing from the stream: it asks how many bytes wait (FIONREAD) and reads one byte
+only when none wait, which then either fails with EAGAIN (a writer is there) or returns end of
+file (nobody is).
+
+The lost-input signal of the human node: with ``on_input_lost: zero`` it answers every state
+while its input is lost with ``HumanAction.source == SOURCE_NONE`` and a ``source_detail``
+giving the reason (src/hrc_joystick_node/README.md); an answer while the person is not involved
+in the training step says so (``not involved ...``) and is no loss. :func:`lost_reason` reads it.
+"""
+
+import array
+import errno
+import fcntl
+import glob
+import os
+import stat
+import termios
+
+# HumanAction.SOURCE_NONE
+SOURCE_NONE = 4
+NOT_INVOLVED = 'not involved'
+
+
+def device_presence(path: str) -> tuple:
+    """Return (present, why) for the joystick device or FIFO at ``path``."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError as error:
+        return False, f'cannot open {path}: {os.strerror(error.errno)}'
+    try:
+        mode = os.fstat(fd).st_mode
+        if stat.S_ISCHR(mode):
+            return True, f'{path} opens (character device)'
+        if not stat.S_ISFIFO(mode):
+            return False, f'{path} is neither a joystick device nor a FIFO'
+        waiting = array.array('i', [0])
+        fcntl.ioctl(fd, termios.FIONREAD, waiting)
+        if waiting[0] > 0:
+            return True, f'{path} has a writer (FIFO, {waiting[0]} bytes waiting)'
+        try:
+            data = os.read(fd, 1)
+        except OSError as error:
+            if error.errno == errno.EAGAIN:
+                return True, f'{path} has a writer (FIFO)'
+            return False, f'reading {path} failed: {os.strerror(error.errno)}'
+        if data:  # a writer wrote just now; one byte taken (the reader resynchronizes)
+            return True, f'{path} has a writer (FIFO)'
+        return False, f'{path} exists but no program writes to it (FIFO without a writer)'
+    finally:
+        os.close(fd)
+
+
+def joystick_devices() -> list:
+    """Return the joystick devices this machine shows (/dev/input/js*, by-id names)."""
+    found = sorted(glob.glob('/dev/input/js*'))
+    found += sorted(path for path in glob.glob('/dev/input/by-id/*')
+                    if 'joystick' in path or path.endswith('-js'))
+    return found
+
+
+def device_missing_message(path: str, why: str, seen: list) -> str:
+    """Return what the operator reads when the joystick is not there, and how to fix it."""
+    listing = ', '.join(seen) if seen else 'none'
+    return (f'the joystick {path} is not there: {why}. Joystick devices seen: {listing}. '
+            f'Fix: plug the joystick in (ls -l /dev/input/js* lists it); if it is there but '
+            f'cannot be opened, add yourself to its group (sudo usermod -aG input $USER, then '
+            f'log in again); if it has another name, pass it with --set '
+            f'human.device=/dev/input/jsN or the file joystick_setup writes (--params FILE); '
+            f'to run with the simulated human instead, use --human sim.')
+
+
+def joy_missing_message(publishers: int) -> str:
+    """Return what the operator reads when /joy has no publisher."""
+    return (f'/joy has {publishers} publishers: no joy node is running. Fix: start one '
+            f'(ros2 run joy joy_node) in the same ROS_DOMAIN_ID, or use --human device with the '
+            f'joystick device, or --human sim for the simulated human.')
+
+
+def lost_reason(source: int, detail: str, involved: bool) -> str:
+    """Return why the person's input is lost according to one HumanAction ('' = it is not).
+
+    Only while the person is involved: an answer outside their training steps holds zero on
+    purpose.
+    """
+    if not involved or source != SOURCE_NONE or detail.startswith(NOT_INVOLVED):
+        return ''
+    return detail or 'the human node holds zero (no input)'
