@@ -3,24 +3,41 @@
 The agent node and the offline loop (``offline.py``) call the same methods in the same order,
 so they cannot diverge::
 
-    core = AgentCore(params)
+    core = AgentCore(params)                      # or load_into(core, checkpoint) to resume
     while core.phase != 'done':
-        plan = core.start_episode()              # episode index, seed, evaluation or not
-        state = <reset the sim with plan.seed>
+        plan = core.start_episode()              # index, seed, kind (training / judging /
+        state = <reset the sim with plan.seed>   #   evaluation), human involved or not
         while not (state.truncated or state.terminated):
-            decision = core.act(state, human_action)   # robot action for this state
-            state = <step the sim>
+            answer = <the human's answer to state> if core.needs_human_action else None
+            decision = core.act(state, answer)   # robot action for this state
+            state = <step the sim with decision.action and the human's command>
         result = core.end_episode(state)          # reward of the last step, metrics, strategy
         if core.phase == 'updating':
             core.update()                         # PPO, between episodes only
-        <save core.checkpoint()>
+        <save core.state_dict() (checkpoint.save_checkpoint)>
 
 Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
 ``evaluation`` -> ``done``; the operator may put ``paused`` between two episodes
 (:meth:`pause`, :meth:`resume`) or end the session as ``aborted`` (:meth:`abort`).
-Training ends when the strategy's last step converges or after ``max_training_episodes``;
-evaluation runs the frozen deterministic policy for
+Training ends when the strategy's last step converges or after ``max_training_episodes``
+episodes (judging episodes included); evaluation runs the frozen deterministic policy for
 ``evaluation_episodes`` episodes in the last training step's setting (human involved as there).
+
+Three kinds of episode (:class:`EpisodePlan`):
+
+* **training**: the stochastic policy explores; its samples go to the rollout buffer;
+* **judging** (``convergence_judged_on: evaluation``, the default): one deterministic episode of
+  the current policy after each PPO update (``judging_interval: 0``) or after every N training
+  episodes, in the current step's setting; the step's advance condition is judged on these
+  episodes only. They are not learned from, but they count in :attr:`total_episodes` and,
+  when the human acts in them, in :attr:`human_involved_episodes` (the person's time is the
+  burden the paper measures). ``convergence_judged_on: training`` judges the stochastic
+  training episodes instead (the earlier rule; no judging episodes);
+* **evaluation**: the frozen policy after training (Table II); not counted in the totals.
+
+When a step advances to a step with another reward, the rollout buffer (samples of the old
+reward) and the reward scaler's statistics are reset, so the first update of the new step
+learns only from the new reward.
 
 Reward timing: the reward of the action taken in state s_k is computed from the state reached,
 s_k+1 (eq. 3-5 on S_x, P_z, B_y of s_k+1). So the record of step k (``StepRecord``) is complete
@@ -39,18 +56,31 @@ from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.params import checked
 
-PHASES = ('training', 'updating', 'evaluation', 'paused', 'done', 'aborted')
+JUDGED_ON = ('evaluation', 'training')
+RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
+                 'terminated', 'truncated', 'episode_return', 'errors', 'robot_effort',
+                 'human_effort', 'converged', 'event', 'judging')
 
 
 @dataclass(frozen=True)
 class EpisodePlan:
-    """What the next episode is: its index in the session, its seed, and its kind."""
+    """What the next episode is: its index in the session, its seed, and its kind.
+
+    ``evaluation``: the frozen policy after training (Table II); ``judging``: a deterministic
+    episode during training on which the step's condition is judged; neither: training.
+    """
 
     episode: int
     seed: int
     evaluation: bool
     training_step: int
     human_involved: bool
+    judging: bool = False
+
+    @property
+    def deterministic(self) -> bool:
+        """Return True when the policy's mean action is taken (no exploration, no learning)."""
+        return self.evaluation or self.judging
 
 
 @dataclass
@@ -100,6 +130,18 @@ class EpisodeResult:
     event: str               # '' | 'advanced' | 'training_finished' | 'evaluation_finished'
     last_record: StepRecord = None
     phase_after: str = ''
+    judging: bool = False    # a judging episode (deterministic, counted in the totals)
+
+    def to_plain(self) -> dict:
+        """Return the metrics as plain data (checkpoints; no step record)."""
+        return {name: (dict(self.errors) if name == 'errors' else getattr(self, name))
+                for name in RESULT_FIELDS}
+
+    @classmethod
+    def from_plain(cls, data: dict) -> 'EpisodeResult':
+        """Rebuild a result saved by :meth:`to_plain`."""
+        return cls(**{name: (dict(data[name]) if name == 'errors' else data[name])
+                      for name in RESULT_FIELDS})
 
     @property
     def total_error(self) -> float:
@@ -178,14 +220,62 @@ class AgentCore:
         self.buffer = RolloutBuffer()
         self.phase = 'evaluation' if p.evaluation_only else 'training'
         self.episode = 0                    # index of the current (or next) episode
-        self.total_episodes = 0             # training episodes finished
+        self.total_episodes = 0             # training and judging episodes finished
         self.human_involved_episodes = 0    # of which the human took part
+        self.judging_episodes = 0           # judging episodes finished (in total_episodes)
+        self.judging_due = False            # the next training-phase episode is a judging one
+        self.episodes_since_judging = 0     # training episodes since the last judging episode
         self.evaluation_results = []        # EpisodeResult of this session's evaluation
         self.last_update = None             # statistics of the last PPO update
         self._log = None
         self._interrupted_phase = None      # the phase a pause or an abort interrupted
 
     # ------------------------------------------------------------------ the session right now
+
+    @property
+    def case_id(self) -> int:
+        """Return the paper case of the session (1..6)."""
+        return self.case.case_id
+
+    @property
+    def strategy(self) -> str:
+        """Return the case's learning strategy."""
+        return self.case.strategy
+
+    @property
+    def training_step_count(self) -> int:
+        """Return how many training steps the case's strategy has."""
+        return len(self.case.steps)
+
+    @property
+    def converged(self) -> bool:
+        """Return True once the strategy's last step has met its condition."""
+        return self.progress.finished
+
+    @property
+    def buffered_samples(self) -> int:
+        """Return how many training samples wait for the next PPO update."""
+        return len(self.buffer)
+
+    @property
+    def preset(self) -> str:
+        """Return the task tree's reward preset."""
+        return self.tree.preset
+
+    @property
+    def seed(self) -> int:
+        """Return the session seed."""
+        return self.params.seed
+
+    @property
+    def convergence_rule(self) -> str:
+        """Return what step conditions are judged on: 'evaluation' or 'training' episodes."""
+        return self.params.convergence_judged_on
+
+    @property
+    def judged_on_evaluation(self) -> bool:
+        """Return True when step conditions are judged on deterministic judging episodes."""
+        return self.params.convergence_judged_on == 'evaluation'
 
     @property
     def robot_dof(self) -> str:
@@ -254,8 +344,9 @@ class AgentCore:
                 f'step {step.index + 1}/{len(self.case.steps)} "{step.name}": robot '
                 f'{self.robot_dof} rewarded on {list(step.robot_subtasks)}, human '
                 f'{"involved on " + str(list(step.human_subtasks)) if step.human_involved else "not involved"}; '  # noqa: E501
-                f'episode {self.episode}, {self.total_episodes} training episodes '
-                f'({self.human_involved_episodes} with the human)')
+                f'episode {self.episode}{" (judging)" if self._next_is_judging() else ""}, '
+                f'{self.total_episodes} episodes ({self.human_involved_episodes} with the '
+                f'human, {self.judging_episodes} judging)')
 
     # ------------------------------------------------------------------ episode
 
@@ -267,7 +358,7 @@ class AgentCore:
             raise RuntimeError(f'episode {self.episode} is still running')
         plan = EpisodePlan(self.episode, derive_seed(self.params.seed, self.episode),
                            self.phase == 'evaluation', self.training_step.index,
-                           self.human_involved)
+                           self.human_involved, self._next_is_judging())
         self._log = _EpisodeLog(plan, error_sums={subtask_id: 0.0
                                                   for subtask_id in self.tree.subtasks})
         self.reward_scaler.start_episode()
@@ -291,13 +382,37 @@ class AgentCore:
         """
         return applied_command(state, self.human_dof, self.params)
 
-    def act(self, state, human_action: float = 0.0) -> Decision:
+    def observed_human_action(self, state, human_action=None) -> float:
+        """Return the human action a_h the robot observes in ``state`` (normalized, [-1, 1]).
+
+        By ``human_action_source``: ``applied``, the human's command the sim applied in the
+        last period, read from ``state`` (then ``human_action`` must be None: it would not be
+        used); ``same_step``, ``human_action``, the human's answer to this same state (required
+        while the human is involved). 0 while the human is not involved (then ``human_action``
+        must be None); a non-finite answer is observed as 0. Raises ValueError otherwise.
+        """
+        involved = self._require_episode().plan.human_involved
+        if human_action is not None and not (involved and
+                                             self.params.human_action_source == 'same_step'):
+            why = ('the human is not involved in this episode' if not involved else
+                   'human_action_source is applied: the observed action comes from the state')
+            raise ValueError(f'a human action was given but would not be used: {why}')
+        if not involved:
+            return 0.0
+        if self.params.human_action_source == 'applied':
+            human_action = self.applied_human_action(state)
+        elif human_action is None:
+            raise ValueError("human_action_source is same_step: act() needs the human's answer "
+                             'to this state')
+        if not math.isfinite(human_action):
+            return 0.0
+        return min(1.0, max(-1.0, float(human_action)))
+
+    def act(self, state, human_action=None) -> Decision:
         """Return the robot's action for a non-final state of the running episode.
 
-        The observed human action is, by ``human_action_source``: ``applied``, the human's
-        command applied in the last period (from ``state``; ``human_action`` is not used) or
-        ``same_step``, ``human_action``, the human's command for the same step. It is observed
-        as 0 when the human is not involved; a non-finite one is observed as 0.
+        ``human_action``: the human's answer to this state, given exactly when
+        :attr:`needs_human_action` (see :meth:`observed_human_action`).
         """
         log = self._require_episode()
         if state.truncated or state.terminated:
@@ -307,17 +422,14 @@ class AgentCore:
                              f'{state.step} again')
         # A later step than expected means states were lost: the pending step's reward comes
         # from the state that did arrive (a gap, reported by the caller), and the episode goes on.
+        human_action = self.observed_human_action(state, human_action)
         previous = self._close_pending(state) if log.next_step > 0 else None
         plan = log.plan
-        if plan.human_involved and self.params.human_action_source == 'applied':
-            human_action = self.applied_human_action(state)
-        if not plan.human_involved or not math.isfinite(human_action):
-            human_action = 0.0
-        human_action = min(1.0, max(-1.0, float(human_action)))
         observation = self.observation(state, human_action)
-        raw, action, log_prob, value = self.ppo.act(observation, deterministic=plan.evaluation)
+        raw, action, log_prob, value = self.ppo.act(observation,
+                                                    deterministic=plan.deterministic)
         record = StepRecord(plan.episode, int(state.step), human_action, action, raw,
-                            self.wrench_of(action), value, log_prob, plan.evaluation)
+                            self.wrench_of(action), value, log_prob, plan.deterministic)
         log.pending = record
         log.observations.append(observation)
         log.raw_actions.append(raw)
@@ -328,12 +440,20 @@ class AgentCore:
         log.next_step = int(state.step) + 1
         return Decision(action, record.wrench, record, previous)
 
-    def end_episode(self, final_state) -> EpisodeResult:
-        """Close the running episode at its final state; update counters and the strategy."""
+    def end_episode(self, final_state, human_action=None) -> EpisodeResult:
+        """Close the running episode at its final state; update counters and the strategy.
+
+        ``human_action``: as for :meth:`act`, the human's answer to the final state under
+        ``same_step`` (None there: the last observed one stands in); it enters only the
+        observation of the final state that a truncated episode's value is bootstrapped from.
+        """
         log = self._require_episode()
         if not (final_state.truncated or final_state.terminated):
             raise ValueError('end_episode needs the final state (truncated or terminated)')
         plan = log.plan
+        if human_action is None and self.needs_human_action and log.human_actions:
+            human_action = log.human_actions[-1]
+        final_human_action = self.observed_human_action(final_state, human_action)
         last = self._close_pending(final_state) if log.pending is not None else None
         terminated = bool(final_state.terminated)
         steps = len(log.rewards)
@@ -341,31 +461,21 @@ class AgentCore:
                   for subtask_id, total in log.error_sums.items()}
         converged, event = False, ''
         if not plan.evaluation:
-            if steps:
-                # Truncation (time limit) bootstraps from V(final state); termination from 0.
+            if not plan.judging and steps:
+                # Truncation (time limit) bootstraps from V(final state), observed with the
+                # human action of the final state; termination from 0.
                 final_value = 0.0 if terminated else self.ppo.value_of(
-                    self.observation(final_state, log.human_actions[-1]))
+                    self.observation(final_state, final_human_action))
                 self.buffer.add_episode(log.observations, log.raw_actions, log.log_probs,
                                         log.values, log.train_rewards, final_value, terminated,
                                         self.params.gamma, self.params.gae_lambda)
-            self.total_episodes += 1
-            self.human_involved_episodes += int(plan.human_involved)
-            converged, event = self.progress.record(errors)
-            if event == 'finished':
-                event = 'training_finished'
-            if event == 'training_finished' \
-                    or self.total_episodes >= self.params.max_training_episodes:
-                event = 'training_finished'
-                self.buffer.clear()  # the converged (or last) policy is the one evaluated
-                self.phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
-            elif self.update_due:
-                self.phase = 'updating'
+            converged, event = self._count_and_judge(plan, errors)
         result = EpisodeResult(
             plan.episode, plan.training_step, plan.human_involved, plan.evaluation, steps,
             terminated, bool(final_state.truncated), float(sum(log.rewards)), errors,
             float(np.var(log.robot_actions)) if log.robot_actions else 0.0,
             float(np.var(log.human_actions)) if log.human_actions else 0.0,
-            converged, event, last)
+            converged, event, last, judging=plan.judging)
         if plan.evaluation:
             self.evaluation_results.append(result)
             if len(self.evaluation_results) >= self.params.evaluation_episodes:
@@ -376,13 +486,59 @@ class AgentCore:
         result.phase_after = self.phase
         return result
 
+    def _count_and_judge(self, plan: EpisodePlan, errors: dict) -> tuple:
+        """Count a training or judging episode, judge the step; return (converged, event)."""
+        self.total_episodes += 1
+        self.human_involved_episodes += int(plan.human_involved)
+        judge = plan.judging or not self.judged_on_evaluation
+        if plan.judging:
+            self.judging_episodes += 1
+            self.judging_due = False
+            self.episodes_since_judging = 0
+        else:
+            self.episodes_since_judging += 1
+            interval = self.params.judging_interval
+            if self.judged_on_evaluation and interval > 0 \
+                    and self.episodes_since_judging >= interval:
+                self.judging_due = True
+        converged, event = self.progress.record(errors) if judge else (False, '')
+        if event == 'advanced':
+            self._start_step(self.case.steps[plan.training_step])
+        if event == 'finished' or self.total_episodes >= self.params.max_training_episodes:
+            event = 'training_finished'
+            self.buffer.clear()  # the converged (or last) policy is the one evaluated
+            self.judging_due = False
+            self.phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
+        elif self.update_due:
+            self.phase = 'updating'
+        return converged, event
+
+    def _start_step(self, previous_step) -> None:
+        """Begin the step after ``previous_step``: forget samples and scales of another reward."""
+        if tuple(previous_step.robot_subtasks) != tuple(self.progress.step.robot_subtasks):
+            self.buffer.clear()
+            self.reward_scaler.reset()
+        self.judging_due = False
+        self.episodes_since_judging = 0
+
+    def _next_is_judging(self) -> bool:
+        """Return True when the next episode of the training phase is a judging episode."""
+        return self.judged_on_evaluation and self.judging_due \
+            and self.activity_phase == 'training' and not self.progress.finished
+
     def update(self) -> dict:
-        """Run the PPO update on the buffer (phase ``updating``), then go back to training."""
+        """Run the PPO update on the buffer (phase ``updating``), then go back to training.
+
+        Under ``convergence_judged_on: evaluation`` with ``judging_interval: 0`` the next
+        episode judges the updated policy.
+        """
         if self.phase != 'updating':
             raise RuntimeError(f'no update is due in phase {self.phase!r}')
         self.last_update = self.ppo.update(self.buffer)
         self.buffer.clear()
         self.phase = 'training'
+        if self.judged_on_evaluation and self.params.judging_interval == 0:
+            self.judging_due = True
         return self.last_update
 
     # ------------------------------------------------------------------ operator
@@ -424,6 +580,7 @@ class AgentCore:
             human_effort=float(np.mean([r.human_effort for r in results])),
             episode_return=float(np.mean([r.episode_return for r in results])),
             episodes=len(results), training_episodes=self.total_episodes,
+            judging_episodes=self.judging_episodes,
             human_involved_episodes=self.human_involved_episodes,
             human_involved_percentage=(100.0 * self.human_involved_episodes
                                        / self.total_episodes if self.total_episodes else 0.0))
@@ -446,7 +603,8 @@ class AgentCore:
         record.reward_components = tuple(components)
         record.reward = reward
         log.rewards.append(reward)
-        log.train_rewards.append(self.reward_scaler.scale(reward, learn=not log.plan.evaluation))
+        log.train_rewards.append(self.reward_scaler.scale(reward,
+                                                          learn=not log.plan.deterministic))
         for subtask_id in self.tree.subtasks:
             log.error_sums[subtask_id] += self.tree.error(subtask_id, reached)
         log.states_reached += 1
@@ -462,7 +620,12 @@ class AgentCore:
         return {'ppo': self.ppo.state_dict(), 'reward_scaler': self.reward_scaler.state_dict(),
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
-                             'human_involved_episodes': self.human_involved_episodes},
+                             'human_involved_episodes': self.human_involved_episodes,
+                             'judging_episodes': self.judging_episodes,
+                             'episodes_since_judging': self.episodes_since_judging,
+                             'judging_due': self.judging_due},
+                # a session resumed in evaluation runs only the evaluation episodes left
+                'evaluation_results': [result.to_plain() for result in self.evaluation_results],
                 # a paused session resumes in the phase it was paused in
                 'phase': self.activity_phase}
 
@@ -473,15 +636,22 @@ class AgentCore:
         self.episode = int(counters['episode'])
         self.total_episodes = int(counters['total_episodes'])
         self.human_involved_episodes = int(counters['human_involved_episodes'])
+        self.judging_episodes = int(counters['judging_episodes'])
         if policy_only:
             return
+        self.episodes_since_judging = int(counters['episodes_since_judging'])
+        self.judging_due = bool(counters['judging_due'])
         self.reward_scaler.load_state_dict(state['reward_scaler'])
         self.buffer.load_state_dict(state['buffer'])
         self.progress.load_state_dict(state['progress'])
+        self.evaluation_results = [EpisodeResult.from_plain(data)
+                                   for data in state['evaluation_results']]
         phase = state['phase']
-        # A session stopped while an update was due does the update first when resumed; a
-        # finished one is evaluated again (its evaluation results are not part of the state).
-        if phase == 'done':
-            phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
+        # A session stopped while an update was due does the update first when resumed; one
+        # stopped in its evaluation runs the evaluation episodes it has not run yet (a finished
+        # one stays done).
+        if phase == 'evaluation' \
+                and len(self.evaluation_results) >= self.params.evaluation_episodes:
+            phase = 'done'
         self.phase = phase if phase in ('training', 'updating', 'evaluation', 'done') \
             else 'training'

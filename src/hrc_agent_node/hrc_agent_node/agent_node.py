@@ -139,7 +139,10 @@ class AgentNode(Node):
             if now >= self.exit_at:
                 raise SystemExit(self.exit_code)
             return
-        if self.core.phase in ('done', 'paused'):
+        if self.core.phase == 'done':
+            self.finish_session()  # a resumed session that had already finished
+            return
+        if self.core.phase == 'paused':
             return
         if not self.core.in_episode and self.reset_future is None:
             if self.core.phase == 'updating' or (now < self.next_episode_at and
@@ -161,7 +164,7 @@ class AgentNode(Node):
                 f'no human action for episode {state.episode} step {state.step} within '
                 f'{self.params.human_action_timeout} s: acting on 0 '
                 f'({self.human_timeouts} timeouts so far)', throttle_duration_sec=5.0)
-            self.act(state, 0.0)
+            self.act(state, 0.0)  # same_step: the missing answer is observed as 0
 
     def missing_subscribers(self, now: float) -> bool:
         """Return True while a node of ``wait_for_subscribers`` does not subscribe to the state.
@@ -350,7 +353,7 @@ class AgentNode(Node):
             self.finish_episode(msg)
             return
         if not self.core.needs_human_action:
-            self.act(msg, 0.0)  # the core observes the applied action, or 0 if not involved
+            self.act(msg, None)  # the core observes the applied action, or 0 if not involved
             return
         key = stamp_key(msg.header.stamp)
         if key in self.human_actions:
@@ -361,7 +364,7 @@ class AgentNode(Node):
             self.pending_state = msg
             self.pending_since = time.monotonic()
 
-    def act(self, msg: TaskState, human_action: float):
+    def act(self, msg: TaskState, human_action):
         """Decide, publish the wrench for this state, and the completed previous step."""
         self.pending_state = None
         decision = self.core.act(msg, human_action)
@@ -398,13 +401,16 @@ class AgentNode(Node):
     def finish_episode(self, final: TaskState):
         """Close the episode: summaries, update, checkpoint, session change, next reset."""
         step_before = self.core.training_step.index
-        result = self.core.end_episode(final)
+        answer = self.human_actions.get(stamp_key(final.header.stamp)) \
+            if self.core.needs_human_action else None
+        result = self.core.end_episode(final, answer)
         if result.last_record is not None:
             self.publish_step(result.last_record)
         self.publish_episode(result, final)
         errors = ', '.join(f'{name} {value:.4f}' for name, value in result.errors.items())
         self.get_logger().info(
-            f'episode {result.episode} {"evaluation " if result.evaluation else ""}done: '
+            f'episode {result.episode} {"evaluation " if result.evaluation else ""}'
+            f'{"judging " if result.judging else ""}done: '
             f'{result.steps} steps, return {result.episode_return:.2f}, mean errors {errors}, '
             f'effort robot {result.robot_effort:.4f} human {result.human_effort:.4f}'
             f'{", condition met" if result.converged else ""}'
@@ -415,7 +421,7 @@ class AgentNode(Node):
                                    + self.core.status_line())
         if self.core.phase == 'updating':
             self.publish_session(f'updating the policy after episode {result.episode} '
-                                 f'({len(self.core.buffer)} samples)')
+                                 f'({self.core.buffered_samples} samples)')
             stats = self.core.update()
             self.get_logger().info(
                 f'PPO update {stats["update"]}: {stats["samples"]} samples in '
@@ -442,10 +448,12 @@ class AgentNode(Node):
         msg.header.stamp = final.header.stamp
         msg.header.frame_id = 'world'
         msg.session_id = self.core.session_id
-        msg.case_id = self.core.case.case_id
+        msg.case_id = self.core.case_id
         msg.episode = result.episode
         msg.training_step = result.training_step
         msg.human_involved = result.human_involved
+        # Judging episodes are not Table II evaluation: they count with the training episodes
+        # (their AgentStep messages are deterministic).
         msg.evaluation = result.evaluation
         msg.steps = result.steps
         msg.terminated = result.terminated
@@ -489,10 +497,10 @@ class AgentNode(Node):
         msg = SessionStatus()
         msg.header.stamp = self.get_clock().now().to_msg()
         msg.session_id = core.session_id
-        msg.case_id = core.case.case_id
-        msg.strategy = core.case.strategy
+        msg.case_id = core.case_id
+        msg.strategy = core.strategy
         msg.training_step = step.index
-        msg.training_step_count = len(core.case.steps)
+        msg.training_step_count = core.training_step_count
         msg.robot_dof = DOF_INDEX[core.robot_dof]
         msg.human_dof = DOF_INDEX[core.human_dof]
         msg.human_involved = core.human_involved

@@ -29,8 +29,9 @@ class AgentParams:
                                   'lockstep waits for the human action of each step (up to '
                                   'human_action_timeout) and realtime uses the latest one',
                       choices=('lockstep', 'realtime'))
-    max_training_episodes: int = param(60, 'Training ends after this many training episodes '
-                                           'if the last training step has not converged',
+    max_training_episodes: int = param(60, 'Training ends after this many training and judging '
+                                           'episodes if the last training step has not '
+                                           'converged',
                                        low=1, high=100000)
     evaluation_episodes: int = param(5, 'Episodes of the frozen deterministic policy after '
                                         'training (Table II metrics)', low=0, high=10000)
@@ -73,9 +74,20 @@ class AgentParams:
                                   'cores)', low=1, high=64)
     # --- strategy criteria (the paper does not define them; see strategies.py)
     convergence_window: int = param(3, "converged: the step's robot subtasks satisfied in each "
-                                       'of this many last episodes of the step', low=1, high=1000)
+                                       'of this many last judged episodes of the step',
+                                    low=1, high=1000)
     satisfied_window: int = param(3, 'lower_levels_satisfied: level-2 subtasks satisfied in each '
-                                     'of this many last episodes of the step', low=1, high=1000)
+                                     'of this many last judged episodes of the step',
+                                  low=1, high=1000)
+    convergence_judged_on: str = param(
+        'evaluation', "Episodes the step's condition is judged on: evaluation = deterministic "
+        'judging episodes of the current policy (after each PPO update, or every '
+        'judging_interval training episodes), counted in the episode totals and, when the human '
+        'acts, in the human-involved ones; training = the stochastic training episodes (the '
+        'earlier rule, no judging episodes)', choices=('evaluation', 'training'))
+    judging_interval: int = param(0, 'convergence_judged_on evaluation: 0 = one judging episode '
+                                     'after each PPO update; N = one after every N training '
+                                     'episodes', low=0, high=100000)
     # --- PPO (Table I unless noted)
     gamma: float = param(0.995, 'Discount factor (Table I)', low=0.0, high=1.0)
     gae_lambda: float = param(0.95, 'GAE factor (Table I)', low=0.0, high=1.0)

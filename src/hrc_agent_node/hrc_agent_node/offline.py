@@ -37,7 +37,7 @@ def run_episode(core: AgentCore, sim, partner, on_step=None):
     while not (state.truncated or state.terminated):
         human_action = float(partner(state, human_subtasks)) \
             if plan.human_involved and partner is not None else 0.0
-        decision = core.act(state, human_action)
+        decision = core.act(state, human_action if core.needs_human_action else None)
         if on_step is not None:
             on_step(state, decision, human_action)
         if core.robot_dof == 'translation':
@@ -70,11 +70,13 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
             save_checkpoint(core, checkpoint_path)
         if on_episode is not None:
             on_episode(result, stats)
-    summary = {'case': core.case.case_id, 'strategy': core.case.strategy,
-               'preset': core.tree.preset, 'seed': core.params.seed,
+    summary = {'case': core.case_id, 'strategy': core.strategy,
+               'preset': core.preset, 'seed': core.seed,
+               'convergence_judged_on': core.convergence_rule,
                'training_episodes': core.total_episodes,
+               'judging_episodes': core.judging_episodes,
                'human_involved_episodes': core.human_involved_episodes,
-               'converged': core.progress.finished,
+               'converged': core.converged,
                'episodes_to_step_end': convergence,
                'updates': len(update_seconds),
                'mean_update_seconds': (sum(update_seconds) / len(update_seconds)
@@ -131,7 +133,8 @@ def main(argv=None) -> int:
         errors = ' '.join(f'{name}={value:.4f}' for name, value in result.errors.items())
         update = f' update {stats["seconds"]:.2f}s std={stats["action_std"]:.3f}' \
             if stats else ''
-        print(f'episode {result.episode:3d} {"eval " if result.evaluation else ""}step '
+        kind = 'eval ' if result.evaluation else 'judge ' if result.judging else ''
+        print(f'episode {result.episode:3d} {kind}step '
               f'{result.training_step} return {result.episode_return:8.2f} {errors} '
               f'robot_effort={result.robot_effort:.3f}{" converged" if result.converged else ""}'
               f' {result.event}{update}', file=sys.stderr, flush=True)

@@ -76,7 +76,7 @@ class RunningMeanStd:
 
     def state_dict(self) -> dict:
         """Return the statistics as plain data."""
-        return {'mean': self.mean, 'var': self.var, 'count': self.count}
+        return {'mean': float(self.mean), 'var': float(self.var), 'count': float(self.count)}
 
     def load_state_dict(self, state: dict) -> None:
         """Restore statistics saved by :meth:`state_dict`."""
@@ -97,6 +97,11 @@ class RewardScaler:
         """Forget the return of the previous episode."""
         self.discounted_return = 0.0
 
+    def reset(self) -> None:
+        """Forget every statistic (a new reward has another scale)."""
+        self.return_stats = RunningMeanStd()
+        self.discounted_return = 0.0
+
     def scale(self, reward: float, learn: bool = True) -> float:
         """Return the reward used for training; ``learn`` updates the statistics."""
         if not self.enabled:
@@ -109,7 +114,7 @@ class RewardScaler:
     def state_dict(self) -> dict:
         """Return the scaler's state as plain data."""
         return {'stats': self.return_stats.state_dict(),
-                'discounted_return': self.discounted_return}
+                'discounted_return': float(self.discounted_return)}
 
     def load_state_dict(self, state: dict) -> None:
         """Restore a state saved by :meth:`state_dict`."""
@@ -163,6 +168,9 @@ class ValueFunction(nn.Module):
         return self.net(observations).squeeze(-1)
 
 
+BUFFER_FIELDS = ('observations', 'actions', 'log_probs', 'values', 'advantages', 'returns')
+
+
 class RolloutBuffer:
     """Finished episode segments waiting for the next update (GAE already computed)."""
 
@@ -207,15 +215,14 @@ class RolloutBuffer:
                 'returns': cat(self.returns), 'values': cat(self.values)}
 
     def state_dict(self) -> dict:
-        """Return the stored samples as plain data (for checkpoints)."""
-        return {name: [segment.copy() for segment in getattr(self, name)]
-                for name in ('observations', 'actions', 'log_probs', 'values', 'advantages',
-                             'returns')}
+        """Return the stored samples as tensors (checkpoints load them with weights_only)."""
+        return {name: [torch.from_numpy(np.array(segment)) for segment in getattr(self, name)]
+                for name in BUFFER_FIELDS}
 
     def load_state_dict(self, state: dict) -> None:
         """Restore samples saved by :meth:`state_dict`."""
-        for name, segments in state.items():
-            setattr(self, name, [np.asarray(segment) for segment in segments])
+        for name in BUFFER_FIELDS:
+            setattr(self, name, [np.asarray(segment) for segment in state[name]])
 
 
 class PPO:

@@ -147,7 +147,7 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     fake = FakeSim(rclpy_context)
     agent = start_node('hrc_agent_node', 'agent_node', parameters={
         'case': 1, 'seed': 7, 'session_id': 'dds_test', 'task_tree_file': str(easy_tree),
-        'convergence_window': 2, 'max_training_episodes': 10, 'evaluation_episodes': 1,
+        'convergence_window': 1, 'max_training_episodes': 10, 'evaluation_episodes': 1,
         'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': str(tmp_path / 'ckpt'),
         'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque,
         'human_action_source': 'same_step'})  # the fake sim checks the same-step protocol
@@ -155,29 +155,33 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     fake.node.destroy_node()
     assert code == 0, agent.output
 
-    # 4 training episodes (2 per training step, window 2) and 1 evaluation episode.
-    assert [episode for episode, _ in fake.resets] == [0, 1, 2, 3, 4]
-    assert len({seed for _, seed in fake.resets}) == 5
-    expected = [(episode, step) for episode in range(5) for step in range(STEPS)]
+    # Per training step: 2 training episodes (2 x 10 samples >= horizon 16), the PPO update,
+    # 1 judging episode that meets the condition (window 1); then 1 evaluation episode.
+    judging, evaluation_episode, joined = (2, 5), 6, 3
+    assert [episode for episode, _ in fake.resets] == list(range(7))
+    assert len({seed for _, seed in fake.resets}) == 7
+    expected = [(episode, step) for episode in range(7) for step in range(STEPS)]
     assert fake.answers == expected, 'every non-final state answered exactly once, in order'
     assert fake.stale == [] and fake.off_axis == []
 
     summaries = fake.episodes
+    # A judging episode is no Table II evaluation: evaluation false, counted with training.
     assert [(s.episode, s.training_step, s.human_involved, s.evaluation) for s in summaries] == \
-        [(0, 0, False, False), (1, 0, False, False), (2, 1, True, False), (3, 1, True, False),
-         (4, 1, True, True)]
+        [(0, 0, False, False), (1, 0, False, False), (2, 0, False, False), (3, 1, True, False),
+         (4, 1, True, False), (5, 1, True, False), (6, 1, True, True)]
     assert all(s.steps == STEPS and s.truncated and s.session_id == 'dds_test'
                for s in summaries)
-    assert summaries[1].converged and summaries[3].converged
-    assert summaries[0].human_effort == 0.0 and summaries[2].human_effort > 0.0
+    assert [s.episode for s in summaries if s.converged] == list(judging)
+    assert summaries[0].human_effort == 0.0 and summaries[joined].human_effort > 0.0
 
     # One AgentStep per step: the observed human action is 0 alone, the human's when joined.
     assert [(m.episode, m.step) for m in fake.steps] == expected
     for message in fake.steps:
-        seen = human_command(message.episode, message.step) if message.episode >= 2 else 0.0
+        seen = human_command(message.episode, message.step) if message.episode >= joined \
+            else 0.0
         assert message.observation_human_action == pytest.approx(seen)
         assert message.reward == pytest.approx(sum(message.reward_components))
-        assert message.deterministic == (message.episode == 4)
+        assert message.deterministic == (message.episode in judging + (evaluation_episode,))
         assert -1.0 <= message.action <= 1.0
         assert message.wrench == pytest.approx(message.action * PHYSICS.max_force)
     assert list(fake.steps[0].subtask_ids) == ['slider', 'pendulum']
@@ -185,19 +189,16 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     stamps = {(s.episode, s.step): s.header.stamp for s in fake.published}
     assert all(m.header.stamp == stamps[(m.episode, m.step)] for m in fake.steps)
 
-    # Session transitions: alone -> updating -> human joins -> evaluation -> done.
+    # Session transitions: alone -> updating -> judging -> human joins -> ... -> done.
     phases = [(m.phase, m.training_step, m.human_involved) for m in fake.sessions]
     training, updating = SessionStatus.PHASE_TRAINING, SessionStatus.PHASE_UPDATING
     evaluation, done = SessionStatus.PHASE_EVALUATION, SessionStatus.PHASE_DONE
     assert phases[0] == (training, 0, False)
-    # Step 1 converged after episode 1 (2 x 10 samples >= horizon 16): the update is announced
-    # with the next step's setting, before any episode of it.
-    assert (updating, 1, True) in phases
-    assert phases.index((updating, 1, True)) < phases.index((training, 1, True))
-    assert (evaluation, 1, True) in phases
+    assert phases.index((updating, 0, False)) < phases.index((training, 1, True)) \
+        < phases.index((updating, 1, True)) < phases.index((evaluation, 1, True))
     assert phases[-1] == (done, 1, True)
     last = fake.sessions[-1]
-    assert (last.total_episodes, last.human_involved_episodes) == (4, 2)
+    assert (last.total_episodes, last.human_involved_episodes) == (6, 3)
     assert (last.robot_dof, last.human_dof) == (SessionStatus.DOF_TRANSLATION,
                                                 SessionStatus.DOF_ROTATION)
     assert last.strategy == 'responsibility_guided' and last.case_id == 1

@@ -1,5 +1,7 @@
 """What the robot observes as the human action (human_action_source)."""
 
+import pytest
+
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_common.params import with_overrides
@@ -20,10 +22,13 @@ def test_applied_source_reads_the_human_command_the_sim_applied():
     with SliderPendulumBall(PhysicsParams()) as sim:
         core.start_episode()
         state = sim.reset(seed=1)
-        first = core.act(state, human_action=0.9)   # ignored: nothing applied yet
-        assert first.record.observed_human_action == 0.0
+        # A same-step answer would not be used: refused, never silently ignored.
+        with pytest.raises(ValueError, match='human_action_source is applied'):
+            core.act(state, human_action=0.9)
+        first = core.act(state)
+        assert first.record.observed_human_action == 0.0   # nothing applied yet
         state = sim.step_normalized(first.action, -0.4)   # the human turned at -0.4
-        second = core.act(state, human_action=0.9)
+        second = core.act(state)
         assert abs(second.record.observed_human_action - (-0.4)) < 1e-9
         # An out-of-range human command is observed as the sim applied it: clamped.
         state = sim.step(0.0, 5 * PhysicsParams().max_torque)
@@ -37,4 +42,6 @@ def test_same_step_source_observes_the_answer_to_the_same_state():
     with SliderPendulumBall(PhysicsParams()) as sim:
         core.start_episode()
         state = sim.reset(seed=1)
+        with pytest.raises(ValueError, match="needs the human's answer"):
+            core.act(state)
         assert core.act(state, human_action=0.3).record.observed_human_action == 0.3

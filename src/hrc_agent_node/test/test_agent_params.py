@@ -61,11 +61,13 @@ def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
     core = AgentCore(with_overrides(AgentParams(), case=2, preset='tuned', checkpoint_dir=''))
     assert core.robot_dof == 'rotation' and not core.human_involved
     core.start_episode()
-    first = core.act(fake_state(0), human_action=0.7)
+    with pytest.raises(ValueError, match='the human is not involved'):
+        core.act(fake_state(0), human_action=0.7)
+    first = core.act(fake_state(0))
     assert first.previous is None
     assert first.record.observed_human_action == 0.0   # the human is not involved in step 1
     assert first.wrench == pytest.approx(first.action * core.params.max_torque)
-    second = core.act(fake_state(1, angle=0.05), human_action=0.7)
+    second = core.act(fake_state(1, angle=0.05))
     record = second.previous
     assert record.step == 0 and record.subtask_ids == ('slider', 'pendulum')
     slider, pendulum = core.tree.shapes['slider'], core.tree.shapes['pendulum']
@@ -73,7 +75,7 @@ def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
         (slider.value(0.01), pendulum.value(0.05)))     # from state 1, the state reached
     assert record.reward == pytest.approx(sum(record.reward_components))
     with pytest.raises(ValueError, match='step 1 again'):
-        core.act(fake_state(1), 0.0)
+        core.act(fake_state(1))
     result = core.end_episode(fake_state(2, final=True, angle=-0.3))
     assert result.steps == 2 and result.last_record.step == 1
     assert result.episode_return == pytest.approx(record.reward + result.last_record.reward)

@@ -1,0 +1,178 @@
+"""Convergence judged on judging episodes; PPO fixes; evaluation resumed without double count.
+
+PPO fixes: the buffer and the reward scale reset on a new reward, and a truncated episode
+bootstraps from the final state's observation.
+
+Deterministic: seeded cores driven with hand-made states (no physics), so each test knows
+exactly which episodes satisfy the step's condition.
+"""
+
+import types
+
+import pytest
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import load_into, save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_common.params import with_overrides
+
+STEPS = 4          # control steps per hand-made episode
+GOOD = dict(slider=0.0, angle=0.0, ball=0.0)       # every subtask satisfied
+BAD = dict(slider=0.09, angle=1.0, ball=0.2)       # none satisfied
+
+
+def state(step, final=False, slider=0.0, angle=0.0, ball=0.0, force=0.0, torque=0.0):
+    """Return a state with the attributes AgentCore reads (PhysicsState / TaskState names)."""
+    return types.SimpleNamespace(step=step, slider_position=slider, slider_velocity=0.0,
+                                 pendulum_angle=angle, pendulum_angular_velocity=0.0,
+                                 ball_position=ball, ball_velocity=0.0, truncated=final,
+                                 terminated=False, applied_force=force, applied_torque=torque)
+
+
+def make_core(**overrides):
+    """Return a seeded core whose update is due after 2 hand-made episodes (horizon 8)."""
+    values = dict(case=1, seed=5, preset='tuned', checkpoint_dir='', horizon=8,
+                  minibatch_size=4, convergence_window=2, satisfied_window=2,
+                  max_training_episodes=100, evaluation_episodes=0)
+    values.update(overrides)
+    return AgentCore(with_overrides(AgentParams(), **values))
+
+
+def run_episode(core, training=BAD, judging=GOOD):
+    """Run one hand-made episode: ``training`` values in training, ``judging`` otherwise."""
+    plan = core.start_episode()
+    values = judging if plan.deterministic else training
+    for step in range(STEPS):
+        core.act(state(step, **values))
+    result = core.end_episode(state(STEPS, final=True, **values))
+    if core.phase == 'updating':
+        core.update()
+    return plan, result
+
+
+def test_judging_episode_follows_each_update_and_alone_decides_the_advance():
+    core = make_core()
+    kinds = []
+    while core.training_step.index == 0:
+        plan, result = run_episode(core)
+        kinds.append('judging' if plan.judging else 'training')
+        assert not plan.evaluation
+    # Update after 2 training episodes (8 samples), then one judging episode; window 2.
+    assert kinds == ['training', 'training', 'judging'] * 2
+    assert result.judging and result.converged and result.event == 'advanced'
+    # Every episode counts in the totals; the judging ones are not learned from.
+    assert core.total_episodes == 6 and core.judging_episodes == 2
+    assert core.buffered_samples == 0
+
+
+def test_judging_episodes_are_deterministic_counted_and_human_involved():
+    core = make_core(case=5)   # learn together: the human acts from the first episode
+    records = []
+    for _ in range(3):
+        plan = core.start_episode()
+        for step in range(STEPS):
+            records.append((plan.judging, core.act(state(step, **BAD)).record))
+        core.end_episode(state(STEPS, final=True, **BAD))
+        if core.phase == 'updating':
+            samples = core.buffered_samples
+            core.update()
+    assert samples == 2 * STEPS          # the judging episode added no sample
+    assert all(record.deterministic == judging for judging, record in records)
+    assert (core.total_episodes, core.human_involved_episodes, core.judging_episodes) == \
+        (3, 3, 1)
+
+
+def test_training_rule_judges_the_training_episodes():
+    """The earlier rule, kept as an option: no judging episode; good training episodes advance."""
+    core = make_core(convergence_judged_on='training')
+    plan, _ = run_episode(core, training=GOOD)
+    plan2, result = run_episode(core, training=GOOD)
+    assert not plan.judging and not plan2.judging and result.event == 'advanced'
+    assert core.judging_episodes == 0 and core.total_episodes == 2
+    # And the evaluation rule does not advance on good training episodes.
+    core = make_core()
+    for _ in range(2):
+        run_episode(core, training=GOOD, judging=BAD)
+    assert core.training_step.index == 0
+
+
+def test_judging_interval_counts_training_episodes():
+    core = make_core(judging_interval=3, horizon=64, minibatch_size=4)   # no update at all
+    kinds = [run_episode(core)[0].judging for _ in range(8)]
+    assert kinds == [False, False, False, True, False, False, False, True]
+
+
+def test_new_reward_resets_the_buffer_and_the_reward_scaler():
+    """Case 1 step 1 (slider + pendulum) -> step 2 (all three): the old samples are dropped.
+
+    Training rule, horizon 12: the advancing episode leaves 8 samples of the old reward, which
+    without the reset would go into the first update of step 2 with the old scale.
+    """
+    core = make_core(convergence_judged_on='training', horizon=12)
+    run_episode(core, training=GOOD)
+    assert core.buffered_samples == STEPS
+    assert core.reward_scaler.state_dict()['stats']['count'] > 1
+    _, result = run_episode(core, training=GOOD)
+    assert result.event == 'advanced' and core.phase == 'training'
+    assert core.buffered_samples == 0
+    assert core.reward_scaler.state_dict() == AgentCore(core.params).reward_scaler.state_dict()
+
+
+def test_same_reward_keeps_the_buffer(tmp_path):
+    """A step change that keeps the robot's reward keeps its samples and scale."""
+    cases = tmp_path / 'cases.yaml'
+    cases.write_text(
+        'strategies:\n  two_same:\n    steps:\n'
+        '      - {robot_subtasks: [slider, pendulum], human_involved: false, advance: converged}\n'
+        '      - {robot_subtasks: [slider, pendulum], human_involved: true,\n'
+        '         human_subtasks: [ball], advance: converged}\n'
+        'cases:\n  1: {strategy: two_same, robot_action: translation}\n')
+    core = make_core(convergence_judged_on='training', horizon=12, cases_file=str(cases))
+    run_episode(core, training=GOOD)
+    run_episode(core, training=GOOD)
+    assert core.training_step.index == 1 and core.buffered_samples == 2 * STEPS
+
+
+def test_truncated_episode_bootstraps_from_the_final_state_with_its_human_action():
+    """The value of the final state is taken with the human command applied at that state."""
+    core = make_core(case=5)                  # the human turns the pendulum, observed applied
+    max_torque = core.params.max_torque
+    seen = []
+    value_of = core.ppo.value_of
+    core.ppo.value_of = lambda observation: seen.append(observation) or value_of(observation)
+    core.start_episode()
+    for step in range(STEPS):
+        core.act(state(step, torque=0.1 * max_torque))
+    core.end_episode(state(STEPS, final=True, torque=-0.7 * max_torque))
+    assert len(seen) == 1
+    assert seen[0] == pytest.approx(core.observation(state(STEPS, torque=-0.7 * max_torque),
+                                                     -0.7))
+    assert seen[0][3] == pytest.approx(-0.7)   # not the previous step's 0.1
+
+
+def test_evaluation_aborted_then_resumed_runs_only_the_episodes_left(tmp_path):
+    """Abort after 2 of 3 evaluation episodes, resume: 1 more, 3 in all (was 2 + 3 = 5)."""
+    checkpoint = tmp_path / 'latest.pt'
+    core = make_core(max_training_episodes=1, evaluation_episodes=3)
+    run_episode(core)
+    assert core.phase == 'evaluation'
+    for _ in range(2):
+        plan, _ = run_episode(core)
+        assert plan.evaluation
+        save_checkpoint(core, checkpoint)      # the node saves latest.pt at each episode end
+    core.start_episode()
+    core.act(state(0))
+    core.abort()                               # the third evaluation episode is dropped
+    resumed = make_core(max_training_episodes=1, evaluation_episodes=3)
+    load_into(resumed, checkpoint)
+    run = 0
+    while resumed.phase != 'done':
+        plan, _ = run_episode(resumed)
+        assert plan.evaluation and plan.episode == 3
+        run += 1
+    assert run == 1 and resumed.evaluation_summary()['episodes'] == 3
+    # A finished session stays finished when resumed: no evaluation episode runs again.
+    save_checkpoint(resumed, checkpoint)
+    again = make_core(max_training_episodes=1, evaluation_episodes=3)
+    load_into(again, checkpoint)
+    assert again.phase == 'done' and again.evaluation_summary()['episodes'] == 3
