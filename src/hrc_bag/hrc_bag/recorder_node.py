@@ -92,7 +92,7 @@ class RecorderNode(Node):
                                    f'{self._waiting}')
             self._discovery_timer = self.create_timer(self.params.discovery_period,
                                                       self._discover)
-        self._tick_timer = self.create_timer(min(0.1, self.params.flush_period / 2),
+        self._tick_timer = self.create_timer(min(0.05, self.params.flush_period / 2),
                                              self.core.tick)
 
     @staticmethod

@@ -33,16 +33,17 @@ class RecorderParams:
         262144, 'a chunk is closed when it holds this many bytes (B)', low=1024,
         high=64 * 1024 * 1024)
     flush_period: float = param(
-        1.0, 'the open chunk is written at least this often (s); a SIGKILL loses at most this '
-        'much of the open episode', low=0.05, high=60.0)
+        0.1, 'the open chunk is written at least this often (s); a SIGKILL loses at most this '
+        'much (plus reorder_window) of the open episode', low=0.02, high=60.0)
     close_grace: float = param(
-        0.5, 'an episode file closes this long (s) after its EpisodeSummary, so late messages '
-        'of the episode on other topics still land in it', low=0.0, high=10.0)
+        0.0, 'an episode file closes this long (s) after its EpisodeSummary (the last message '
+        'of an episode) is handled; a later message of the episode goes to the newest file',
+        low=0.0, high=10.0)
     summary_timeout: float = param(
         5.0, 'an episode file closes this long (s) after its final state if no EpisodeSummary '
         'comes', low=0.1, high=600.0)
     reorder_window: float = param(
-        0.5, 'messages are handled in the order DDS received them, after waiting this long (s) '
+        0.2, 'messages are handled in the order DDS received them, after waiting this long (s) '
         'for those the executor serves late (it serves topics in its own order)', low=0.0,
         high=10.0)
     max_buffered: int = param(

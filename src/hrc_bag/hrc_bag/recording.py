@@ -1,6 +1,7 @@
-"""Record an hrc session into one rosbag2-compatible MCAP file per episode (pure, no rclpy).
+"""The recorder's routing policy: which episode file receives a message, and when it closes.
 
-Layout of a session (``<output_dir>/<session_id>/``)::
+Pure (no rclpy). The files themselves (MCAP layout, records, metadata.yaml) are the format
+layer, :mod:`hrc_bag.format`. Layout of a session (``<output_dir>/<session_id>/``)::
 
     metadata.yaml                 rosbag2 bag metadata (version 9, storage mcap), rewritten
                                   atomically each time an episode file is closed
@@ -15,12 +16,13 @@ Episode boundaries (the rule; the node turns messages into the events used here)
   HumanAction, AgentStep, EpisodeSummary; for a command (WrenchStamped) the episode of the
   state whose stamp it carries (the step protocol). Messages that name no episode
   (SessionStatus, other topics) go to the newest open file.
-* A file closes ``close_grace`` seconds after the EpisodeSummary of its episode, or after the
-  first state of the next episode (late messages of its episode on other topics still find
-  it), or after a ``/hrc/session`` with phase done/aborted; ``summary_timeout`` seconds after
-  its final state (``terminated`` or ``truncated``) if nothing else closed it (a sim without
-  an agent); or at shutdown. A message of an episode whose file closed already goes to the
-  newest file (with a warning).
+* The EpisodeSummary is the last message of an episode (the final state is not answered; the
+  agent publishes the last AgentStep before the summary), so a file closes ``close_grace``
+  seconds (default 0: at once) after its EpisodeSummary is handled, or after the first state
+  of the next episode, or after a ``/hrc/session`` with phase done/aborted;
+  ``summary_timeout`` seconds after its final state (``terminated`` or ``truncated``) if
+  nothing else closed it (a sim without an agent); or at shutdown. A message of an episode
+  whose file closed already goes to the newest file (with a warning).
 * Messages that arrive while no file is open (between episodes: phase ``updating``, the next
   training step, the human joining; or before the first episode), and messages of an episode
   whose first state has not been handled yet, are kept in memory and written at the start of
@@ -32,10 +34,11 @@ seconds: rclpy's executor takes one message per subscription in turn, so a recor
 behind gets a topic's messages later than another topic's received after them.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
-exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much (plus
-the ``reorder_window``) of the open episode; every closed file is complete (summary, indexes,
-footer) and fsynced, and metadata.yaml lists only closed files. A later recorder of the same
-session finishes the files a killed one left open (``recover``). Write errors (disk full,
+exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus
+the ``reorder_window`` (defaults 0.1 + 0.2 s) of the open episode; a finished episode's file
+is closed (summary, indexes, footer, fsync) about ``reorder_window`` after its EpisodeSummary
+arrived, and metadata.yaml lists only closed files. A later recorder of the same session
+finishes the files a killed one left open (``recover``). Write errors (disk full,
 permissions) raise :class:`RecordingError`, which stops the recorder with a clear message.
 """
 
@@ -390,7 +393,7 @@ class EpisodeRecorder:
             self._last_flush = now
             for episode in self.open_files.values():
                 try:
-                    episode.file.flush()
+                    episode.file.flush()        # a no-op when nothing came since the last
                 except RecordingError as error:
                     raise self._fail(str(error), error)
 

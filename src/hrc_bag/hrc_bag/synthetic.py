@@ -76,6 +76,7 @@ class SyntheticSession:
         self.total_episodes = 0
         self.human_involved_episodes = 0
         self.publishers = {}
+        self.publish_times = {}       # topic -> [wall clock ns of each publication]
         if node is not None:
             for topic, (message_type, qos) in TOPICS.items():
                 self.publishers[topic] = node.create_publisher(message_type, prefix + topic,
@@ -101,6 +102,7 @@ class SyntheticSession:
     def _publish(self, topic: str, message) -> None:
         if self.publishers:
             self.publishers[topic].publish(message)
+            self.publish_times.setdefault(topic, []).append(time.time_ns())
         if self.sink is not None:
             self.sink(topic, message)
         self.published.add(topic, message)
@@ -134,15 +136,19 @@ class SyntheticSession:
 
     def publish_episode(self, episode: int, steps: int = 10, training_step: int = 0,
                         human_involved: bool = False, evaluation: bool = False,
-                        step_period: float = 0.0, final: bool = True) -> EpisodeSummary:
+                        step_period: float = 0.0, final: bool = True,
+                        stop: typing.Optional[typing.Callable] = None) -> EpisodeSummary:
         """Publish the traffic of one episode of ``steps`` states (the last one final).
 
         With ``final`` false the episode stops after ``steps`` non-final states (as if the
-        graph died). Returns the EpisodeSummary published (None when not final).
+        graph died); so it does, unfinished, as soon as ``stop()`` is true. Returns the
+        EpisodeSummary published (None when not final).
         """
         robot_actions, human_actions = [], []
         errors = numpy.zeros(3)
         for step in range(steps):
+            if stop is not None and stop():
+                return None
             is_final = final and step == steps - 1
             state = TaskState()
             self._stamp(state)
@@ -305,3 +311,62 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
     session.publish_status(len(plan), SessionStatus.PHASE_DONE)
     recorder.close()
     return session
+
+
+def episode_messages(published: Published) -> dict:
+    """Return {episode: {topic: count}} of the messages that belong to an episode.
+
+    TaskState, HumanAction, AgentStep and EpisodeSummary name their episode; a command belongs
+    to the episode of the state whose stamp it carries; SessionStatus belongs to none.
+    """
+    stamps = {}
+    for state in published.by_topic.get(hrc_topics.STATE, []):
+        stamps[(state.header.stamp.sec, state.header.stamp.nanosec)] = state.episode
+    counts = {}
+    for topic, messages in published.by_topic.items():
+        for message in messages:
+            episode = getattr(message, 'episode', None)
+            if isinstance(message, WrenchStamped):
+                episode = stamps.get((message.header.stamp.sec, message.header.stamp.nanosec))
+            if episode is None or isinstance(message, SessionStatus):
+                continue
+            per_topic = counts.setdefault(int(episode), {})
+            per_topic[topic] = per_topic.get(topic, 0) + 1
+    return counts
+
+
+def publish_until(session: SyntheticSession, stop, steps: int = 40,
+                  step_period: float = 0.005, first_episode: int = 0) -> dict:
+    """Publish lockstep-paced episodes until ``stop()`` is true; return {episode: summary ns}.
+
+    Each episode: a SessionStatus, ``steps`` states (the last one final) with their answers,
+    ``step_period`` s apart, then the EpisodeSummary, whose wall-clock time (ns since the
+    epoch) just after its publication is returned. The episode running when ``stop()`` turns
+    true is left unfinished.
+    """
+    summaries = {}
+    episode = first_episode
+    while not stop():
+        session.publish_status(episode, human_involved=True)
+        if session.publish_episode(episode, steps, human_involved=True,
+                                   step_period=step_period, stop=stop) is None:
+            break
+        summaries[episode] = time.time_ns()
+        episode += 1
+    return summaries
+
+
+def loss_window(session: SyntheticSession, recorded_counts: dict, kill_ns: int) -> float:
+    """Return how long (s) before ``kill_ns`` the oldest message that was not recorded was sent.
+
+    ``recorded_counts``: {topic: messages of the topic found in the bags}. Over reliable DDS
+    what a killed recorder keeps of a topic is a prefix of what was published, so the first
+    message missing on a topic is the one after that prefix. 0.0 when nothing sent before the
+    kill is missing.
+    """
+    oldest = kill_ns
+    for topic, times in session.publish_times.items():
+        count = recorded_counts.get(topic, 0)
+        if count < len(times) and times[count] < oldest:
+            oldest = times[count]
+    return (kill_ns - oldest) / 1e9
