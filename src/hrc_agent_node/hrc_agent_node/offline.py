@@ -24,6 +24,7 @@ from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.partners import ScriptedPartner
 from hrc_common.params import with_overrides
+from hrc_sim_node.protocol import per_dof, roles
 
 
 def run_episode(core: AgentCore, sim, partner, on_step=None):
@@ -40,10 +41,10 @@ def run_episode(core: AgentCore, sim, partner, on_step=None):
         decision = core.act(state, human_action if core.needs_human_action else None)
         if on_step is not None:
             on_step(state, decision, human_action)
-        if core.robot_dof == 'translation':
-            state = sim.step_normalized(decision.action, human_action)
-        else:
-            state = sim.step_normalized(human_action, decision.action)
+        # The sim's per-DOF dispatch (hrc_sim_node.protocol), on normalized commands.
+        command = per_dof({'robot': decision.action, 'human': human_action},
+                          roles(core.robot_dof))
+        state = sim.step_normalized(command['translation'], command['rotation'])
     return core.end_episode(state)
 
 
