@@ -1,116 +1,381 @@
-"""Experiment runner: the six paper cases x N seeds, headless, then the report across all.
+"""Experiment runner: paper cases x seeds (x simulated-human profiles), headless, then the study.
 
-    ros2 run hrc_bringup experiment --seeds 1 --parallel 2
+    ros2 run hrc_bringup experiment --seeds 10                       # local process pool
+    ros2 run hrc_bringup experiment --seeds 10 --ray                 # a local Ray instance
+    ros2 run hrc_bringup experiment --seeds 10 --ray-address auto    # an existing Ray cluster
+    ros2 run hrc_bringup experiment --seeds 2 --engine graph         # the ROS graph per session
 
-Each session is a separate ``session`` process on its own ROS_DOMAIN_ID, so sessions that run
-in parallel never see each other. The report then reads every session's bags together and gives
-Table II with the spread across seeds and Fig. 5-7.
+Each session (case, seed, profile) is one task submitted to an executor: a local process pool
+(the embedded default, no Ray needed) or Ray, with declared resources (``--cpus-per-session``).
+A task runs the session with the chosen engine:
+
+* ``inprocess``: ``hrc_engine.run_session`` in the worker process (sim, agent, simulated human
+  in one process, same cores as the graph, same bags);
+* ``graph``: the ``session`` runner (sim, agent, human, recorder as processes over DDS) on a ROS
+  domain reserved on the worker's machine (lock files of hrc_common.testing.DomainReservation,
+  shared with the tests), so concurrent sessions on one node never see each other.
+
+Bags land in ``<bags-dir>/<name>/<session_id>`` as seen from the worker: on a cluster that is a
+shared filesystem, or with ``--pull-bags`` each task packs its session folder and the driver
+unpacks it here (docs/sweeps.md). Every session's outcome and the sweep's wall time go to
+``<bags-dir>/<name>/experiment.json``; then ``hrc_study`` writes the report of all sessions
+(``<runs-dir>/<name>/report/results.md``).
+
+Exit codes: 0 every session done, 1 a session failed or the report failed, 2 bad arguments,
+130 interrupted.
 """
 
 import argparse
+from dataclasses import asdict, dataclass
+import io
+import json
+import os
 import pathlib
+import shlex
+import socket
 import subprocess
 import sys
+import tarfile
+import tempfile
 import time
 
-from hrc_bringup.supervisor import describe_exit
 from hrc_common.contract import case_problem, make_session_id
+
+ENGINES = ('inprocess', 'graph')
+
+
+@dataclass(frozen=True)
+class SessionTask:
+    """One session of the sweep: everything a worker needs, as plain values (picklable)."""
+
+    case: int
+    seed: int
+    profile: str                    # simulated-human profile ('' = the human node's default)
+    session_id: str
+    engine: str                     # inprocess | graph
+    bags_dir: str                   # absolute: <bags-dir>/<name> (the session adds its id)
+    runs_dir: str                   # absolute: <runs-dir>/<name>
+    training_episodes: int          # max training episodes (0 = params/agent.yaml)
+    evaluation_episodes: int        # final evaluation episodes (-1 = params/agent.yaml)
+    overrides: tuple                # ('node.param=value', ...) as given on the command line
+    params_dir: str                 # the parameter files, resolved on the driver
+    pull_bags: bool                 # return the session folder packed (no shared filesystem)
+
+
+def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
+    """Return the session id: 'case2-seed0', with '-<profile>' when several profiles run."""
+    base = make_session_id(case, seed, timestamped=False)
+    return f'{base}-{profile}' if len(profiles) > 1 and profile else base
+
+
+def run_task(task: SessionTask) -> dict:
+    """Run one session on this worker; return its outcome (never raises)."""
+    started = time.monotonic()
+    outcome = {'session_id': task.session_id, 'case': task.case, 'seed': task.seed,
+               'profile': task.profile, 'engine': task.engine, 'host': socket.gethostname(),
+               'worker_pid': os.getpid(), 'exit_code': 1, 'error': ''}
+    try:
+        node = _ray_node_id()
+        if node:
+            outcome['ray_node'] = node
+        bags_dir = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bags-')) if task.pull_bags \
+            else pathlib.Path(task.bags_dir)
+        runner = run_inprocess if task.engine == 'inprocess' else run_graph
+        outcome['exit_code'], outcome['error'] = runner(task, bags_dir)
+        if task.pull_bags:
+            outcome['bag_archive'] = pack_folder(bags_dir / task.session_id)
+    except Exception as error:   # a worker reports every failure back to the driver
+        outcome['error'] = f'{type(error).__name__}: {error}'
+    outcome['seconds'] = time.monotonic() - started
+    return outcome
+
+
+def _ray_node_id() -> str:
+    if 'ray' not in sys.modules:
+        return ''
+    import ray
+    try:
+        return ray.get_runtime_context().get_node_id() if ray.is_initialized() else ''
+    except Exception:   # not inside a Ray worker
+        return ''
+
+
+def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
+    """Run the session with the in-process engine; return (exit code, error text)."""
+    from hrc_bringup.plan import parse_override
+    from hrc_engine.engine import EngineConfig, run_session
+
+    overrides = {}
+    for text in task.overrides:
+        node, name, value = parse_override(text)
+        overrides[f'{node}.{name}'] = value
+    run_session(EngineConfig(
+        case=task.case, seed=task.seed, training_episodes=task.training_episodes,
+        evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
+        bags_dir=str(bags_dir), runs_dir=str(pathlib.Path(task.runs_dir) / task.session_id),
+        human_profile=task.profile, overrides=overrides, params_dir=task.params_dir))
+    return 0, ''
+
+
+def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
+    """Run the session as the ROS graph on a domain reserved on this machine."""
+    from hrc_common.executables import executable_path
+    from hrc_common.testing import DomainReservation
+
+    reservation = DomainReservation()
+    try:
+        command = [str(executable_path('hrc_bringup', 'session')), '--case', str(task.case),
+                   '--seed', str(task.seed), '--session-id', task.session_id,
+                   '--bags-dir', str(bags_dir), '--no-report',
+                   '--runs-dir', str(pathlib.Path(task.runs_dir) / task.session_id),
+                   '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
+        if task.profile:
+            command += ['--profile', task.profile]
+        if task.training_episodes > 0:
+            command += ['--episodes', str(task.training_episodes)]
+        if task.evaluation_episodes >= 0:
+            command += ['--eval-episodes', str(task.evaluation_episodes)]
+        for override in task.overrides:
+            command += ['--set', override]
+        pathlib.Path(task.runs_dir).mkdir(parents=True, exist_ok=True)
+        with open(pathlib.Path(task.runs_dir) / f'{task.session_id}.log', 'wb') as log:
+            code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode
+    finally:
+        reservation.release()
+    return code, '' if code == 0 else f'session exited with {code}'
+
+
+def pack_folder(folder: pathlib.Path) -> bytes:
+    """Return ``folder`` as a gzipped tar (its name as the top entry)."""
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode='w:gz') as archive:
+        archive.add(folder, arcname=folder.name)
+    return buffer.getvalue()
+
+
+def unpack_folder(data: bytes, target: pathlib.Path, expected: str) -> None:
+    """Unpack a session archive into ``target`` (only members under ``expected``)."""
+    with tarfile.open(fileobj=io.BytesIO(data), mode='r:gz') as archive:
+        members = [member for member in archive.getmembers()
+                   if member.name == expected or member.name.startswith(expected + '/')]
+        archive.extractall(target, members=members, filter='data')
+
+
+class LocalPool:
+    """The embedded executor: a process pool on this machine."""
+
+    def __init__(self, workers: int):
+        from concurrent.futures import ProcessPoolExecutor
+        import multiprocessing
+        self.workers = workers
+        # spawn: a fresh interpreter per worker (no forked torch or PyBullet state)
+        self.pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context('spawn'))
+
+    def describe(self) -> str:
+        """Return what runs the tasks."""
+        return f'local process pool ({self.workers} workers)'
+
+    def run(self, tasks, on_done):
+        """Run every task; call ``on_done(outcome)`` as each finishes."""
+        from concurrent.futures import as_completed
+        futures = [self.pool.submit(run_task, task) for task in tasks]
+        for future in as_completed(futures):
+            on_done(future.result())
+
+    def close(self):
+        """Stop the workers."""
+        self.pool.shutdown(cancel_futures=True)
+
+
+class RayExecutor:
+    """Ray: an existing cluster (``address``) or a local instance started here (None)."""
+
+    def __init__(self, address, cpus_per_session: float):
+        import ray
+        self.ray = ray
+        ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                 logging_level='ERROR', configure_logging=True)
+        self.remote = ray.remote(num_cpus=cpus_per_session, max_retries=0)(run_task)
+        self.cpus_per_session = cpus_per_session
+
+    def describe(self) -> str:
+        """Return what runs the tasks."""
+        nodes = [node for node in self.ray.nodes() if node.get('Alive')]
+        cpus = self.ray.cluster_resources().get('CPU', 0)
+        return (f'Ray cluster ({len(nodes)} nodes, {cpus:g} CPUs, {self.cpus_per_session:g} '
+                f'CPU per session)')
+
+    def run(self, tasks, on_done):
+        """Run every task; call ``on_done(outcome)`` as each finishes."""
+        pending = [self.remote.remote(task) for task in tasks]
+        while pending:
+            done, pending = self.ray.wait(pending, num_returns=1)
+            on_done(self.ray.get(done[0]))
+
+    def close(self):
+        """Disconnect (a local instance started here stops with it)."""
+        self.ray.shutdown()
 
 
 def parse_args(argv=None):
-    """Parse the command line."""
+    """Parse and check the command line (exit 2 with every reason)."""
     parser = argparse.ArgumentParser(
-        prog='experiment', description='Run paper cases x seeds headless with the simulated '
-        'human (sessions in parallel on separate ROS domains), then the report across all.')
+        prog='experiment', description='Run paper cases x seeds (x simulated-human profiles) '
+        'headless, each session a task on a local process pool or a Ray cluster, then write '
+        'the study of all sessions (hrc_study).')
     parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6],
                         help='cases to run (default 1 2 3 4 5 6)')
-    parser.add_argument('--seeds', type=int, default=1, help='seeds per case (0..N-1)')
+    parser.add_argument('--seeds', type=int, default=10,
+                        help='seeds per case, each a different simulated person (default 10)')
     parser.add_argument('--first-seed', type=int, default=0, help='first seed (default 0)')
-    parser.add_argument('--parallel', type=int, default=2,
-                        help='sessions at once (default 2, one per core)')
-    parser.add_argument('--name', default='', help='experiment name (default: time)')
-    parser.add_argument('--bags-dir', default='bags', help='root of the bags')
+    parser.add_argument('--profiles', nargs='+', default=[''],
+                        help='simulated-human profiles (params/sim_human.yaml); each runs '
+                        "every case and seed (default: the human node's profile)")
+    parser.add_argument('--engine', choices=ENGINES, default='inprocess',
+                        help='inprocess (default): one process per session; graph: the ROS '
+                        'nodes over DDS per session')
+    parser.add_argument('--episodes', type=int, default=0,
+                        help='max training episodes per session (default: params/agent.yaml)')
+    parser.add_argument('--eval-episodes', type=int, default=-1,
+                        help='final evaluation episodes (default: params/agent.yaml)')
+    parser.add_argument('--set', dest='overrides', action='append', default=[],
+                        metavar='NODE.PARAM=VALUE', help='parameter override for every session '
+                        '(repeatable)')
+    parser.add_argument('--parallel', type=int, default=0,
+                        help='local pool: sessions at once (default: the CPU count)')
+    parser.add_argument('--ray', action='store_true',
+                        help='run the tasks on a Ray instance started on this machine')
+    parser.add_argument('--ray-address', default='',
+                        help="run the tasks on an existing Ray cluster: 'auto' or host:port")
+    parser.add_argument('--cpus-per-session', type=float, default=1.0,
+                        help='Ray: CPUs each session task declares (default 1)')
+    parser.add_argument('--pull-bags', action='store_true',
+                        help='workers send their session folders back to this machine (no '
+                        'shared filesystem); default: they write to --bags-dir directly')
+    parser.add_argument('--params-dir', default='',
+                        help='parameter files (default: ./params in a checkout, else the '
+                        'installed ones)')
+    parser.add_argument('--name', default='', help='experiment name (default: the time)')
+    parser.add_argument('--bags-dir', default='bags', help='root of the bags (default bags)')
     parser.add_argument('--runs-dir', default='runs', help='root of logs and reports')
-    parser.add_argument('--first-domain-id', type=int, default=40,
-                        help='ROS_DOMAIN_ID of the first parallel slot (default 40)')
-    parser.add_argument('--session-arg', action='append', default=[],
-                        help='extra argument passed to every session (repeatable), e.g. '
-                        '--session-arg=--episodes=30')
+    parser.add_argument('--report-out', default='',
+                        help='where the study writes results.md (default '
+                        '<runs-dir>/<name>/report)')
+    parser.add_argument('--no-report', dest='report', action='store_false',
+                        help='skip the study at the end')
     options = parser.parse_args(argv)
-    problems = [case_problem(case) for case in options.cases if case_problem(case)]
-    if problems:
-        parser.error('; '.join(problems))
-    if options.seeds < 1 or options.parallel < 1:
-        parser.error('--seeds and --parallel must be >= 1')
+    reasons = [problem for problem in map(case_problem, options.cases) if problem]
+    if options.seeds < 1:
+        reasons.append(f'--seeds must be >= 1, got {options.seeds}')
+    if options.parallel < 0:
+        reasons.append(f'--parallel must be >= 0, got {options.parallel}')
+    if options.cpus_per_session <= 0:
+        reasons.append(f'--cpus-per-session must be > 0, got {options.cpus_per_session}')
+    if options.ray and options.ray_address:
+        reasons.append('--ray starts a local instance; --ray-address joins one: give one')
+    if len(set(options.profiles)) != len(options.profiles):
+        reasons.append(f'--profiles repeats a profile: {options.profiles}')
+    from hrc_bringup.plan import parse_override
+    for override in options.overrides:
+        try:
+            parse_override(override)
+        except ValueError as error:
+            reasons.append(str(error))
+    if reasons:
+        parser.error('; '.join(reasons))
+    options.argv = list(sys.argv[1:] if argv is None else argv)
     return options
+
+
+def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
+    """Return the sweep's tasks: profiles x seeds x cases."""
+    from hrc_bringup.session import default_params_dir
+    # resolved here, so that every worker reads the same files (a checkout's params/ when the
+    # driver runs in one; on a cluster the same path, or the installed share/, on every node)
+    params_dir = str((pathlib.Path(options.params_dir) if options.params_dir
+                      else default_params_dir()).resolve())
+    return [SessionTask(case=case, seed=seed, profile=profile,
+                        session_id=session_id_of(case, seed, profile, options.profiles),
+                        engine=options.engine, bags_dir=str(bags_dir.resolve()),
+                        runs_dir=str(runs_dir.resolve()),
+                        training_episodes=options.episodes,
+                        evaluation_episodes=options.eval_episodes,
+                        overrides=tuple(options.overrides), params_dir=params_dir,
+                        pull_bags=options.pull_bags)
+            for profile in options.profiles
+            for seed in range(options.first_seed, options.first_seed + options.seeds)
+            for case in options.cases]
+
+
+def make_executor(options):
+    """Return the executor the options ask for."""
+    if options.ray or options.ray_address:
+        return RayExecutor(options.ray_address or None, options.cpus_per_session)
+    return LocalPool(options.parallel or os.cpu_count() or 1)
 
 
 def main(argv=None) -> int:
     """Entry point of ``ros2 run hrc_bringup experiment``."""
-    from hrc_common.executables import executable_path
-
     options = parse_args(argv)
     name = options.name or time.strftime('experiment-%Y%m%d-%H%M%S')
-    runs_dir = pathlib.Path(options.runs_dir) / name
     bags_dir = pathlib.Path(options.bags_dir) / name
+    runs_dir = pathlib.Path(options.runs_dir) / name
+    bags_dir.mkdir(parents=True, exist_ok=True)
     runs_dir.mkdir(parents=True, exist_ok=True)
-    jobs = [(case, seed) for seed in range(options.first_seed, options.first_seed + options.seeds)
-            for case in options.cases]
-    print(f'[experiment] {name}: {len(jobs)} sessions ({len(options.cases)} cases x '
-          f'{options.seeds} seeds), {options.parallel} at a time; bags in {bags_dir}',
-          flush=True)
-    session = str(executable_path('hrc_bringup', 'session'))
-    running = {}
-    results = {}
-    free_slots = list(range(options.parallel))
+    tasks = plan_tasks(options, bags_dir, runs_dir)
+    started_at = time.strftime('%Y-%m-%d %H:%M:%S %Z')
     start = time.monotonic()
     try:
-        while jobs or running:
-            while jobs and free_slots:
-                case, seed = jobs.pop(0)
-                slot = free_slots.pop(0)
-                session_id = make_session_id(case, seed, timestamped=False)
-                log = open(runs_dir / f'{session_id}.log', 'wb')
-                command = [session, '--case', str(case), '--seed', str(seed),
-                           '--session-id', session_id, '--bags-dir', str(bags_dir),
-                           '--runs-dir', str(runs_dir), '--no-report',
-                           '--domain-id', str(options.first_domain_id + slot),
-                           *options.session_arg]
-                process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)
-                running[session_id] = (process, slot, log, time.monotonic())
-                print(f'[experiment] started {session_id} (domain '
-                      f'{options.first_domain_id + slot})', flush=True)
-            time.sleep(0.5)
-            for session_id, (process, slot, log, started) in list(running.items()):
-                if process.poll() is None:
-                    continue
-                log.close()
-                del running[session_id]
-                free_slots.append(slot)
-                results[session_id] = process.returncode
-                print(f'[experiment] {session_id} finished in {time.monotonic() - started:.0f} s'
-                      f' ({describe_exit(process.returncode)})', flush=True)
-    except KeyboardInterrupt:
-        print('[experiment] interrupted: stopping the running sessions', flush=True)
-        for process, _, _, _ in running.values():
-            process.send_signal(2)
-        for process, _, _, _ in running.values():
-            process.wait()
-        return 130
-    elapsed = time.monotonic() - start
-    failed = sorted(session_id for session_id, code in results.items() if code != 0)
-    print(f'[experiment] {len(results)} sessions in {elapsed:.0f} s wall'
-          + (f'; failed: {failed}' if failed else ''), flush=True)
-    report_dir = runs_dir / 'report'
-    report = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')),
-                             *sorted(str(path) for path in bags_dir.iterdir() if path.is_dir()),
-                             '--out', str(report_dir)], capture_output=True, text=True)
-    print(report.stdout, end='')
-    if report.returncode != 0:
-        print(f'[experiment] report failed:\n{report.stderr}', file=sys.stderr)
+        executor = make_executor(options)
+    except Exception as error:   # Ray not reachable: say so, no traceback
+        print(f'[experiment] cannot start the executor: {error}', file=sys.stderr)
         return 1
-    print(f'[experiment] report and figures: {report_dir}', flush=True)
-    return 1 if failed else 0
+    print(f'[experiment] {name}: {len(tasks)} sessions ({len(options.cases)} cases x '
+          f'{options.seeds} seeds x {len(options.profiles)} profiles), engine '
+          f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
+    outcomes = []
+
+    def on_done(outcome):
+        archive = outcome.pop('bag_archive', None)
+        if archive is not None:
+            unpack_folder(archive, bags_dir, outcome['session_id'])
+        outcomes.append(outcome)
+        status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
+        print(f'[experiment] {outcome["session_id"]} on {outcome["host"]} in '
+              f'{outcome["seconds"]:.0f} s ({len(outcomes)}/{len(tasks)}): {status}',
+              flush=True)
+
+    try:
+        executor.run(tasks, on_done)
+    except KeyboardInterrupt:
+        print('[experiment] interrupted', flush=True)
+        executor.close()
+        return 130
+    description = executor.describe()
+    executor.close()
+    wall = time.monotonic() - start
+    failed = sorted(outcome['session_id'] for outcome in outcomes if outcome['exit_code'])
+    record = {'command': 'ros2 run hrc_bringup experiment '
+                         + ' '.join(shlex.quote(arg) for arg in options.argv),
+              'engine': options.engine, 'executor': description, 'sessions': len(tasks),
+              'failed': failed, 'wall_seconds': wall, 'started': started_at,
+              'host_cpus': os.cpu_count(), 'version': _version(),
+              'tasks': [asdict(task) for task in tasks],
+              'outcomes': sorted(outcomes, key=lambda outcome: outcome['session_id'])}
+    (bags_dir / 'experiment.json').write_text(json.dumps(record, indent=1))
+    print(f'[experiment] {len(outcomes)} sessions in {wall:.0f} s wall ({wall / 60:.1f} min)'
+          + (f'; failed: {failed}' if failed else ''), flush=True)
+    if not options.report:
+        return 1 if failed else 0
+    out = options.report_out or str(runs_dir / 'report')
+    from hrc_study import results_cli
+    code = results_cli.main([str(bags_dir), '--out', out])
+    return 1 if failed or code else 0
+
+
+def _version() -> str:
+    from hrc_bringup.plan import package_version
+    return package_version()
 
 
 if __name__ == '__main__':

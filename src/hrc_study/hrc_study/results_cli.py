@@ -76,7 +76,10 @@ def main(argv=None) -> int:
     for target, measured, met in result['targets']:
         print(f'  [{"met" if met else "NOT met"}] {target}: {measured}')
     name = 'your priorities' if arguments.weights else 'balanced'
-    print('strategy chooser:\n' + choice_markdown(result['choices'][name], name))
+    if name in result['choices']:
+        print('strategy chooser:\n' + choice_markdown(result['choices'][name], name))
+    else:
+        print('strategy chooser: not computed (sessions of fewer than two strategies)')
     for path in result['files'].values():
         print(f'wrote {path}')
     return 0

@@ -135,7 +135,8 @@ def targets(rows: dict, experiment: dict) -> list:
                        f'{wall / 60:.1f} min wall, {experiment.get("sessions", "?")} sessions, '
                        f'engine {experiment.get("engine", "?")}, executor '
                        f'{experiment.get("executor", "?")}',
-                       wall < 600 and experiment.get('engine') == 'inprocess'))
+                       wall < 600 and experiment.get('engine') == 'inprocess'
+                       and experiment.get('sessions', 0) >= 60))
     return result
 
 
@@ -198,24 +199,30 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
     figures.figure_training(sessions, primary, assets / 'fig5_training.png')
     figures.figure_actions(sessions, primary, assets / 'fig6_actions.png')
     figures.figure_convergence(sessions, primary, assets / 'convergence.png')
-    choices = {}
-    for name, weights in PRESETS.items():
-        choices[name] = choose(sessions, weights, profile=primary, seed=seed)
-    if priorities:
-        choices['your priorities'] = choose(sessions, priorities, profile=primary, seed=seed)
-    figures.figure_three_factor(choices['balanced'], assets / 'fig7_three_factor.png')
+    choices, chooser_problem = {}, ''
+    weights_by_name = dict(PRESETS, **({'your priorities': priorities} if priorities else {}))
+    try:
+        for name, weights in weights_by_name.items():
+            choices[name] = choose(sessions, weights, profile=primary, seed=seed)
+    except ValueError as error:   # fewer than two strategies in the data
+        chooser_problem = str(error)
+    names = ['fig5_training.png', 'fig6_actions.png', 'convergence.png', 'sessions.csv']
+    if choices:
+        figures.figure_three_factor(choices['balanced'], assets / 'fig7_three_factor.png')
+        names.append('fig7_three_factor.png')
     (assets / 'sessions.csv').write_text(sessions_csv(sessions))
-    for name in ('fig5_training.png', 'fig6_actions.png', 'convergence.png',
-                 'fig7_three_factor.png', 'sessions.csv'):
+    for name in names:
         files[name] = assets / name
-    text = document(sessions, profiles, rows, findings, choices, command, experiment)
+    text = document(sessions, profiles, rows, findings, choices, command, experiment,
+                    chooser_problem)
     (out_dir / 'results.md').write_text(text)
     files['results.md'] = out_dir / 'results.md'
     return {'files': files, 'findings': findings, 'choices': choices, 'rows': rows,
             'targets': targets(rows, experiment)}
 
 
-def document(sessions, profiles, rows, findings, choices, command, experiment) -> str:
+def document(sessions, profiles, rows, findings, choices, command, experiment,
+             chooser_problem: str = '') -> str:
     """Return the Markdown of docs/results.md."""
     primary = profiles[0]
     seeds = sorted({session.seed for session in sessions})
@@ -268,8 +275,12 @@ def document(sessions, profiles, rows, findings, choices, command, experiment) -
               'seeds. Both role assignments pooled, as in Fig. 7.', '']
     for name, choice in choices.items():
         parts += [choice_markdown(choice, name), '']
+    if chooser_problem:
+        parts += [f'Not computed: {chooser_problem}.', '']
     parts += ['## Figures', '', '![Fig. 5](results/fig5_training.png)', '',
-              '![Fig. 6](results/fig6_actions.png)', '',
-              '![Fig. 7](results/fig7_three_factor.png)', '',
+              '![Fig. 6](results/fig6_actions.png)', '']
+    if choices:
+        parts += ['![Fig. 7](results/fig7_three_factor.png)', '']
+    parts += [
               'Per-session values: [results/sessions.csv](results/sessions.csv).', '']
     return '\n'.join(parts)
