@@ -8,20 +8,50 @@ A checkpoint is one ``torch.save`` file holding::
     network         observation size and network shape (checked before loading weights)
     core            AgentCore.state_dict(): policy and value state_dicts, optimizer, generator
                     states (exploration noise, minibatch order), reward scaler, rollout buffer,
-                    strategy progress, counters, phase
+                    strategy progress, counters, evaluation results so far, phase
+
+Only tensors and plain containers (dict, list, tuple, str, int, float, bool, None): the file
+is read with ``torch.load(weights_only=True)``, whose unpickler builds nothing else, so a
+crafted file cannot run code (anything else is refused with the reason). The layout is then
+checked against :data:`LAYOUT` (every problem reported at once) before anything is loaded.
 
 Written atomically (temporary file, then rename) so a crash never leaves half a checkpoint.
 """
 
 import os
+import pickle
 import tempfile
+import warnings
 
 import torch
 
+from hrc_agent_node.ppo import BUFFER_FIELDS
 from hrc_common.params import as_dict
 
 FORMAT = 'hrc_agent_checkpoint'
-FORMAT_VERSION = 1
+# 2: weights_only layout (tensors in the buffer), judging counters, evaluation results.
+FORMAT_VERSION = 2
+
+# The checkpoint's layout: a dict maps keys to layouts, a type is the type of a leaf.
+LAYOUT = {
+    'format': str, 'format_version': int,
+    'config': {'params': dict, 'preset': str, 'case': int, 'strategy': str, 'robot_dof': str,
+               'human_dof': str, 'session_id': str},
+    'network': {'observation_size': int, 'hidden_size': int, 'hidden_layers': int,
+                'observe_rates': bool},
+    'core': {
+        'ppo': {'policy': dict, 'value': dict, 'optimizer': dict,
+                'action_generator': torch.Tensor, 'shuffle_generator': torch.Tensor,
+                'updates': int},
+        'reward_scaler': {'stats': {'mean': float, 'var': float, 'count': float},
+                          'discounted_return': float},
+        'buffer': {name: list for name in BUFFER_FIELDS},
+        'progress': {'case_id': int, 'step_index': int, 'finished': bool, 'step_history': list},
+        'counters': {'episode': int, 'total_episodes': int, 'human_involved_episodes': int,
+                     'judging_episodes': int, 'episodes_since_judging': int,
+                     'judging_due': bool},
+        'evaluation_results': list, 'phase': str},
+}
 
 
 class CheckpointError(ValueError):
@@ -39,7 +69,7 @@ def make_checkpoint(core) -> dict:
     """Return the checkpoint dictionary of an AgentCore between episodes."""
     return {'format': FORMAT, 'format_version': FORMAT_VERSION,
             'config': {'params': as_dict(core.params), 'preset': core.tree.preset,
-                       'case': core.case.case_id, 'strategy': core.case.strategy,
+                       'case': core.case_id, 'strategy': core.strategy,
                        'robot_dof': core.robot_dof, 'human_dof': core.human_dof,
                        'session_id': core.session_id},
             'network': network_signature(core),
@@ -63,14 +93,48 @@ def save_checkpoint(core, path) -> str:
     return path
 
 
+def layout_problems(value, layout, where: str = 'checkpoint') -> list:
+    """Return every way ``value`` departs from ``layout`` (see :data:`LAYOUT`), or []."""
+    if isinstance(layout, dict):
+        if not isinstance(value, dict):
+            return [f'{where} must be a mapping, got {type(value).__name__}']
+        problems = [f'{where} lacks {key!r}' for key in layout if key not in value]
+        for key, inner in layout.items():
+            if key in value:
+                problems += layout_problems(value[key], inner, f'{where}.{key}')
+        return problems
+    if layout is float:
+        fits = isinstance(value, (int, float)) and not isinstance(value, bool)
+    elif layout is int:
+        fits = isinstance(value, int) and not isinstance(value, bool)
+    else:
+        fits = isinstance(value, layout)
+    return [] if fits else [f'{where} must be {layout.__name__}, got {type(value).__name__}']
+
+
 def read_checkpoint(path) -> dict:
-    """Read a checkpoint file and check its format; raise CheckpointError on any problem."""
+    """Read a checkpoint file and check its layout; raise CheckpointError on any problem."""
     path = os.fspath(path)
     try:
-        # weights_only=False: the checkpoint holds generator states and plain dicts we wrote.
-        checkpoint = torch.load(path, map_location='cpu', weights_only=False)
+        # weights_only=True: tensors and plain containers only; no object of the file's
+        # choosing is built, so no code from the file runs.
+        with warnings.catch_warnings():   # torch warns about pickle protocols it reads anyway
+            warnings.simplefilter('ignore', UserWarning)
+            checkpoint = torch.load(path, map_location='cpu', weights_only=True)
     except FileNotFoundError:
         raise CheckpointError(f'checkpoint {path} does not exist') from None
+    except pickle.UnpicklingError as error:
+        lines = str(error).strip().splitlines()
+        detail = next((line.strip() for line in lines if 'Unsupported' in line),
+                      lines[0] if lines else '')
+        detail = detail.split('. Please')[0].replace('WeightsUnpickler error: ', '')
+        if 'GLOBAL' not in detail:   # no object reference: a damaged or foreign file
+            raise CheckpointError(f'checkpoint {path} cannot be read (UnpicklingError: '
+                                  f'{detail})') from None
+        raise CheckpointError(
+            f'checkpoint {path} refused: it holds objects other than tensors and plain '
+            f'containers, which are never loaded (code could run from them; checkpoints of '
+            f'format version 1 held numpy arrays and are refused too): {detail}') from None
     except Exception as error:  # torch raises many kinds for a damaged or foreign file
         raise CheckpointError(f'checkpoint {path} cannot be read ({type(error).__name__}: '
                               f'{error})') from None
@@ -81,6 +145,9 @@ def read_checkpoint(path) -> dict:
     if version != FORMAT_VERSION:
         raise CheckpointError(f'checkpoint {path} has format version {version}; this agent '
                               f'reads version {FORMAT_VERSION}')
+    problems = layout_problems(checkpoint, LAYOUT)
+    if problems:
+        raise CheckpointError(f'checkpoint {path} is malformed: ' + '; '.join(problems))
     return checkpoint
 
 
@@ -99,10 +166,10 @@ def check_compatible(checkpoint: dict, core, path='checkpoint', resume: bool = T
     config = checkpoint['config']
     if config.get('robot_dof') != core.robot_dof:
         problems.append(f'the policy drives {config.get("robot_dof")!r} but the robot drives '
-                        f'{core.robot_dof!r} in case {core.case.case_id}')
-    if resume and config.get('case') != core.case.case_id:
+                        f'{core.robot_dof!r} in case {core.case_id}')
+    if resume and config.get('case') != core.case_id:
         problems.append(f'it belongs to case {config.get("case")}, not case '
-                        f'{core.case.case_id}')
+                        f'{core.case_id}')
     if problems:
         raise CheckpointError(f'checkpoint {path} is incompatible: ' + '; '.join(problems))
 
@@ -116,7 +183,7 @@ def load_into(core, path, resume: bool = True) -> dict:
     check_compatible(checkpoint, core, path, resume)
     try:
         core.load_state_dict(checkpoint['core'], policy_only=not resume)
-    except (KeyError, RuntimeError, ValueError) as error:
+    except (KeyError, RuntimeError, ValueError, TypeError, IndexError) as error:
         raise CheckpointError(f'checkpoint {path} does not load: {type(error).__name__}: '
                               f'{error}') from None
     return checkpoint['config']

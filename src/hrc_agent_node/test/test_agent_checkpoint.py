@@ -1,8 +1,11 @@
 """Checkpoints: round trip, exact resume, evaluation-only loading, clear errors.
 
 Identical policy outputs after a round trip, resumed sessions continue exactly, a policy loads
-for evaluation alone, incompatible or foreign files fail with a clear reason.
+for evaluation alone, incompatible or foreign files fail with a clear reason, a crafted file
+runs no code, a file of the wrong layout is refused with every reason.
 """
+
+import pickle
 
 import numpy as np
 import pytest
@@ -112,7 +115,7 @@ def test_foreign_damaged_missing_and_old_files_fail_clearly(tmp_path):
     old = make_checkpoint(core)
     old['format_version'] = 0
     torch.save(old, tmp_path / 'old.pt')
-    with pytest.raises(CheckpointError, match='format version 0; this agent reads version 1'):
+    with pytest.raises(CheckpointError, match='format version 0; this agent reads version 2'):
         load_into(core, tmp_path / 'old.pt')
 
 
@@ -121,3 +124,64 @@ def test_no_checkpoint_during_an_episode():
     core.start_episode()
     with pytest.raises(RuntimeError, match='between episodes'):
         make_checkpoint(core)
+
+
+class Payload:
+    """Pickles as a call of open(marker, 'w'): unpickled by plain pickle, it creates the file."""
+
+    def __init__(self, marker):
+        self.marker = str(marker)
+
+    def __reduce__(self):
+        return (open, (self.marker, 'w'))
+
+
+def test_payload_is_live_under_plain_pickle(tmp_path):
+    """The payload the next test uses does run code when a file is loaded without the guard."""
+    marker = tmp_path / 'ran'
+    pickle.loads(pickle.dumps(Payload(marker))).close()
+    assert marker.exists()
+    marker.unlink()
+    torch.save({'x': Payload(marker)}, tmp_path / 'p.pt')
+    torch.load(tmp_path / 'p.pt', weights_only=False)['x'].close()
+    assert marker.exists()
+
+
+@pytest.mark.parametrize('how', ['alone', 'hidden in a valid checkpoint', 'plain pickle'])
+def test_crafted_checkpoint_runs_no_code_and_is_refused(tmp_path, how):
+    marker = tmp_path / 'ran'
+    path = tmp_path / 'crafted.pt'
+    core = AgentCore(params())
+    if how == 'alone':
+        torch.save(Payload(marker), path)
+    elif how == 'hidden in a valid checkpoint':
+        checkpoint = make_checkpoint(core)
+        checkpoint['core']['ppo']['policy']['extra'] = Payload(marker)
+        torch.save(checkpoint, path)
+    else:
+        with open(path, 'wb') as stream:
+            pickle.dump({'format': 'hrc_agent_checkpoint', 'x': Payload(marker)}, stream,
+                        protocol=2)
+    with pytest.raises(CheckpointError) as error:
+        load_into(core, path)
+    assert 'refused: it holds objects other than tensors and plain containers' in \
+        str(error.value)
+    assert not marker.exists(), 'the payload ran'
+
+
+@pytest.mark.parametrize('change, reasons', [
+    (lambda c: {key: c[key] for key in ('format', 'format_version')},
+     ["checkpoint lacks 'config'", "checkpoint lacks 'network'", "checkpoint lacks 'core'"]),
+    (lambda c: {**c, 'network': 5}, ['checkpoint.network must be a mapping, got int']),
+    (lambda c: {**c, 'core': {**c['core'], 'counters': {'episode': 'x'}}},
+     ['checkpoint.core.counters.episode must be int, got str',
+      "checkpoint.core.counters lacks 'total_episodes'"]),
+])
+def test_checkpoint_of_the_wrong_layout_is_refused_with_every_reason(tmp_path, change,
+                                                                     reasons):
+    core = AgentCore(params())
+    torch.save(change(make_checkpoint(core)), tmp_path / 'bad.pt')
+    with pytest.raises(CheckpointError) as error:
+        load_into(core, tmp_path / 'bad.pt')
+    assert 'is malformed' in str(error.value)
+    assert all(reason in str(error.value) for reason in reasons), str(error.value)
