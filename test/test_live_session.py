@@ -9,6 +9,7 @@ in no file name), and a checkpoint from which the resumed session continues the 
 """
 
 import collections
+import os
 import pathlib
 import re
 import shlex
@@ -17,7 +18,8 @@ import subprocess
 from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
 from hrc_common.testing import executable_path, wait_for
-from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
+from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_INIT, pack_event
+from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
 import yaml
@@ -210,3 +212,163 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     assert len(resumed_logs) == 1 and (tmp_path / 'runs' / 'live' / 'logs' / 'agent.log').is_file()
     # The resumed run records into the same session folder, with the same metadata.
     assert len(session_records(bags)) > len(records)
+
+
+# --------------------------------------------------------------------------- issue 14
+# Case 2 learns the task first: the robot alone (lockstep, no wall time waited), then the person
+# joins (realtime). A task tree with loose tolerances makes each training step converge after
+# `convergence_window` (1) episode, so both steps come quickly.
+SHORT_STEPS = 15  # control steps per episode (episode_duration 3 s)
+
+
+def loose_task_tree(folder) -> str:
+    source = pathlib.Path(__file__).resolve().parents[1] / 'params' / 'task_tree.yaml'
+    path = pathlib.Path(folder) / 'loose_task_tree.yaml'
+    path.write_text(re.sub(r'tolerance: .*', 'tolerance: 10.0', source.read_text()))
+    return str(path)
+
+
+def case2_command(tmp_path, domain_id, *extra):
+    return [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
+            '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
+            '--session-id', 'case2', '--case', '2', '--mode', 'realtime',
+            '--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',
+            '--set', 'agent.episode_break=0.5', '--set', 'agent.convergence_window=1',
+            '--set', f'agent.task_tree_file={loose_task_tree(tmp_path)}',
+            '--eval-episodes', '0', '--no-report', *extra]
+
+
+class StateClock:
+    """Wall time of each state's arrival, to tell lockstep (fast) from realtime episodes."""
+
+    def __init__(self, watcher):
+        import time
+        self.arrivals = collections.defaultdict(list)
+        watcher.node.create_subscription(
+            TaskState, topics.STATE,
+            lambda state: self.arrivals[state.episode].append(time.monotonic()), qos.STATE_QOS)
+
+    def duration(self, episode) -> float:
+        times = self.arrivals[episode]
+        return times[-1] - times[0]
+
+
+def check_clock_switch(watcher, clock, summaries):
+    """Assert the robot's lonely episodes ran fast, the person's at the control period."""
+    alone = [s.episode for s in summaries if not s.human_involved]
+    together = [s.episode for s in summaries if s.human_involved]
+    assert alone and together and max(alone) < min(together), summaries
+    # Realtime: 15 periods of 0.2 s = 3 s of wall time; lockstep: as fast as the graph goes.
+    assert all(clock.duration(episode) < 1.5 for episode in alone), \
+        [clock.duration(episode) for episode in alone]
+    assert all(clock.duration(episode) > 2.5 for episode in together), \
+        [clock.duration(episode) for episode in together]
+    return alone, together
+
+
+def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
+        tmp_path, ros_domain_id, watcher, read_rosbag):
+    clock = StateClock(watcher)
+    log = open(tmp_path / 'runner.log', 'w+')
+    runner = subprocess.Popen(case2_command(tmp_path, ros_domain_id, '--episodes', '8'),
+                              stdout=log, stderr=subprocess.STDOUT, text=True)
+    try:
+        assert watcher.wait(lambda: runner.poll() is not None, timeout=240)
+    finally:
+        if runner.poll() is None:
+            runner.kill()
+            runner.wait()
+    log.seek(0)
+    text = log.read()
+    assert runner.returncode == 0, text
+    alone, together = check_clock_switch(watcher, clock, watcher.summaries)
+    match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
+                      r'practised alone: (\d+) episodes in (\d+) s', text)
+    assert match, text
+    assert int(match.group(1)) == min(together) + 1 and int(match.group(2)) == len(alone)
+    # One continuous session: one bag folder, consecutive episodes, one checkpoint folder.
+    bag = read_rosbag(tmp_path / 'bags' / 'case2')
+    assert [s.episode for s in bag['/hrc/episode']] == list(range(len(watcher.summaries)))
+    assert {a.source for a in bag['/hrc/human/action']} <= {HumanAction.SOURCE_SIMULATED,
+                                                             HumanAction.SOURCE_NONE}
+    assert (tmp_path / 'runs' / 'checkpoints' / 'case2' / 'latest.pt').is_file()
+
+
+def js_bytes(event_type, number, value, init=False):
+    return pack_event(0, value, event_type | (JS_EVENT_INIT if init else 0), number)
+
+
+def plug_in(fifo, stick=-16384):
+    """Open the FIFO as the joystick (O_RDWR never blocks) and send its INIT state."""
+    writer = os.open(fifo, os.O_RDWR)
+    os.write(writer, js_bytes(JS_EVENT_AXIS, 0, 0, init=True)
+             + js_bytes(JS_EVENT_AXIS, 1, stick, init=True))
+    return writer
+
+
+def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_domain_id,
+                                                                  watcher, read_rosbag):
+    clock = StateClock(watcher)
+    fifo = str(tmp_path / 'js0')
+    os.mkfifo(fifo)
+    log = open(tmp_path / 'runner.log', 'w+')
+    runner = subprocess.Popen(case2_command(
+        tmp_path, ros_domain_id, '--episodes', '8', '--human', 'device', '--set',
+        f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--input-wait', '120'),
+        stdout=log, stderr=subprocess.STDOUT, text=True)
+
+    def output():
+        log.seek(0)
+        return log.read()
+
+    writer = None
+    try:
+        # Nobody writes to the FIFO yet: the runner waits, says why and how to fix it.
+        assert watcher.wait(lambda: 'waiting for the person' in output(), 60), output()
+        assert 'no program writes to it' in output() and 'Fix: plug the joystick in' in output()
+        assert not watcher.statuses, 'no node may start before the input is there'
+        writer = plug_in(fifo)
+        # The person joins (realtime); unplug in the middle of their first episode.
+        assert watcher.wait(lambda: any(s.human_involved for s in watcher.statuses), 120), \
+            output()
+        first = watcher.statuses[-1].total_episodes
+        assert watcher.wait(lambda: any(s.episode == first and s.step >= 5
+                                        for s in watcher.states), 60), output()
+        os.close(writer)
+        writer = None
+        assert watcher.wait(lambda: 'joystick disconnected' in output(), 30), output()
+        assert watcher.wait(lambda: watcher.phase() == SessionStatus.PHASE_PAUSED, 30), output()
+        assert 'joystick disconnected' in watcher.statuses[-1].message
+        code, said = operator(ros_domain_id, 'status')
+        assert code == 0 and 'phase paused' in said and 'joystick disconnected' in said, said
+        # The sim holds: the interrupted episode gets no final state and no state comes.
+        states_when_paused = len(watcher.states)
+        watcher.wait(lambda: False, timeout=1.5)
+        assert len(watcher.states) == states_when_paused
+        assert not any(s.episode == first and s.truncated for s in watcher.states)
+        # Resume while unplugged: refused, with the reason.
+        code, said = operator(ros_domain_id, 'resume')
+        assert code == 1 and 'still disconnected' in said, said
+        writer = plug_in(fifo)
+        code, said = operator(ros_domain_id, 'resume')
+        assert code == 0 and 'resuming' in said, said
+        assert watcher.wait(lambda: runner.poll() is not None, timeout=240), output()
+    finally:
+        if writer is not None:
+            os.close(writer)
+        if runner.poll() is None:
+            runner.kill()
+            runner.wait()
+    text = output()
+    assert runner.returncode == 0, text
+    summaries = watcher.summaries
+    check_clock_switch(watcher, clock, summaries)
+    # The interrupted episode ran again from its start; the counters continue.
+    assert [s.episode for s in summaries] == list(range(len(summaries)))
+    assert any(s.episode == first and s.step == 0 for s in watcher.states[states_when_paused:])
+    # No simulated input recorded as the subject's: the device or zero (lost / not involved).
+    bag = read_rosbag(tmp_path / 'bags' / 'case2')
+    sources = collections.Counter((a.source, a.engaged) for a in bag['/hrc/human/action'])
+    assert HumanAction.SOURCE_SIMULATED not in {source for source, _ in sources}, sources
+    assert sources[(HumanAction.SOURCE_DEVICE, True)] >= SHORT_STEPS, sources
+    assert [s.episode for s in bag['/hrc/episode']] == list(range(len(summaries)))

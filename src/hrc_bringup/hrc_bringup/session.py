@@ -52,6 +52,8 @@ from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, Se
                               write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
+# Seconds the runner keeps serving the operator services after a resume it answered.
+SERVICE_RETIRE_S = 1.0
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
 
@@ -315,6 +317,7 @@ class InputGuard:
         self.abort_requested = False
         self.last_status = None
         self._services = []
+        self._retire_at = 0.0
         self._status_pub = None
         self._string = String
         self._trigger = Trigger
@@ -349,11 +352,12 @@ class InputGuard:
         reason = lost_reason(action.source, action.source_detail, self.involved)
         if not reason:
             return
+        if not reason.startswith('joystick disconnected'):
+            reason = f'joystick disconnected: {reason}'
         self.lost = reason
-        print(f'[session] joystick disconnected ({reason}): pausing the session now (the '
-              f'agent stops mid-episode, the sim holds, zero commands); resume with '
-              f'"ros2 run hrc_live operator resume" or the console once it is back',
-              flush=True)
+        print(f'[session] {reason}: pausing the session now (the agent stops mid-episode, '
+              f'the sim holds, zero commands); resume with "ros2 run hrc_live operator '
+              f'resume" or the console once it is back', flush=True)
         self.lost_pub.publish(self._string(data=reason))
         if self.abort_client.service_is_ready():
             self.abort_client.call_async(self._trigger.Request())
@@ -361,17 +365,23 @@ class InputGuard:
     def on_agent_exit(self) -> None:
         """Stand in for the agent stopped for the loss: operator services, phase paused."""
         self.agent_down = True
+        if self._services:  # lost again before the last stand-in services were retired
+            return self._publish_paused()
         self._services = [self.node.create_service(self._trigger, OPERATOR_SERVICES[name],
                                                     getattr(self, f'_serve_{name}'))
                           for name in ('pause', 'resume', 'abort')]
+        self._publish_paused()
+
+    def _publish_paused(self) -> None:
+        """Say on /hrc/session (for ``operator status``) that the session is paused, and why."""
         self._status_pub = self.node.create_publisher(self._session_status,
                                                       self._topics.SESSION,
                                                       self._qos.SESSION_QOS)
         if self.last_status is not None:
             status = self.last_status
             status.phase = int(Phase.PAUSED)
-            status.message = (f'joystick disconnected ({self.lost}): paused; resume after it '
-                              f'is back')
+            status.message = f'{self.lost}: paused; resume after it is back'
+
             self._status_pub.publish(status)
 
     def _serve_pause(self, request, response):
@@ -399,14 +409,21 @@ class InputGuard:
 
     def resumed(self) -> None:
         """Stop standing in for the agent (it is starting again)."""
-        for service in self._services:
-            self.node.destroy_service(service)
-        self._services = []
         if self._status_pub is not None:
             self.node.destroy_publisher(self._status_pub)
             self._status_pub = None
+        # The services go a moment later: the answer to the resume call must reach the caller
+        # first (the new agent takes seconds to serve them itself).
+        self._retire_at = time.monotonic() + SERVICE_RETIRE_S
         self.lost, self.agent_down, self.resume_requested = '', False, False
         self.lost_pub.publish(self._string(data=''))
+
+    def tick(self) -> None:
+        """Retire the stand-in operator services once their last answer is out."""
+        if self._services and not self.agent_down and time.monotonic() > self._retire_at:
+            for service in self._services:
+                self.node.destroy_service(service)
+            self._services = []
 
 
 def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: list) -> bool:
@@ -513,6 +530,8 @@ def run_session(settings: SessionSettings, options) -> int:
                 print(f'[session] {stop_reason[0]} received: stopping the session', flush=True)
                 code = 130 if stop_reason[0] == 'SIGINT' else 143
                 break
+            if guard is not None:
+                guard.tick()
             if guard is not None and guard.agent_down:
                 if guard.abort_requested:
                     print('[session] the operator aborted the session while it was paused '

@@ -281,8 +281,11 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     session, state, now = snapshot.session, snapshot.state, snapshot.now
     notice = INVALID_STATE_NOTICE if snapshot.invalid_state else ''
     if snapshot.input_lost:
-        notice = (f'Joystick disconnected ({snapshot.input_lost}): the session is paused. '
-                  f'Please wait for the operator.')
+        reason = snapshot.input_lost
+        if not reason.lower().startswith('joystick disconnected'):
+            reason = f'joystick disconnected: {reason}'
+        notice = (f'{reason[0].upper()}{reason[1:]}. The session is paused: please wait for '
+                  f'the operator.')
     if session is None:
         return Overlay('Please wait: the session is starting', 'info',
                        ('Waiting for the robot to announce the session.',), notice=notice)
@@ -552,7 +555,9 @@ def console_document(snapshot: Snapshot) -> dict:
                   'healthy': (age < STALE_COMMAND_S and human.source != 'none'
                               and not snapshot.input_lost)}
     if snapshot.input_lost:
-        source['detail'] = f'joystick disconnected: {snapshot.input_lost}'
+        source['detail'] = snapshot.input_lost
+        if not source['detail'].startswith('joystick disconnected'):
+            source['detail'] = f'joystick disconnected: {source["detail"]}'
     errors = snapshot.errors
     means = errors.means()
     totals = {'elapsed_s': (round(now - snapshot.session_started, 1)
