@@ -56,7 +56,6 @@ from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.params import checked
 
-JUDGED_ON = ('evaluation', 'training')
 RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
                  'terminated', 'truncated', 'episode_return', 'errors', 'robot_effort',
                  'human_effort', 'converged', 'event', 'judging')

@@ -7,6 +7,7 @@ and documented choices where it does not. Mirrored in ``params/agent.yaml``.
 from dataclasses import dataclass
 import os
 
+from hrc_common.contract import id_problem
 from hrc_common.params import param
 
 PACKAGE = 'hrc_agent_node'
@@ -129,6 +130,10 @@ class AgentParams:
     def check(self):
         """Conditions across fields."""
         reasons = []
+        # The id names the checkpoint directory: '../../x' or '/abs' would leave it.
+        problem = id_problem(self.session_id, 'session_id') if self.session_id else None
+        if problem:
+            reasons.append(problem)
         if self.minibatch_size > self.horizon:
             reasons.append(f'minibatch_size: {self.minibatch_size} exceeds horizon '
                            f'{self.horizon}')

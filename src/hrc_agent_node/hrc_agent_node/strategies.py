@@ -32,7 +32,6 @@ import yaml
 from hrc_agent_node.task_tree import TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
-STRATEGIES = ('responsibility_guided', 'level_guided', 'learn_together')
 SELECTOR_PREFIX = 'direct:'
 
 
@@ -107,11 +106,11 @@ def cases_from_dict(document, tree) -> dict:
             continue
         strategy = entry.get('strategy')
         robot_action = entry.get('robot_action')
-        if strategy not in document['strategies']:
+        if not isinstance(strategy, str) or strategy not in document['strategies']:
             problems.append(f'case {case_id}: unknown strategy {strategy!r}; defined: '
                             f'{sorted(document["strategies"])}')
             continue
-        if robot_action not in actions:
+        if not isinstance(robot_action, str) or robot_action not in actions:
             problems.append(f'case {case_id}: robot_action {robot_action!r} is not an action of '
                             f'the tree {actions}')
             continue
@@ -170,7 +169,9 @@ def _resolve_ids(raw, tree, robot_action, human_action, where) -> list:
         raise CasesError(f'{where}: subtask lists must be lists, got {raw!r}')
     ids = []
     for item in raw:
-        if isinstance(item, str) and item.startswith(SELECTOR_PREFIX):
+        if not isinstance(item, str):
+            raise CasesError(f'{where}: subtask lists hold subtask ids, got {item!r}')
+        if item.startswith(SELECTOR_PREFIX):
             who = item[len(SELECTOR_PREFIX):]
             if who not in ('robot', 'human'):
                 raise CasesError(f'{where}: selector {item!r} must be direct:robot or '

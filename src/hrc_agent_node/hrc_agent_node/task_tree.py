@@ -94,7 +94,6 @@ class TaskTree:
         self.actions = {action.id: action for action in actions}
         self.executors = tuple(executors)
         self.presets = dict(presets)
-        self.preset_descriptions = {}
         if preset not in self.presets:
             raise TaskTreeError(f'unknown reward preset {preset!r}: the tree defines '
                                 f'{sorted(self.presets)}')
@@ -136,6 +135,10 @@ class TaskTree:
                 or levels != list(range(1, len(levels) + 1))):
             problems.append(f'levels must be 1, 2, ... without gaps, got {levels!r}')
             levels = []
+        for key in ('actions', 'executors', 'subtasks'):
+            if document[key] is not None and not isinstance(document[key], list):
+                problems.append(f'{key} must be a list, got {_kind(document[key])}')
+                document = {**document, key: []}
         actions = []
         for index, entry in enumerate(document['actions'] or []):
             if not isinstance(entry, dict) or not isinstance(entry.get('id'), str):
@@ -143,6 +146,9 @@ class TaskTree:
                 continue
             actions.append(Action(entry['id'], str(entry.get('description', ''))))
         executors = list(document['executors'] or [])
+        if not all(isinstance(executor, str) for executor in executors):
+            problems.append(f'executors must be a list of names, got {executors!r}')
+            executors = [executor for executor in executors if isinstance(executor, str)]
         subtasks = []
         for index, entry in enumerate(document['subtasks'] or []):
             subtask, reasons = _parse_subtask(index, entry)
@@ -163,17 +169,11 @@ class TaskTree:
             raise TaskTreeError('invalid task tree: ' + '; '.join(problems))
         if preset is None or preset == '':
             preset = document.get('default_preset', next(iter(presets)))
-        tree = cls(levels, subtasks, actions, executors, presets, preset)
-        tree.preset_descriptions = {name: str((entry or {}).get('description', '')).strip()
-                                    for name, entry in raw_presets.items()}
-        return tree
+            if not isinstance(preset, str):
+                raise TaskTreeError(f'default_preset must be a preset name, got {preset!r}')
+        return cls(levels, subtasks, actions, executors, presets, preset)
 
     # ----------------------------------------------------------------------------- queries
-
-    @property
-    def lowest_level(self) -> int:
-        """Return the index of the lowest-priority level (the largest number)."""
-        return self.levels[-1]
 
     def subtasks_at(self, level: int) -> list:
         """Return the ids of the subtasks on ``level``, in file order."""
@@ -274,9 +274,10 @@ def _parse_subtask(index, entry):
         reasons.append(f'subtask {name!r}: level must be an integer, got {level!r}')
         level = 0
     variable = entry.get('state_variable')
-    if variable not in STATE_VARIABLES:
+    if not isinstance(variable, str) or variable not in STATE_VARIABLES:
         reasons.append(f'subtask {name!r}: state_variable {variable!r} is not one of '
                        f'{sorted(STATE_VARIABLES)}')
+        variable = ''
     tolerance = entry.get('tolerance')
     if (not isinstance(tolerance, (int, float)) or isinstance(tolerance, bool)
             or not math.isfinite(tolerance) or tolerance <= 0):
@@ -285,16 +286,33 @@ def _parse_subtask(index, entry):
         tolerance = 0.0
     children = entry.get('children') or []
     actions = entry.get('actions') or []
-    if not isinstance(children, list) or not isinstance(actions, list):
-        reasons.append(f'subtask {name!r}: children and actions must be lists')
-        children, actions = [], []
+    for key, value in (('children', children), ('actions', actions)):
+        if _ids_in(value) != value:
+            reasons.append(f'subtask {name!r}: {key} must be a list of ids, got {value!r}')
+    children, actions = _ids_in(children), _ids_in(actions)
+    direct_action = entry.get('direct_action', '')
+    if not isinstance(direct_action, str):
+        reasons.append(f'subtask {name!r}: direct_action must be an action id, got '
+                       f'{direct_action!r}')
+        direct_action = ''
     subtask = Subtask(id=name, level=level, state_variable=str(variable),
                       tolerance=float(tolerance), children=tuple(children),
-                      actions=tuple(actions), direct_action=str(entry.get('direct_action', '')),
+                      actions=tuple(actions), direct_action=direct_action,
                       description=str(entry.get('description', '')),
                       paper_symbol=str(entry.get('paper_symbol', '')),
                       unit=str(entry.get('unit', STATE_VARIABLES.get(variable, ''))))
     return subtask, reasons
+
+
+def _ids_in(value) -> list:
+    """Return the string items of a YAML list (none of anything else)."""
+    return [item for item in value if isinstance(item, str)] if isinstance(value, list) else []
+
+
+def _kind(value) -> str:
+    """Return a short description of a YAML value's type, for reasons."""
+    return f'{type(value).__name__} {value!r}' if not isinstance(value, (dict, list)) \
+        else type(value).__name__
 
 
 def _parse_preset(name, entry, subtask_ids):
