@@ -5,13 +5,15 @@ Inputs (parameter ``input``):
 * ``device``: a Linux joystick device (see :mod:`hrc_joystick_node.js_event`);
 * ``joy``: ``sensor_msgs/Joy`` on ``/joy`` as a stock ``joy``/``joy_linux`` node publishes it;
 * ``sim``: the simulated human (:mod:`hrc_joystick_node.sim_human`);
-* ``auto``: the device if it opens, else ``/joy`` if a publisher is seen, else the simulated
-  human; re-evaluated continuously, so a device that appears later takes over.
+* ``auto``: the device if it opens, else ``/joy`` if a publisher is seen; re-evaluated
+  continuously, so a device that appears later takes over.
 
-When the chosen input is lost (the device vanishes, ``/joy`` falls silent past its deadline),
-the fallback (parameter ``on_input_lost``) is the simulated human (``sim``) or a held zero
-(``zero``). The input returns as soon as it is back. :class:`InputSelector` keeps that logic in
-one place and words each change for the log.
+When the joystick (device or ``/joy``) is missing (never seen) or lost (the device vanishes,
+``/joy`` falls silent past its deadline), the policy ``on_input_lost`` holds: ``pause`` (the
+default: a held zero, and the input status asks the session to pause), ``zero`` (a held zero)
+or ``sim`` (the simulated human stands in: only when asked for, never silently). The input
+returns as soon as it is back. :class:`InputSelector` keeps that logic in one place, words each
+change for the log and says what state the input is in (``ok``, ``missing``, ``lost``).
 """
 
 import typing
@@ -23,8 +25,18 @@ JOY = 'joy'
 SIM = 'sim'
 AUTO = 'auto'
 ZERO = 'zero'
+PAUSE = 'pause'
 INPUT_MODES = (AUTO, DEVICE, JOY, SIM)
-FALLBACKS = (SIM, ZERO)
+FALLBACKS = (PAUSE, ZERO, SIM)
+OK, MISSING, LOST = 'ok', 'missing', 'lost'
+
+
+class StickReading(typing.NamedTuple):
+    """One joystick input read now: its axis, its enable button, and its name for the log."""
+
+    axis: typing.Optional[float]  # [-1, 1] in the Joy convention, None = not reported yet
+    enable: typing.Optional[bool]  # enable (deadman) button held, None = not reported
+    name: str  # device path or /joy topic
 
 
 class JoyInput:
@@ -111,32 +123,53 @@ class InputSelector:
         self.mode = mode
         self.on_input_lost = on_input_lost
         self.active = None  # DEVICE, JOY, SIM or ZERO
+        self.state = MISSING if mode != SIM else OK  # OK, MISSING or LOST
         self.reason = ''
+        self.lost_count = 0  # times a joystick input went away
         self._had_real_input = False
+
+    @property
+    def pause_requested(self) -> bool:
+        """True when the joystick is missing or lost and the policy is ``pause``."""
+        return self.state != OK and self.on_input_lost == PAUSE
+
+    def status_line(self) -> str:
+        """One line a person can read: what drives the human now and why."""
+        if self.state == OK:
+            return f'{self.active}: {self.reason}'
+        what = 'joystick disconnected' if self.state == LOST else 'no joystick yet'
+        holds = {PAUSE: 'zero held, session should pause', ZERO: 'zero held',
+                 SIM: 'the simulated human stands in (on_input_lost: sim)'}[self.on_input_lost]
+        return f'{what} ({holds}): {self.reason}'
 
     def update(self, device_present: bool, device_status: str, joy_alive: bool,
                joy_status: str) -> typing.Optional[str]:
-        """Re-evaluate; return a log line when the active input changed, else None."""
-        lost = 'lost' if self._had_real_input else 'no input yet'
+        """Re-evaluate; return a log line when the active input or its state changed."""
         if self.mode == SIM:
             choice, reason = SIM, 'input is sim'
         elif self.mode == DEVICE:
-            choice, reason = ((DEVICE, device_status) if device_present
-                              else (self.on_input_lost, f'{lost}: {device_status}'))
+            choice, reason = (DEVICE, device_status) if device_present else (None,
+                                                                            device_status)
         elif self.mode == JOY:
-            choice, reason = ((JOY, joy_status) if joy_alive
-                              else (self.on_input_lost, f'{lost}: {joy_status}'))
+            choice, reason = (JOY, joy_status) if joy_alive else (None, joy_status)
         elif device_present:
             choice, reason = DEVICE, f'auto: the device opened ({device_status})'
         elif joy_alive:
             choice, reason = JOY, f'auto: no device ({device_status}); {joy_status}'
         else:
-            # Nothing was ever connected: the simulated human; an input lost: the policy.
-            fallback = self.on_input_lost if self._had_real_input else SIM
-            choice, reason = fallback, f'auto, {lost}: {device_status}; {joy_status}'
+            choice, reason = None, f'auto: {device_status}; {joy_status}'
+        if choice is None:  # the joystick is missing or lost: the policy, never silently
+            state = LOST if self._had_real_input else MISSING
+            choice = ZERO if self.on_input_lost in (PAUSE, ZERO) else SIM
+        else:
+            state = OK
         if choice in (DEVICE, JOY):
             self._had_real_input = True
-        if choice == self.active:
+        if choice == self.active and state == self.state:
+            self.reason = reason  # the wording may change (e.g. an age), not the decision
             return None
-        previous, self.active, self.reason = self.active, choice, reason
-        return f'input: {previous or "none"} -> {choice} ({reason})'
+        if state == LOST and self.state != LOST:
+            self.lost_count += 1
+        previous = self.active
+        self.active, self.state, self.reason = choice, state, reason
+        return f'input: {previous or "none"} -> {choice} ({self.status_line()})'

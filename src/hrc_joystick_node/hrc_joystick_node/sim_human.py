@@ -234,19 +234,46 @@ def default_profiles_path() -> pathlib.Path:
 
 
 def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:
-    """Read every profile of ``path`` (default: the installed sim_human.yaml)."""
+    """Read every profile of ``path`` (default: the installed sim_human.yaml).
+
+    The file is checked by shape before use: it must be YAML text holding a mapping with a
+    non-empty mapping ``profiles:`` of name -> mapping of fields. Anything else (missing,
+    unreadable, binary, not YAML, a list, a string) raises ParameterError with every reason.
+    """
     path = pathlib.Path(path) if path is not None else default_profiles_path()
-    with open(path) as stream:
-        document = yaml.safe_load(stream) or {}
+    try:
+        text = path.read_text(encoding='utf-8')
+    except UnicodeDecodeError:
+        raise ParameterError(f'{path}: not a YAML text file (binary content)') from None
+    except OSError as error:
+        raise ParameterError(f'{path}: cannot read: {error.strerror or error}') from None
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        where = getattr(error, 'problem_mark', None)
+        at = f' (line {where.line + 1}, column {where.column + 1})' if where else ''
+        raise ParameterError(f'{path}: not valid YAML{at}: '
+                             f'{getattr(error, "problem", None) or error}') from None
+    if not isinstance(document, dict):
+        raise ParameterError(f'{path}: expected a mapping with "profiles:", got '
+                             f'{type(document).__name__}')
     entries = document.get('profiles')
     if not isinstance(entries, dict) or not entries:
         raise ParameterError(f'{path}: expected a non-empty mapping "profiles:"')
-    profiles = {}
+    profiles, reasons = {}, []
     for name, values in entries.items():
+        if values is not None and not isinstance(values, dict):
+            reasons.append(f'{path}: profile {name!r}: expected a mapping of fields, got '
+                           f'{type(values).__name__}')
+            continue
         try:
-            profiles[name] = from_dict(HumanProfile, values or {})
+            profiles[str(name)] = from_dict(HumanProfile, values or {})
         except ParameterError as error:
-            raise ParameterError(f'{path}: profile {name!r}: {error}') from None
+            reasons += [f'{path}: profile {name!r}: {reason}' for reason in error.reasons]
+        except TypeError as error:  # a field of the wrong type the dataclass cannot take
+            reasons.append(f'{path}: profile {name!r}: {error}')
+    if reasons:
+        raise ParameterError('; '.join(reasons), reasons)
     return profiles
 
 

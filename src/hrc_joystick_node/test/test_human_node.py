@@ -5,13 +5,16 @@ import pathlib
 import time
 import uuid
 
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+import numpy
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Joy
 
 from hrc_common import qos, topics
+from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
 from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
@@ -50,6 +53,9 @@ class Harness:
                                                  reliability=ReliabilityPolicy.RELIABLE))
         self.node.create_subscription(WrenchStamped, self.topic(topics.HUMAN_CMD_WRENCH),
                                       self._on_wrench, qos.COMMAND_QOS)
+        self.statuses = []
+        self.node.create_subscription(DiagnosticStatus, self.topic(HUMAN_INPUT),
+                                      self.statuses.append, qos.SESSION_QOS)
         self.joy_message = None
         self._joy_timer = None
 
@@ -61,7 +67,7 @@ class Harness:
         """Start the human node with every topic remapped under the test's prefix."""
         remaps = []
         for name in (topics.STATE, topics.SESSION, topics.JOY, topics.HUMAN_ACTION,
-                     topics.HUMAN_CMD_WRENCH):
+                     topics.HUMAN_CMD_WRENCH, HUMAN_INPUT):
             remaps += ['-r', f'{name}:={self.topic(name)}']
         return start_node('hrc_joystick_node', 'human_node', ros_args=remaps, **kwargs)
 
@@ -161,7 +167,10 @@ def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_n
         for step in range(25):  # lockstep: the next state only after the answer
             state = task_state(0, step, physics_state)
             action, wrench = harness.step(state, process)
-            expected = reference.act(physics_state, ['pendulum'])
+            # The node's clock for the person is the state's stamp (simulation time).
+            expected = reference.act(physics_state, ['pendulum'],
+                                     now=state.header.stamp.sec + state.header.stamp.nanosec
+                                     * 1e-9)
             assert (action.episode, action.step) == (0, step)
             assert action.header.stamp == state.header.stamp == wrench.header.stamp
             assert action.command == expected, 'the node is the pure simulated human'
@@ -308,12 +317,13 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
         action = answer()
         assert (action.command, action.engaged) == (0.0, False)
 
-        os.close(writer)  # unplugged: the simulated human takes over at once
+        os.close(writer)  # unplugged: the simulated human takes over at once, as configured
         writer = None
         action = answer(slider_position=0.05)
         assert action.source == HumanAction.SOURCE_SIMULATED, process.output
         assert action.engaged and action.command < 0.0
-        assert action.source_detail.startswith('skilled (lost: ')
+        assert action.source_detail.startswith('skilled (joystick disconnected (the simulated '
+                                               'human stands in (on_input_lost: sim)')
         assert 'vanished' in process.output
 
         writer = os.open(fifo, os.O_RDWR)  # plugged in again
@@ -331,7 +341,8 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
             os.close(writer)
 
 
-def test_auto_selects_device_then_joy_then_simulated_human(start_node, harness, tmp_path):
+def test_auto_selects_device_then_joy_and_never_the_simulated_human(start_node, harness,
+                                                                      tmp_path):
     fifo = str(tmp_path / 'js0')
     os.mkfifo(fifo)  # exists, but nobody writes: not a present device
     process = harness.start(start_node, parameters={
@@ -353,8 +364,10 @@ def test_auto_selects_device_then_joy_then_simulated_human(start_node, harness, 
         raise AssertionError(f'never switched to source {source} ({command}): last {action}'
                              f'\n{process.output}')
 
-    answer_until(HumanAction.SOURCE_SIMULATED)
-    assert 'auto, no input yet' in process.output, 'the log says why'
+    # Nothing connected: zero held (was: the simulated human, silently).
+    action = answer_until(HumanAction.SOURCE_NONE)
+    assert action.source_detail.startswith('no joystick yet (zero held)'), action
+    assert 'no joystick yet' in process.output, 'the log says why'
 
     harness.publish_joy([0.0, 0.5], [])
     answer_until(HumanAction.SOURCE_JOY, (0.5 - 0.05) / 0.95)  # deadzone 0.05 rescaled
@@ -371,6 +384,61 @@ def test_auto_selects_device_then_joy_then_simulated_human(start_node, harness, 
     harness.stop_joy()  # a real input was lost: the policy (zero), not the simulated human
     action = answer_until(HumanAction.SOURCE_NONE)
     assert (action.command, action.engaged) == (0.0, False)
+    assert action.source_detail.startswith('joystick disconnected (zero held)')
+    assert not any(a.source == HumanAction.SOURCE_SIMULATED for a in harness.action_log)
+
+
+def status_values(status):
+    return {pair.key: pair.value for pair in status.values}
+
+
+def test_input_status_says_missing_ok_lost_and_not_a_joystick(start_node, harness, tmp_path):
+    # The default policy (pause): a missing or lost joystick holds zero and the node reports
+    # it on /hrc/human/input for the session to pause; /dev/urandom-like streams are lost with
+    # the reason, and none of their bytes becomes a command.
+    fifo = str(tmp_path / 'js0')
+    process = harness.start(start_node, parameters={
+        'input': 'device', 'device': fifo, 'reopen_period': 0.1, 'input_check_period': 0.05})
+    harness.wait_for_human_node(process)
+
+    def latest_status(state):
+        harness.spin_until(lambda: harness.statuses
+                           and status_values(harness.statuses[-1])['state'] == state)
+        assert harness.statuses, process.output
+        status = harness.statuses[-1]
+        assert status_values(status)['state'] == state, (status, process.output)
+        return status, status_values(status)
+
+    status, values = latest_status('missing')
+    assert status.level == DiagnosticStatus.ERROR and values['pause_requested'] == 'true'
+    assert status.message.startswith('no joystick yet (zero held, session should pause)')
+    assert 'No such file' in status.message
+    action, _ = harness.step(task_state(0, 0, pendulum_angle=0.3), process)
+    assert (action.source, action.command, action.engaged) == (HumanAction.SOURCE_NONE, 0.0,
+                                                               False)
+
+    os.mkfifo(fifo)
+    writer = os.open(fifo, os.O_RDWR)
+    try:
+        os.write(writer, js(JS_EVENT_AXIS, 1, 0, init=True))
+        status, values = latest_status('ok')
+        assert status.level == DiagnosticStatus.OK and values['active'] == 'device'
+        assert values['pause_requested'] == 'false' and status.hardware_id == fifo
+        noise = numpy.random.default_rng(7).integers(0, 256, 16384, dtype=numpy.uint8)
+        os.write(writer, noise.tobytes())
+        status, values = latest_status('lost')
+        assert status.level == DiagnosticStatus.ERROR and values['pause_requested'] == 'true'
+        assert status.message.startswith('joystick disconnected (zero held, session should '
+                                         'pause)')
+        assert 'is not a joystick' in status.message
+        for step in range(1, 6):
+            action, _ = harness.step(task_state(0, step), process)
+            assert action.source == HumanAction.SOURCE_NONE and action.command == 0.0
+            assert 'not a joystick' in action.source_detail or 'no writer' in \
+                action.source_detail
+    finally:
+        os.close(writer)
+    assert int(status_values(harness.statuses[-1])['lost_count']) >= 1
 
 
 def test_drives_the_real_sim_node_in_lockstep_without_a_missing_command(start_node, harness):
@@ -420,8 +488,28 @@ def test_drives_the_real_sim_node_in_lockstep_without_a_missing_command(start_no
 @pytest.mark.parametrize('parameters, reason', [
     ({'input': 'keyboard'}, "input: 'keyboard' is not one of"),
     ({'profile': 'expert'}, "profile: 'expert' is not in"),
+    ({'on_input_lost': 'panic'}, "on_input_lost: 'panic' is not one of"),
 ])
 def test_bad_parameters_exit_2_with_the_reason(start_node, parameters, reason):
     process = start_node('hrc_joystick_node', 'human_node', parameters=parameters)
     assert process.wait(timeout=30) == 2
     assert reason in process.output
+
+
+@pytest.mark.parametrize('content, reason', [
+    (b'profiles: {paper: [\n', 'not valid YAML (line 2'),
+    (b'- paper\n- skilled\n', 'expected a mapping with "profiles:", got list'),
+    (bytes(range(256)) * 4, 'not a YAML text file (binary content)'),
+    (b'profiles:\n  paper: 5\n', "profile 'paper': expected a mapping of fields, got int"),
+    (None, 'cannot read: No such file or directory'),
+])
+def test_a_bad_profiles_file_exits_2_with_the_reason(start_node, tmp_path, content, reason):
+    # Was: a traceback and exit 1 for a profiles_file that is not YAML or is a list.
+    path = tmp_path / 'profiles.yaml'
+    if content is not None:
+        path.write_bytes(content)
+    process = start_node('hrc_joystick_node', 'human_node',
+                         parameters={'input': 'sim', 'profiles_file': str(path)})
+    assert process.wait(timeout=30) == 2, process.output
+    assert reason in process.output
+    assert 'Traceback' not in process.output

@@ -2,43 +2,64 @@
 
 import pytest
 
-from hrc_joystick_node.inputs import (DEVICE, InputSelector, JOY, JoyInput, SIM, stick_command,
-                                      ZERO)
+from hrc_joystick_node.human_core import HumanParams
+from hrc_joystick_node.inputs import (DEVICE, InputSelector, JOY, JoyInput, LOST, MISSING, OK,
+                                      PAUSE, SIM, stick_command, ZERO)
 
 
-def test_auto_prefers_device_then_joy_then_the_simulated_human():
+def test_auto_prefers_device_then_joy_and_stands_in_only_when_asked():
     selector = InputSelector('auto', 'sim')
     change = selector.update(False, 'cannot open /dev/input/js0', False, '/joy has no publisher')
-    assert selector.active == SIM
+    assert selector.active == SIM and selector.state == MISSING
     assert 'cannot open /dev/input/js0' in change and '/joy has no publisher' in change
+    assert 'simulated human stands in' in change, 'the stand-in is never silent'
     assert 'joy' in selector.update(False, 'absent', True, '/joy alive') and selector.active == JOY
+    assert selector.state == OK
     assert selector.update(True, 'open', True, '/joy alive') is not None
     assert selector.active == DEVICE
     assert selector.update(True, 'open', True, '/joy alive') is None, 'no change, no log'
 
 
+@pytest.mark.parametrize('mode', ['auto', 'device', 'joy'])
+def test_a_missing_joystick_is_never_replaced_by_the_simulated_human_by_default(mode):
+    # Was: `auto` ran the simulated human when nothing was connected, and `on_input_lost: sim`
+    # was the default, silently mixing simulated input into a subject's data.
+    selector = InputSelector(mode, HumanParams().on_input_lost)
+    assert HumanParams().on_input_lost == PAUSE
+    change = selector.update(False, 'cannot open /dev/input/js0', False, '/joy has no publisher')
+    assert selector.active == ZERO and selector.state == MISSING
+    assert selector.pause_requested
+    assert 'no joystick yet' in change and 'session should pause' in change
+
+
 def test_auto_after_losing_a_real_input_follows_the_fallback_policy():
     selector = InputSelector('auto', 'zero')
     selector.update(False, 'absent', False, 'no publisher')
-    assert selector.active == SIM, 'nothing ever connected: the simulated human'
+    assert selector.active == ZERO and selector.state == MISSING
+    assert not selector.pause_requested, 'zero holds zero without asking for a pause'
     selector.update(True, 'open', False, 'no publisher')
     assert selector.active == DEVICE
     change = selector.update(False, 'vanished: ENODEV', False, 'no publisher')
-    assert selector.active == ZERO and 'lost' in change and 'vanished' in change
+    assert selector.active == ZERO and selector.state == LOST
+    assert 'joystick disconnected' in change and 'vanished' in change
+    assert selector.lost_count == 1
     selector.update(True, 'open', False, 'no publisher')
-    assert selector.active == DEVICE, 'returns to the device when it reappears'
+    assert selector.active == DEVICE and selector.state == OK, 'returns when it reappears'
 
 
-@pytest.mark.parametrize('fallback', ['sim', 'zero'])
+@pytest.mark.parametrize('fallback', ['sim', 'zero', 'pause'])
 def test_device_mode_falls_back_and_returns(fallback):
+    expected = SIM if fallback == 'sim' else ZERO
     selector = InputSelector('device', fallback)
     selector.update(False, 'cannot open', True, '/joy alive')
-    assert selector.active == fallback, '/joy is not used in device mode'
-    assert 'no input yet' in selector.reason
+    assert selector.active == expected, '/joy is not used in device mode'
+    assert selector.state == MISSING and 'no joystick yet' in selector.status_line()
     selector.update(True, 'open', False, '')
     assert selector.active == DEVICE
     selector.update(False, 'vanished', False, '')
-    assert selector.active == fallback and selector.reason.startswith('lost')
+    assert selector.active == expected and selector.state == LOST
+    assert selector.status_line().startswith('joystick disconnected')
+    assert selector.pause_requested == (fallback == 'pause')
 
 
 def test_joy_mode_and_sim_mode():
@@ -47,9 +68,9 @@ def test_joy_mode_and_sim_mode():
     assert selector.active == SIM, 'the device is not used in joy mode'
     selector.update(True, 'open', True, 'alive')
     assert selector.active == JOY
-    selector = InputSelector('sim', 'zero')
+    selector = InputSelector('sim', 'pause')
     selector.update(True, 'open', True, 'alive')
-    assert selector.active == SIM
+    assert selector.active == SIM and selector.state == OK and not selector.pause_requested
 
 
 def test_bad_modes_are_refused():

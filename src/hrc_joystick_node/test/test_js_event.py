@@ -3,6 +3,7 @@
 import os
 import time
 
+import numpy
 import pytest
 
 from hrc_joystick_node.js_event import (device_axis, EVENT_SIZE, JoystickDevice, JS_EVENT_AXIS,
@@ -174,3 +175,101 @@ def test_regular_file_end_is_idle_not_unplugged(tmp_path):
     assert device.parser.pending_bytes == 2
     device.close()
     assert not device.present
+
+
+class FakeClock:
+    """A monotonic clock the test moves by hand (s)."""
+
+    def __init__(self, now=100.0):
+        self.now = now
+
+    def __call__(self):
+        return self.now
+
+
+def test_a_misaligned_read_is_not_taken_for_an_event():
+    # Two stray bytes right after a good event shift the next record: its timestamp's upper
+    # half then reads as a button value 0, its stick value -32767 (0x8001) as type 0x01 and
+    # number 0x80: "button 128 released", and the stick event itself is lost. Timestamps
+    # checked against the clock expose the misaligned record.
+    clock = FakeClock()
+    parser = JsEventParser(clock)
+    assert parser.feed(axis(1, 5, time_ms=1000)) == [JsEvent(1000, 5, JS_EVENT_AXIS, 1)]
+    clock.now += 0.01
+    events = parser.feed(b'\x12\x34' + axis(1, -32767, time_ms=1010))
+    assert events == [JsEvent(1010, -32767, JS_EVENT_AXIS, 1)]
+    assert parser.garbage_bytes == 2
+    clock.now += 0.01
+    assert parser.feed(button(0, 0, time_ms=1020)) == [JsEvent(1020, 0, JS_EVENT_BUTTON, 0)]
+    # Events whose time runs backwards or ahead of the clock are no events either.
+    assert parser.feed(axis(1, 7, time_ms=900)) == []
+    assert parser.feed(axis(1, 7, time_ms=1020 + 60_000)) == []
+    assert parser.feed(axis(1, 7, time_ms=1030)) == [JsEvent(1030, 7, JS_EVENT_AXIS, 1)]
+
+
+def test_time_wraps_around_and_an_idle_stick_may_wake_up_later():
+    clock = FakeClock()
+    parser = JsEventParser(clock)
+    assert len(parser.feed(axis(0, 1, time_ms=2 ** 32 - 5))) == 1
+    clock.now += 3600.0  # an hour without touching the stick, and the kernel's ms wrapped
+    assert parser.feed(axis(0, 2, time_ms=3_600_000 - 10)) == [
+        JsEvent(3_600_000 - 10, 2, JS_EVENT_AXIS, 0)]
+
+
+def test_dev_urandom_is_not_a_joystick():
+    # Was: 33 phantom commands in 4 s, source DEVICE, never declared lost.
+    device = JoystickDevice('/dev/urandom')
+    for _ in range(3):  # reopened as the node does: refused every time, before any event
+        assert not device.open()
+        assert not device.present and device.rejected
+        assert 'is not a joystick' in device.status and 'no js_event' in device.status
+        assert device.axes == {} and device.buttons == {}
+
+
+def test_a_stream_that_turns_to_garbage_is_lost_with_the_reason(fifo):
+    clock = FakeClock()
+    writer = open_writer(fifo)
+    device = JoystickDevice(fifo, clock=clock)
+    try:
+        os.write(writer, axis(1, 0, init=True) + button(0, 0, init=True))
+        assert device.open() and device.axis(1) == 0.0
+        assert len(device.poll()) == 2, 'the INIT events read at open'
+        clock.now += 0.1
+        noise = numpy.random.default_rng(5).integers(0, 256, 4096, dtype=numpy.uint8)
+        os.write(writer, noise.tobytes())
+        assert device.poll() == [], 'none of the garbage chunk is used'
+        assert not device.present and device.rejected
+        assert 'not a joystick' in device.status
+        assert device.axis(1) is None, 'no stale state is kept'
+        # On probation: a quiet stream is not taken for a joystick again ...
+        assert not device.open() and not device.present
+        assert 'waiting for the initial (INIT) events' in device.status
+        os.write(writer, axis(1, 100, time_ms=5))
+        assert not device.open() and device.poll() == []
+        # ... until it starts as a joystick driver does.
+        os.write(writer, axis(1, -32767, init=True, time_ms=6))
+        assert device.open() and device.present and not device.rejected
+        assert device.axis(1) == 1.0
+    finally:
+        os.close(writer)
+        device.close()
+
+
+def test_more_events_than_any_joystick_sends_is_not_a_joystick(fifo):
+    clock = FakeClock()
+    writer = open_writer(fifo)
+    device = JoystickDevice(fifo, clock=clock)
+    try:
+        assert device.open()
+        burst = axis(1, 100) * 3000  # 24 kB: fits the pipe buffer
+        for _ in range(3):
+            os.write(writer, burst)
+            device.poll()
+        assert device.present, '9000 events in a second: a busy but possible gamepad'
+        os.write(writer, burst)
+        device.poll()
+        assert not device.present
+        assert 'more than any joystick sends' in device.status
+    finally:
+        os.close(writer)
+        device.close()

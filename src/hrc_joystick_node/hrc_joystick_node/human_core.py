@@ -1,0 +1,262 @@
+"""The human's per-step logic as a pure core: plain values and a clock in, decisions out.
+
+No rclpy: the human node (:mod:`hrc_joystick_node.human_node`) converts messages to the calls
+below and the answers back to messages; the in-process engine (``hrc_engine``) calls the same
+core directly, so both answer every state the same way::
+
+    core = HumanCore(HumanParams(input='sim', profile='paper', seed=3), profiles)
+    core.on_session('rotation', involved=True, subtasks=['pendulum'], aborted=False)
+    answer = core.answer(episode, step, stamp_ns, state)   # a HumanAnswer
+
+What it decides, per state (not the last of its episode, which needs no answer):
+
+* the session aborted: zero, ``engaged`` false, source ``none``;
+* the same state again (same episode and step): the same answer, ``repeated`` true, and the
+  simulated human is not advanced twice;
+* the human not involved in this training step: zero, ``engaged`` false, source ``none``;
+* otherwise the active input (:class:`~hrc_joystick_node.inputs.InputSelector`): the stick of
+  the device or ``/joy`` (deadzone, inversion, deadman), the simulated human (reset at each new
+  episode or when a step does not follow the last one; its clock is the state's stamp, so
+  fatigue and rest run on simulation time), or a held zero when the input is missing or lost
+  and the policy ``on_input_lost`` is ``pause`` (the default: the input status asks the session
+  to pause) or ``zero``. The simulated human stands in for a missing or lost joystick only
+  with ``on_input_lost: sim``; every answer says which input drove it (``source``) and why.
+
+The input status (:class:`InputStatus`) is what the node publishes on ``/hrc/human/input``.
+"""
+
+from dataclasses import dataclass
+import typing
+
+from hrc_common.dof import check_dof, DOFS, TRANSLATION
+from hrc_common.params import param, ParameterError
+from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
+                                      PAUSE, SIM, stick_command, StickReading, ZERO)
+from hrc_joystick_node.population import person_or_profile
+from hrc_joystick_node.sim_human import (BALL, HumanProfile, normalize_subtasks, OWN_SUBTASK,
+                                         SimulatedHuman)
+
+# HumanAction.SOURCE_* of hrc_msgs (a test keeps them equal), by input name.
+SOURCE_CODE = {DEVICE: 0, JOY: 1, SIM: 2, ZERO: 4}
+
+
+@dataclass
+class HumanParams:
+    """Parameters of the human node (mirrored in params/human.yaml)."""
+
+    input: str = param('auto', 'where the command comes from: auto = the device if it opens, '
+                       'else /joy if a publisher is seen; sim = the simulated human',
+                       choices=INPUT_MODES)
+    device: str = param('/dev/input/js0', 'Linux joystick device (or a FIFO/file carrying its '
+                        'js_event stream)')
+    axis: int = param(1, 'joystick axis that drives the command, same index on the device and '
+                      'on /joy (1 = left stick vertical on most gamepads)', low=0, high=63)
+    invert: bool = param(False, 'flip the axis: by default stick up/left (the Joy convention, '
+                         '+1) commands + (slider up, east end of the beam up)')
+    deadzone: float = param(0.05, 'axis magnitudes below this read as 0; the rest is rescaled '
+                            'to [0, 1] (normalized units)', low=0.0, high=0.9)
+    enable_button: int = param(-1, 'deadman button that must be held for a non-zero command '
+                               '(-1 = none)', low=-1, high=255)
+    joy_timeout: float = param(1.0, '/joy counts as silent after this long without a message '
+                               '(s, wall time); the joy node must publish faster '
+                               '(autorepeat_rate)', low=0.05, high=60.0)
+    on_input_lost: str = param(PAUSE, 'when the joystick (device or /joy) is missing or lost: '
+                               'pause = hold zero and ask the session to pause (reported on '
+                               '/hrc/human/input), zero = hold zero, sim = the simulated human '
+                               'stands in (only when asked for)', choices=FALLBACKS)
+    reopen_period: float = param(1.0, 'interval between attempts to (re)open an absent device '
+                                 '(s)', low=0.05, high=60.0)
+    input_check_period: float = param(0.1, 'interval of the input check: drain the device, '
+                                      'watch the /joy deadline, publish the input status (s)',
+                                      low=0.01, high=5.0)
+    dof: str = param('rotation', 'degree of freedom of the human until /hrc/session says',
+                     choices=DOFS)
+    involved: bool = param(True, 'whether the human acts, until /hrc/session says')
+    hold_ball: bool = param(False, 'whether the human is also asked to hold the ball, until '
+                            "/hrc/session lists the human's subtasks")
+    max_force: float = param(2.0, 'force (N) of a full command on translation; same value as '
+                             "the sim's max_force", low=0.01, high=100.0)
+    max_torque: float = param(0.5, 'torque (N*m) of a full command on rotation; same value as '
+                              "the sim's max_torque", low=0.001, high=50.0)
+    control_period: float = param(0.2, 'control period of the sim (s), for the simulated '
+                                  "human's delay and fatigue", low=0.01, high=1.0)
+    profile: str = param('paper', 'simulated-human profile (a name in profiles_file)')
+    profiles_file: str = param('', 'simulated-human profiles YAML (empty = the installed '
+                               'share/hrc_joystick_node/params/sim_human.yaml)')
+    person: int = param(-1, 'simulated human: draw person number N of the population around '
+                        'the profile (hrc_joystick_node.population); -1 = the profile itself',
+                        low=-1, high=2 ** 31 - 1)
+    seed: int = param(0, 'seed of the simulated human (with the episode index)', low=0,
+                      high=2 ** 31 - 1)
+
+
+class HumanAnswer(typing.NamedTuple):
+    """The human's answer to one state."""
+
+    episode: int
+    step: int
+    stamp_ns: int           # the answered state's stamp (simulation time, ns)
+    command: float          # normalized, [-1, 1]
+    wrench: float           # N (translation) or N*m (rotation) on ``dof``
+    dof: str
+    source: str             # the input that drove it: device, joy, sim or zero
+    detail: str             # e.g. device path, profile name, why zero
+    engaged: bool
+    repeated: bool = False  # the same state again: the earlier answer, model not advanced
+
+    @property
+    def source_code(self) -> int:
+        """HumanAction.SOURCE_* of :attr:`source`."""
+        return SOURCE_CODE[self.source]
+
+
+class InputStatus(typing.NamedTuple):
+    """Which input drives the human now and whether it is healthy (``/hrc/human/input``)."""
+
+    mode: str               # the parameter input: auto, device, joy, sim
+    active: str             # device, joy, sim or zero
+    state: str              # ok | missing (never seen) | lost (seen, then gone)
+    fallback: str           # on_input_lost: pause, zero or sim (what holds while not ok)
+    pause_requested: bool   # missing or lost with on_input_lost pause: the session should pause
+    reason: str             # one line a person can read ("joystick disconnected: ...")
+
+    @property
+    def level(self) -> int:
+        """0 OK, 1 WARN (zero held or the simulated human standing in), 2 ERROR (pause)."""
+        if self.state == 'ok':
+            return 0
+        return 2 if self.pause_requested else 1
+
+
+def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile],
+                    where='profiles_file') -> HumanProfile:
+    """Return the person the parameters name (profile, then the population draw)."""
+    if params.profile not in profiles:
+        raise ParameterError(f'profile: {params.profile!r} is not in {where} '
+                             f'(known: {sorted(profiles)})')
+    return person_or_profile(profiles[params.profile], params.person)
+
+
+class HumanCore:
+    """The human's per-step decisions (see the module docstring)."""
+
+    def __init__(self, params: HumanParams, profiles: typing.Dict[str, HumanProfile],
+                 profiles_where: str = 'profiles_file'):
+        self.params = params
+        self.profile = resolve_profile(params, profiles, profiles_where)
+        self.dof = check_dof(params.dof)
+        self.involved = bool(params.involved)
+        self.subtasks = self.default_subtasks(self.dof)
+        self.session_seen = False
+        self.aborted = False
+        self.selector = InputSelector(params.input, params.on_input_lost)
+        self.sim_human = self._new_sim_human(self.dof)
+        self._sim_episode = None
+        self._sim_step = None
+        self.last_answer: typing.Optional[HumanAnswer] = None
+        self.answered = 0
+
+    # -- roles ---------------------------------------------------------------------------
+    def default_subtasks(self, dof: str) -> typing.List[str]:
+        """Return the subtasks before a session says: the own level-2 one (and the ball)."""
+        return [OWN_SUBTASK[dof]] + ([BALL] if self.params.hold_ball else [])
+
+    def _new_sim_human(self, dof: str) -> SimulatedHuman:
+        return SimulatedHuman(self.profile, dof, seed=self.params.seed,
+                              control_period=self.params.control_period)
+
+    def on_session(self, dof: str, involved: bool, subtasks, aborted: bool = False
+                   ) -> typing.Tuple[bool, typing.List[str]]:
+        """Take the roles a session announces; return (roles changed, unknown subtask ids)."""
+        dof = check_dof(dof)
+        known, unknown = normalize_subtasks(subtasks)
+        changed = (not self.session_seen or dof != self.dof
+                   or bool(involved) != self.involved or known != self.subtasks)
+        if dof != self.dof:
+            self.sim_human = self._new_sim_human(dof)
+            self._sim_episode = None
+        self.dof, self.involved, self.subtasks = dof, bool(involved), known
+        self.session_seen = True
+        self.aborted = bool(aborted)
+        return changed, unknown
+
+    # -- inputs --------------------------------------------------------------------------
+    def on_inputs(self, device_present: bool, device_status: str, joy_alive: bool,
+                  joy_status: str) -> typing.Optional[str]:
+        """Re-evaluate the active input; return a log line when it changed."""
+        return self.selector.update(device_present, device_status, joy_alive, joy_status)
+
+    @property
+    def input_status(self) -> InputStatus:
+        """The input status now (what the node publishes)."""
+        selector = self.selector
+        return InputStatus(selector.mode, selector.active or ZERO, selector.state,
+                           selector.on_input_lost, selector.pause_requested,
+                           selector.status_line())
+
+    # -- the step ------------------------------------------------------------------------
+    def answer(self, episode: int, step: int, stamp_ns: int, state,
+               sticks: typing.Optional[dict] = None) -> HumanAnswer:
+        """Answer one state (not the last of its episode).
+
+        ``state``: anything with the PhysicsState attributes the simulated human reads;
+        ``stamp_ns``: its stamp (simulation time since the session start, ns); ``sticks``:
+        ``{input: StickReading}`` for the joystick inputs the caller read just now (device,
+        joy).
+        """
+        last = self.last_answer
+        if self.aborted:
+            return self._zero(episode, step, stamp_ns, 'session aborted by the operator')
+        if last is not None and (last.episode, last.step) == (episode, step):
+            return last._replace(repeated=True)
+        command, engaged, source, detail = self._decide(episode, step, stamp_ns, state,
+                                                        sticks or {})
+        scale = self.params.max_force if self.dof == TRANSLATION else self.params.max_torque
+        answer = HumanAnswer(int(episode), int(step), int(stamp_ns), command, command * scale,
+                             self.dof, source, detail, engaged)
+        self.last_answer = answer
+        self.answered += 1
+        return answer
+
+    def abort_answer(self) -> typing.Optional[HumanAnswer]:
+        """Return a zero answer to the last answered state (sent at once on an abort)."""
+        last = self.last_answer
+        if last is None:
+            return None
+        return self._zero(last.episode, last.step, last.stamp_ns,
+                          'session aborted by the operator')
+
+    def _zero(self, episode, step, stamp_ns, why) -> HumanAnswer:
+        answer = HumanAnswer(int(episode), int(step), int(stamp_ns), 0.0, 0.0, self.dof, ZERO,
+                             why, False)
+        self.last_answer = answer
+        return answer
+
+    def _decide(self, episode, step, stamp_ns, state, sticks) -> tuple:
+        """Return (command, engaged, input, detail) for one new state."""
+        active = self.selector.active
+        if not self.involved:
+            return 0.0, False, ZERO, f'not involved in this training step (input: {active})'
+        params = self.params
+        if active in (DEVICE, JOY):
+            reading = sticks.get(active) or StickReading(None, None, active)
+            command, engaged, why = stick_command(reading.axis, reading.enable,
+                                                  params.enable_button >= 0, params.deadzone,
+                                                  params.invert)
+            return command, engaged, active, reading.name + (f' ({why})' if why else '')
+        if active == SIM:
+            if (episode != self._sim_episode or self._sim_step is None
+                    or step <= self._sim_step):
+                self.sim_human.reset(episode)
+                self._sim_episode = episode
+            self._sim_step = step
+            command = self.sim_human.act(state, self.subtasks, now=stamp_ns * 1e-9)
+            detail = params.profile + (f' person {params.person}' if params.person >= 0 else '')
+            if params.input != SIM:  # standing in for a missing or lost joystick: say so
+                detail += f' ({self.selector.status_line()})'
+            return command, True, SIM, detail
+        return 0.0, False, ZERO, self.selector.status_line()
+
+
+__all__ = ['AUTO', 'HumanAnswer', 'HumanCore', 'HumanParams', 'InputStatus', 'SOURCE_CODE',
+           'resolve_profile']
