@@ -1,0 +1,123 @@
+"""The experiment runner: a sweep on a real two-node Ray cluster equals the local pool's.
+
+The cluster is a head and a second node, each a ``ray start --block`` process of its own on
+this machine with one CPU, in a private temporary directory; both are stopped (their process
+groups, nothing else) in the teardown. Sessions: the in-process engine, 1 training and 1
+evaluation episode of 4 s (tiny, so the test stays well under a minute).
+"""
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import tempfile
+import time
+
+from hrc_common.testing import executable_path
+import pytest
+
+from hrc_study.loading import load_sessions
+
+TINY = ['--cases', '1', '2', '--seeds', '1', '--episodes', '1', '--eval-episodes', '1',
+        '--set', 'sim.episode_duration=4.0', '--no-report']
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        return probe.getsockname()[1]
+
+
+def _ray(*args, log, env) -> subprocess.Popen:
+    return subprocess.Popen(['ray', 'start', '--block', '--num-cpus=1', '--disable-usage-stats',
+                             '--node-ip-address=127.0.0.1', *args], env=env, stdout=log,
+                            stderr=subprocess.STDOUT, start_new_session=True)
+
+
+def _stop(process: subprocess.Popen) -> None:
+    """Stop a ``ray start --block`` process group (raylet, GCS, workers it started)."""
+    try:
+        os.killpg(process.pid, signal.SIGTERM)
+        process.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        pass
+    except ProcessLookupError:
+        return
+    try:
+        os.killpg(process.pid, signal.SIGKILL)   # what SIGTERM left of this group only
+    except ProcessLookupError:
+        pass
+    process.wait(timeout=10)
+
+
+@pytest.fixture
+def ray_cluster():
+    """Yield the address of a local Ray cluster of two nodes (one CPU each)."""
+    port = _free_port()
+    temp_dir = tempfile.mkdtemp(prefix='hrcray', dir='/tmp')   # short: Ray's socket paths
+    env = dict(os.environ, RAY_USAGE_STATS_ENABLED='0')
+    log = open(os.path.join(temp_dir, 'ray.log'), 'w')
+    address = f'127.0.0.1:{port}'
+    processes = [_ray('--head', f'--port={port}', '--include-dashboard=false',
+                      f'--temp-dir={temp_dir}', log=log, env=env)]
+    try:
+        deadline = time.monotonic() + 40
+        while subprocess.run(['ray', 'status', f'--address={address}'], env=env,
+                             capture_output=True).returncode != 0:
+            assert time.monotonic() < deadline, open(log.name).read()[-2000:]
+            time.sleep(0.5)
+        processes.append(_ray(f'--address={address}', log=log, env=env))
+        while True:
+            status = subprocess.run(['ray', 'status', f'--address={address}'], env=env,
+                                    capture_output=True, text=True).stdout
+            if status.count('node_') >= 2 or '2.0 CPU' in status:
+                break
+            assert time.monotonic() < deadline, status
+            time.sleep(0.5)
+        yield address
+    finally:
+        for process in reversed(processes):
+            _stop(process)
+        log.close()
+
+
+def _run_experiment(tmp_path, name, *extra) -> dict:
+    command = [str(executable_path('hrc_bringup', 'experiment')), *TINY, '--name', name,
+               '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
+               *extra]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=150)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return json.loads((tmp_path / 'bags' / name / 'experiment.json').read_text())
+
+
+def _episodes(folder) -> dict:
+    return {session.session_id: session.episodes for session in load_sessions([folder],
+                                                                               log=print)}
+
+
+@pytest.mark.slow
+def test_sweep_on_a_two_node_ray_cluster_equals_the_local_pool(tmp_path, ray_cluster):
+    local = _run_experiment(tmp_path, 'local', '--parallel', '2')
+    on_ray = _run_experiment(tmp_path, 'ray', '--ray-address', ray_cluster)
+    assert 'Ray cluster (2 nodes, 2 CPUs' in on_ray['executor']
+    assert 'local process pool' in local['executor']
+    # one session per node: each node declares one CPU and each session asks for one
+    assert len({outcome['ray_node'] for outcome in on_ray['outcomes']}) == 2
+    local_episodes = _episodes(tmp_path / 'bags' / 'local')
+    ray_episodes = _episodes(tmp_path / 'bags' / 'ray')
+    assert sorted(local_episodes) == ['case1-seed0', 'case2-seed0']
+    assert ray_episodes == local_episodes       # every summary field of every episode
+    assert all(len(episodes) == 2 for episodes in ray_episodes.values())
+
+
+def test_bad_arguments_exit_2_with_every_reason(tmp_path):
+    result = subprocess.run([str(executable_path('hrc_bringup', 'experiment')), '--cases', '9',
+                             '--seeds', '0', '--ray', '--ray-address', 'auto', '--set', 'x',
+                             '--bags-dir', str(tmp_path)], capture_output=True, text=True,
+                            timeout=60)
+    assert result.returncode == 2
+    for reason in ('case must be one of', '--seeds must be >= 1', '--ray starts a local',
+                   'x'):
+        assert reason in result.stderr
+    assert 'Traceback' not in result.stderr
