@@ -78,7 +78,8 @@ def figure_training(sessions, profile: str, path) -> None:
         if axis.get_lines():
             axis.legend(loc='lower right', fontsize='small')
     axes[0].set_ylabel('episode return (robot reward)')
-    figure.suptitle('Fig. 5: mean training return over seeds, band: 95% interval of the mean '
+    figure.suptitle('Fig. 5: mean training return over seeds (judging episodes included), band: '
+                    '95% interval of the mean '
                     '(sessions drop out as they converge); dashed: median episode at which '
                     'the human joins', fontsize='medium')
     figure.tight_layout()

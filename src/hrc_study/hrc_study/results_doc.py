@@ -159,8 +159,8 @@ def sessions_csv(sessions) -> str:
     """Return one CSV row per session: the values behind every table."""
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    keys = ['human_involved_episodes', 'total_episodes', 'training_only_episodes',
-            'converged', 'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]]
+    keys = ['human_involved_episodes', 'total_episodes', 'converged',
+            'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]]
     writer.writerow(['session_id', 'profile', 'case_id', 'strategy', 'robot_dof', 'seed']
                     + keys)
     for session in sessions:

@@ -8,9 +8,10 @@ records from bags; tests build them directly.
 Definitions (the issue #13 rules, see docs/results.md):
 
 * The final evaluation block: the evaluation episodes after training ended (the frozen policy
-  evaluated for Table II's performance and effort). Evaluation episodes run *during* training to
-  judge convergence are part of training: they count in the episode total, and as
-  human-involved whenever the human acted in them (the person's time is the burden metric).
+  evaluated for Table II's performance and effort). The deterministic episodes run *during*
+  training to judge convergence (the agent's judging episodes; their summaries are not marked
+  as evaluation) are part of training: they count in the episode total, and as human-involved
+  whenever the human acted in them (the person's time is the burden metric).
 * Episodes to convergence: every episode before the final block; "converged" when an episode
   of the strategy's last training step carries the convergence flag. A session that stopped at
   the episode limit without it is right-censored at its episode count.
@@ -96,8 +97,8 @@ def final_block_start(session: SessionRecord) -> int:
 def measures(session: SessionRecord) -> dict:
     """Return the per-session values of Table II and the three factors (NaN: no data).
 
-    Keys: human_involved_episodes, total_episodes (both include evaluation episodes run during
-    training), training_only_episodes, percentage, converged (bool), the four errors and two
+    Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
+    training), percentage, converged (bool), the four errors and two
     efforts (means over the final evaluation block), evaluation_episodes.
     """
     start = final_block_start(session)
@@ -109,8 +110,6 @@ def measures(session: SessionRecord) -> dict:
     values = {
         'human_involved_episodes': float(involved),
         'total_episodes': float(len(training)),
-        'training_only_episodes': float(sum(1 for episode in training
-                                            if not episode.evaluation)),
         'percentage': 100.0 * involved / len(training) if training else math.nan,
         'converged': converged,
         'evaluation_episodes': float(len(final)),

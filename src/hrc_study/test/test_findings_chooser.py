@@ -18,7 +18,6 @@ def test_measures_count_judging_evaluations_as_training():
     values = measures(session)
     assert final_block_start(session) == 20
     assert values['total_episodes'] == 20            # 4 judging evaluations included
-    assert values['training_only_episodes'] == 16
     assert values['human_involved_episodes'] == 10
     assert values['converged'] is True
     assert values['evaluation_episodes'] == 3
