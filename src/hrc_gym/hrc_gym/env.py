@@ -19,9 +19,10 @@
   time limit, so a learner must bootstrap from the final state). The final ``info`` holds
   ``episode_errors`` (mean |x - mu| per subtask) and ``episode_satisfied`` (within tolerance).
 * **The human**: when the step involves it, the simulated human of ``hrc_joystick_node``
-  (``human=<profile>`` or ``population:<profile>``) acts on the same state as the robot, or
-  any object passed as ``human_model`` with ``act(state, subtasks) -> float`` (and optionally
-  ``reset(episode)``), e.g. a model cloned from a person's bags.
+  (``human=<profile>`` or ``population:<profile>``), answered through the human node's own
+  per-step core (``HumanCore``, with the sim's stamps as its clock), acts on the same state as
+  the robot; or any object passed as ``human_model`` with ``act(state, subtasks) -> float``
+  (and optionally ``reset(episode)``), e.g. a model cloned from a person's bags.
 * **Seeding**: ``reset(seed=s)`` seeds the episode-start generator (``self.np_random``) and a
   fresh simulated human (seed derived from s, no practice yet); later ``reset()`` calls go on
   with both (the human practices across episodes, as in the project's sessions).
@@ -33,6 +34,7 @@ import gymnasium
 from gymnasium import spaces
 import numpy as np
 
+from hrc_common.contract import NS_PER_S
 from hrc_common.params import from_dict, ParameterError
 from hrc_gym.task import GymParams, HUMAN, make_human, NO_HUMAN, POPULATION_PREFIX, ROBOT, \
     TaskRun
@@ -77,6 +79,9 @@ class SliderPendulumBallEnv(gymnasium.Env):
         self.human = None
         self._human_ready = False
         self._episode = 0
+        self._states = 0          # states on the session clock (stamps, as the sim's)
+        self._stamp_ns = 0
+        self._period_ns = int(round(self.task.physics.params.control_period * NS_PER_S))
         self._return = 0.0
 
     @property
@@ -88,22 +93,43 @@ class SliderPendulumBallEnv(gymnasium.Env):
         """Start an episode (see the module docstring for seeding); return (obs, info)."""
         super().reset(seed=seed)
         if seed is not None or not self._human_ready:
-            # A new person (no practice yet) for every seeded run.
+            # A new person (no practice yet) and a new session clock for every seeded run.
             self._episode = 0
+            self._states = 0
             self._human_ready = True
             if self._human_model is not None:
                 self.human = self._human_model
             else:
+                task = self.task
                 human_seed = derived_seed(seed if seed is not None
                                           else int(self.np_random.integers(SEED_LIMIT)), 1)
-                self.human = make_human(self.config.human, self.task.dofs[HUMAN], human_seed,
-                                        self.task.physics.params.control_period)
-        if self.human is not None and hasattr(self.human, 'reset'):
+                self.human = make_human(self.config.human, task.dofs[HUMAN], human_seed,
+                                        task.physics.params.control_period,
+                                        task.human_involved, task.subtasks[HUMAN],
+                                        task.agent_params.max_force,
+                                        task.agent_params.max_torque)
+        else:
+            self._episode += 1
+        if self._human_model is not None and hasattr(self.human, 'reset'):
             self.human.reset(self._episode)
-        self._episode += 1
         self._return = 0.0
         self.task.reset(int(self.np_random.integers(SEED_LIMIT)))
+        self._published()
         return self.task.observation(ROBOT), {'step': 0}
+
+    def _published(self):
+        """Count a state on the session clock (the sim's stamps: one period per state)."""
+        self._stamp_ns = self._states * self._period_ns
+        self._states += 1
+
+    def _human_command(self) -> float:
+        state = self.task.state
+        if not self.task.human_involved or self.human is None:
+            return 0.0
+        if self._human_model is not None:
+            return float(self.human.act(state, self.task.subtasks[HUMAN]))
+        return float(self.human.answer(self._episode, state.step, self._stamp_ns,
+                                       state).command)
 
     def step(self, action):
         """Advance one control period with the robot's command (the human acts alongside)."""
@@ -112,10 +138,9 @@ class SliderPendulumBallEnv(gymnasium.Env):
         if self.task.finished:
             raise RuntimeError('the episode is over: call reset()')
         command = float(np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[0], -1.0, 1.0))
-        human_command = 0.0
-        if self.task.human_involved and self.human is not None:
-            human_command = float(self.human.act(self.task.state, self.task.subtasks[HUMAN]))
+        human_command = self._human_command()
         self.task.advance({ROBOT: command, HUMAN: human_command})
+        self._published()
         components, reward = self.task.reward(ROBOT)
         self._return += reward
         state = self.task.state

@@ -11,7 +11,8 @@ Nothing here is a second implementation: :class:`TaskRun` only wires the cores t
 * observation: ``hrc_agent_node.agent_core.observation_of`` ({B_y, P_z, S_x, a_partner}, plus
   the three rates when ``observe_rates``), where a_partner is the partner's command *applied in
   the last control period* (``applied_command``, the agent's default ``human_action_source``);
-* the simulated human: ``hrc_joystick_node.sim_human`` (see :func:`make_human`).
+* the simulated human: the human node's per-step core ``hrc_joystick_node.human_core.HumanCore``
+  with the simulated input (see :func:`make_human`).
 
 Per-episode errors (mean |x - mu| of every subtask over the states reached, as ``AgentCore``
 reports them) are kept so a learner can be judged by the strategies' criterion (a subtask is
@@ -70,22 +71,28 @@ def resolve_step(case, index: int):
     return steps[index]
 
 
-def make_human(spec: str, dof: str, seed: int, control_period: float):
-    """Return the simulated human named by ``spec`` on ``dof``, seeded with ``seed``, or None.
+def make_human(spec: str, dof: str, seed: int, control_period: float, involved: bool,
+               subtasks, max_force: float, max_torque: float):
+    """Return the human node's per-step core driving the simulated human named by ``spec``.
 
-    ``spec``: 'none', a profile name, or 'population:<profile>' (a member of the population
-    around that profile, ``hrc_joystick_node.population.sample_person``, person ``seed``).
+    ``spec``: 'none' (returns None), a profile name, or 'population:<profile>' (person number
+    ``seed`` of the population around that profile, ``hrc_joystick_node.population``). The
+    core (``HumanCore``, input ``sim``) is the one the human node runs: it resets the person at
+    each new episode and runs fatigue and rest on the stamps (simulation time) it is given.
     """
     if spec == NO_HUMAN:
         return None
-    from hrc_joystick_node import sim_human
-    from hrc_joystick_node.population import sample_person
+    from hrc_joystick_node.human_core import HumanCore, HumanParams
+    from hrc_joystick_node.sim_human import load_profiles
 
-    if spec.startswith(POPULATION_PREFIX):
-        profile = sample_person(sim_human.load_profile(spec[len(POPULATION_PREFIX):]), seed)
-    else:
-        profile = sim_human.load_profile(spec)
-    return sim_human.SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
+    population = spec.startswith(POPULATION_PREFIX)
+    params = HumanParams(input='sim', dof=dof, involved=involved, control_period=control_period,
+                         max_force=max_force, max_torque=max_torque,
+                         profile=spec[len(POPULATION_PREFIX):] if population else spec,
+                         person=int(seed) if population else -1, seed=int(seed))
+    core = HumanCore(checked(params), load_profiles())
+    core.on_session(dof, involved, list(subtasks))
+    return core
 
 
 class TaskRun:
