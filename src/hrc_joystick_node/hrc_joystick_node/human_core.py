@@ -137,6 +137,22 @@ def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile
     return person_or_profile(profiles[params.profile], params.person)
 
 
+def core_from_parameters(parameters: dict) -> 'HumanCore':
+    """Return the core for the human node's parameters given as a plain dict.
+
+    E.g. as ``hrc_bringup.plan.compose`` composes them; checked as the node checks them
+    (ParameterError with every reason). No device or /joy in this process: input ``sim``.
+    """
+    from hrc_common.params import from_dict
+    from hrc_joystick_node.sim_human import default_profiles_path, load_profiles
+
+    params = from_dict(HumanParams, dict(parameters))
+    path = params.profiles_file or default_profiles_path()
+    core = HumanCore(params, load_profiles(path), str(path))
+    core.on_inputs(False, 'no device in this process', False, '/joy not used')
+    return core
+
+
 class HumanCore:
     """The human's per-step decisions (see the module docstring)."""
 
@@ -258,5 +274,5 @@ class HumanCore:
         return 0.0, False, ZERO, self.selector.status_line()
 
 
-__all__ = ['AUTO', 'HumanAnswer', 'HumanCore', 'HumanParams', 'InputStatus', 'SOURCE_CODE',
-           'resolve_profile']
+__all__ = ['AUTO', 'core_from_parameters', 'HumanAnswer', 'HumanCore', 'HumanParams',
+           'InputStatus', 'SOURCE_CODE', 'resolve_profile']

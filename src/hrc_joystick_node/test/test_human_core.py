@@ -141,3 +141,18 @@ def test_a_person_of_the_population_and_bad_profiles():
     assert HumanCore(HumanParams(input='sim'), PROFILES).profile == PROFILES['paper']
     with pytest.raises(ParameterError, match="profile: 'expert' is not in"):
         HumanCore(HumanParams(profile='expert'), PROFILES)
+
+
+def test_a_core_from_composed_parameters_as_the_in_process_engine_builds_it():
+    import yaml
+
+    from hrc_joystick_node.human_core import core_from_parameters
+
+    path = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'human.yaml'
+    parameters = yaml.safe_load(path.read_text())['human']['ros__parameters']
+    parameters.update(input='sim', person=2, seed=5)
+    core = core_from_parameters(parameters)
+    assert core.profile == sample_person(PROFILES['paper'], 2)
+    assert core.answer(0, 0, 0, State(pendulum_angle=0.3)).source == SIM
+    with pytest.raises(ParameterError, match="unknown parameter 'persn'"):
+        core_from_parameters({'persn': 2})
