@@ -1,6 +1,7 @@
 """Experiment runner: paper cases x seeds (x simulated-human profiles), headless, then the study.
 
     ros2 run hrc_bringup experiment --seeds 10                       # local process pool
+    ros2 run hrc_bringup experiment --seeds 10 --profiles paper paper_symmetric
     ros2 run hrc_bringup experiment --seeds 10 --ray                 # a local Ray instance
     ros2 run hrc_bringup experiment --seeds 10 --ray-address auto    # an existing Ray cluster
     ros2 run hrc_bringup experiment --seeds 2 --engine graph         # the ROS graph per session
@@ -231,6 +232,9 @@ def parse_args(argv=None):
     parser.add_argument('--profiles', nargs='+', default=[''],
                         help='simulated-human profiles (params/sim_human.yaml); each runs '
                         "every case and seed (default: the human node's profile)")
+    parser.add_argument('--same-person', action='store_true',
+                        help='every seed with the profile itself (default: seed N is person '
+                        'N of the population around the profile)')
     parser.add_argument('--engine', choices=ENGINES, default='inprocess',
                         help='inprocess (default): one process per session; graph: the ROS '
                         'nodes over DDS per session')
@@ -300,11 +304,21 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
                         runs_dir=str(runs_dir.resolve()),
                         training_episodes=options.episodes,
                         evaluation_episodes=options.eval_episodes,
-                        overrides=tuple(options.overrides), params_dir=params_dir,
+                        overrides=person_override(options, seed) + tuple(options.overrides),
+                        params_dir=params_dir,
                         pull_bags=options.pull_bags)
             for profile in options.profiles
             for seed in range(options.first_seed, options.first_seed + options.seeds)
             for case in options.cases]
+
+
+def person_override(options, seed: int) -> tuple:
+    """Return the override that makes the session's simulated human person number ``seed``.
+
+    Each seed is then a different person drawn from the population around the profile
+    (hrc_joystick_node.population.sample_person); ``--same-person`` keeps the profile itself.
+    """
+    return () if options.same_person else (f'human.person={seed}',)
 
 
 def make_executor(options):

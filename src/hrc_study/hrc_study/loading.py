@@ -24,6 +24,15 @@ def profile_of(config: dict) -> str:
     return 'paper'
 
 
+def person_of(config: dict) -> int:
+    """Return the simulated person drawn for the session (-1: the profile itself)."""
+    for path in (('parameters', 'human', 'person'), ('human', 'person'), ('person',)):
+        value = _nested(config, *path)
+        if isinstance(value, int):
+            return value
+    return -1
+
+
 def episode_limit_of(config: dict) -> int:
     """Return the session's max training episodes (0 when the config does not say)."""
     for path in (('parameters', 'agent', 'max_training_episodes'),
@@ -59,7 +68,8 @@ def record_from_bag_session(session) -> SessionRecord:
                          profile=profile_of(session.config), episodes=episodes,
                          step_count=step_count,
                          episode_limit=episode_limit_of(session.config),
-                         path=str(session.path), extra={'bag_session': session})
+                         path=str(session.path),
+                         extra={'bag_session': session, 'person': person_of(session.config)})
 
 
 def _final_flag(summary):

@@ -161,12 +161,12 @@ def sessions_csv(sessions) -> str:
     writer = csv.writer(buffer)
     keys = ['human_involved_episodes', 'total_episodes', 'converged',
             'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]]
-    writer.writerow(['session_id', 'profile', 'case_id', 'strategy', 'robot_dof', 'seed']
-                    + keys)
+    writer.writerow(['session_id', 'profile', 'person', 'case_id', 'strategy', 'robot_dof',
+                     'seed'] + keys)
     for session in sessions:
         values = measures(session)
-        writer.writerow([session.session_id, session.profile, session.case_id,
-                         session.strategy, session.robot_dof, session.seed]
+        writer.writerow([session.session_id, session.profile, session.extra.get('person', ''),
+                         session.case_id, session.strategy, session.robot_dof, session.seed]
                         + [values[key] for key in keys])
     return buffer.getvalue()
 
@@ -221,6 +221,14 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
             'targets': targets(rows, experiment)}
 
 
+def _persons(sessions) -> str:
+    persons = sorted({session.extra.get('person', -1) for session in sessions})
+    if persons == [-1]:
+        return 'every session with the profile itself (no population draw)'
+    return (f'simulated persons {", ".join(map(str, persons))} of the population around the '
+            f'profile (human.person; -1 = the profile itself)')
+
+
 def document(sessions, profiles, rows, findings, choices, command, experiment,
              chooser_problem: str = '') -> str:
     """Return the Markdown of docs/results.md."""
@@ -239,7 +247,7 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
                   f'({experiment.get("started", "?")}, {experiment.get("version", "?")}).', '']
     parts += [f'{len(sessions)} sessions: simulated-human profiles '
               f'{", ".join(f"`{profile}`" for profile in profiles)}; seeds '
-              f'{seeds[0]}..{seeds[-1]} (each seed a different simulated person); episode '
+              f'{seeds[0]}..{seeds[-1]}; {_persons(sessions)}; episode '
               f'limit {", ".join(map(str, limits)) or "?"}. Tables and findings below are for '
               f'profile `{primary}` unless named.', '',
               '## Table II: mean [95% confidence interval] over seeds', '',
