@@ -2,7 +2,8 @@
 
 import sys
 
-from hrc_common.params import describe, ParameterError
+from hrc_common.params import (describe, node_parameter_problems, ParameterError,
+                               parse_ros_arguments, RosArguments, set_process_arguments)
 
 # Exit code of a node whose parameters were rejected (distinct from a crash, for the supervisor).
 EXIT_BAD_PARAMETERS = 2
@@ -23,29 +24,53 @@ def wants_help(argv) -> bool:
     return '-h' in user_args or '--help' in user_args
 
 
+def report_bad_parameters(executable: str, reasons) -> int:
+    """Print every reason (one a line) to stderr; return EXIT_BAD_PARAMETERS."""
+    reasons = list(reasons)
+    lines = [f'[ERROR] [{executable}] parameters rejected ({len(reasons)} '
+             f'reason{"s" if len(reasons) != 1 else ""}):']
+    lines += [f'  - {reason}' for reason in reasons]
+    print('\n'.join(lines), file=sys.stderr, flush=True)
+    return EXIT_BAD_PARAMETERS
+
+
 def run_node(node_factory, executable: str, summary: str, params_cls=None, args=None) -> int:
     """Run a node: answer --help, spin until Ctrl-C/SIGTERM or shutdown, then clean up.
 
-    Bad parameters print the reasons to stderr and return EXIT_BAD_PARAMETERS. A node may define
-    ``close()`` to release resources (files, PyBullet) before it is destroyed.
+    Bad parameters print every reason to stderr and return EXIT_BAD_PARAMETERS: the command
+    line and every --params-file are checked before ``rclpy.init`` (which would otherwise fail
+    with a traceback), then the node's own section and names when the node declares its
+    parameters (:func:`hrc_common.params.declare_parameters`). A node may define ``close()`` to
+    release resources (files, PyBullet) before it is destroyed.
     """
-    argv = sys.argv if args is None else args
+    argv = list(sys.argv if args is None else args)
     if wants_help(argv):
         print(help_text(executable, summary, params_cls))
         return 0
 
+    set_process_arguments(argv)
+    arguments = parse_ros_arguments(argv)
+    if arguments.problems:
+        reasons = list(arguments.problems)
+        if params_cls is not None:   # -p names can be checked without the node
+            reasons += node_parameter_problems(RosArguments(overrides=arguments.overrides),
+                                               '', '/', params_cls)
+        return report_bad_parameters(executable, reasons)
+
     import rclpy
     from rclpy.executors import ExternalShutdownException
 
-    rclpy.init(args=argv)
     node = None
     code = 0
     try:
+        try:
+            rclpy.init(args=argv)
+        except Exception as error:  # rcl refuses the arguments (it says why)
+            return report_bad_parameters(executable, [f'ROS refused the arguments: {error}'])
         node = node_factory()
         rclpy.spin(node)
     except ParameterError as error:
-        print(f'[ERROR] [{executable}] {error}', file=sys.stderr)
-        code = EXIT_BAD_PARAMETERS
+        code = report_bad_parameters(executable, error.reasons)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -55,7 +55,8 @@ def test_every_reason_is_reported_at_once():
 
 
 def test_unknown_keys_are_an_error_and_ints_become_floats():
-    with pytest.raises(ParameterError, match='unknown parameters'):
+    with pytest.raises(ParameterError, match="unknown parameter 'perod' "
+                                             r"\(did you mean 'period'\?\)"):
         from_dict(ExampleParams, {'perod': 0.3})
     assert from_dict(ExampleParams, {'period': 1}).period == 1.0
     assert with_overrides(ExampleParams(), episodes=7).episodes == 7
@@ -164,3 +165,58 @@ def test_domain_reservations_are_exclusive():
     finally:
         first.release()
         second.release()
+
+
+def test_command_line_problems_all_at_once(tmp_path):
+    from hrc_common.params import parse_ros_arguments
+    good = tmp_path / 'good.yaml'
+    good.write_text('/**:\n  ros__parameters: {period: 0.3}\nns:\n  node:\n'
+                    '    ros__parameters: {inner: {deep: 1}}\n')
+    shapes = tmp_path / 'shapes.yaml'
+    shapes.write_text('a: 3\nb: {ros__parameters: [1]}\nc: {}\nd: {ros__parameters: {}, x: 1}\n')
+    text = tmp_path / 'text.yaml'
+    text.write_text('just words')
+    arguments = parse_ros_arguments([
+        'exe', 'user-arg', '-p', 'ignored', '--ros-args', '--params-file', str(good),
+        '--params-file', str(shapes), '--params-file', str(text), '-p', 'period:=0.1',
+        '-p', 'sim:episodes:=4', '-p', 'novalue', '-r', '__node:=x', '--log-level', 'debug',
+        '--disable-rosout-logs', '--what', '--', 'tail', '-p', 'also_ignored',
+        '--ros-args', '--params-file'])
+    assert [f.path for f in arguments.files] == [str(good), str(shapes)]
+    assert arguments.files[0].sections == {'/**': {'period': 0.3}, 'ns/node': {'inner.deep': 1}}
+    assert arguments.overrides == [('', 'period'), ('sim', 'episodes')]
+    problems = '\n'.join(arguments.problems)
+    for reason in ("section 'a' must be a mapping with ros__parameters, got int",
+                   'b.ros__parameters must be a mapping of parameter names, got list',
+                   "section 'c' has no ros__parameters",
+                   "section 'd' has keys ['x'] next to ros__parameters",
+                   'text.yaml: expected a mapping of node names',
+                   '-p novalue: expected name:=value',
+                   "unknown argument '--what'", '--ros-args --params-file: a value must follow'):
+        assert reason in problems
+    assert len(arguments.problems) == 8
+
+
+def test_node_problems_name_the_closest_parameter_and_section(tmp_path):
+    from hrc_common.params import node_parameter_problems, parse_ros_arguments, section_applies
+    assert section_applies('/**', '/sim') and section_applies('/**/sim', '/ns/sim')
+    assert section_applies('sim', '/sim') and section_applies('/*', '/sim')
+    assert not section_applies('/ns/sim', '/sim') and not section_applies('simm', '/sim')
+    shared = tmp_path / 'shared.yaml'
+    shared.write_text('sim:\n  ros__parameters: {perod: 1, use_sim_time: true, '
+                      'qos_overrides: {/t: {publisher: {depth: 3}}}}\n'
+                      'agent:\n  ros__parameters: {anything: 1}\n'
+                      'simm:\n  ros__parameters: {period: 1}\n')
+    elsewhere = tmp_path / 'elsewhere.yaml'
+    elsewhere.write_text('recorder:\n  ros__parameters: {period: 1}\n')
+    arguments = parse_ros_arguments(['exe', '--ros-args', '--params-file', str(shared),
+                                     '--params-file', str(elsewhere), '-p', 'episods:=2',
+                                     '-p', 'agent:whatever:=1', '-p', 'use_sim_time:=true'])
+    problems = node_parameter_problems(arguments, 'sim', '/sim', ExampleParams)
+    assert problems == [
+        f"--params-file {shared}: section 'simm' does not name this node (did you mean 'sim'?)",
+        f"--params-file {shared}: section 'sim': unknown parameter 'perod' (did you mean "
+        "'period'?)",
+        f"--params-file {elsewhere}: no section for node 'sim' (sections: ['recorder'], "
+        "expected sim: or /**:)",
+        "-p episods: unknown parameter (did you mean 'episodes'?)"]
