@@ -1,8 +1,10 @@
 """A live session as the operator runs it: pause, resume and abort over DDS, then resume it.
 
 The whole graph runs in separate processes started by the session runner (``ros2 run
-hrc_bringup session``) in realtime mode, as with a person, with short episodes (4 s = 20 control
-steps) and a short break between them. The operator uses the ``operator`` CLI of hrc_live. The
+hrc_bringup session``) in realtime mode, as with a person, with short episodes (5 s = 25 control
+steps) and a short break between them; case 5 (learn together), so that the person acts in
+every episode and every episode runs in realtime (in cases 1 and 2 the robot's lonely first
+step runs in lockstep). The operator uses the ``operator`` CLI of hrc_live. The
 test watches the graph through its own subscriptions and then checks what stays behind: bags
 that an independent reader (rosbags) reads, the subject id and notes in the MCAP metadata (and
 in no file name), and a checkpoint from which the resumed session continues the counters.
@@ -25,7 +27,7 @@ import pytest
 import yaml
 
 STEPS = 25  # control steps per episode here (episode_duration 5 s)
-LIVE = ['--mode', 'realtime', '--case', '1', '--set', 'sim.episode_duration=5.0',
+LIVE = ['--mode', 'realtime', '--case', '5', '--set', 'sim.episode_duration=5.0',
         '--set', 'agent.horizon=80', '--set', 'agent.episode_break=0.5', '--no-report']
 SUBJECT, NOTES = 'P07', 'left-handed; first session'
 

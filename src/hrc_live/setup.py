@@ -23,5 +23,6 @@ setup(
         'display_node = hrc_live.display_node:main',
         'joystick_setup = hrc_live.joystick_setup:main',
         'operator = hrc_live.operator_cli:main',
+        'study = hrc_live.study_cli:main',
     ]},
 )

@@ -111,11 +111,22 @@ def parse_args(argv=None):
     parser.add_argument('--tlx', action='store_true',
                         help='with --display: ask the raw NASA-TLX on the page when the '
                         'session is done; stored in <runs-dir>/<session>/tlx.yaml (0600)')
+    parser.add_argument('--tlx-wait', type=float, default=600.0, metavar='S',
+                        help='with --tlx: keep the page up this long for the answer after the '
+                        'session (default 600 s)')
     parser.add_argument('--stand-in', choices=('none', 'sim'), default='none',
                         help='realtime with --human device|joy: what drives the human side '
                         'when the input is lost: none (default) = the session pauses until '
                         'the operator resumes; sim = the simulated human (its episodes are '
                         'marked simulated in the bags)')
+    parser.add_argument('--practice', type=int, default=0, metavar='N',
+                        help='before the condition: N practice episodes of the person alone on '
+                        'their degree of freedom (realtime, no robot), recorded as the session '
+                        '<session-id>-practice and counted apart (default 0)')
+    parser.add_argument('--study-dir', default='',
+                        help='the study folder (ros2 run hrc_live study): the subject must be '
+                        'registered there with consent yes; the session is added to its '
+                        'per-subject index')
     parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
                         help='realtime with --human device|joy: wait this long for the input '
                         'before refusing to start (default 120 s)')
@@ -161,6 +172,23 @@ def parse_args(argv=None):
         reasons.append('--tlx needs --display (the questionnaire is on the page)')
     if options.input_wait < 0:
         reasons.append('--input-wait must be >= 0')
+    if options.practice < 0:
+        reasons.append('--practice must be >= 0')
+    if options.practice and settings.mode != 'realtime':
+        reasons.append('--practice needs --mode realtime (the person practises at the '
+                       'control rate)')
+    if options.study_dir:
+        if not settings.subject_id:
+            reasons.append('--study-dir needs --subject-id (the registered pseudonym)')
+        else:
+            from hrc_live.study import consent_problem, load_registry, StudyError
+            try:
+                problem = consent_problem(load_registry(options.study_dir),
+                                          settings.subject_id)
+            except StudyError as error:
+                problem = str(error)
+            if problem:
+                reasons.append(problem)
     if reasons:
         parser.error('; '.join(reasons))
     return settings, options
@@ -244,9 +272,17 @@ class Progress:
                         f'subtasks {list(status.robot_subtasks)}, human subtasks '
                         f'{list(status.human_subtasks)}', permanent=True)
 
+    def restart(self) -> None:
+        """Forget the practice: the condition's clock and person time start now."""
+        self.status, self.episodes = None, []
+        self.started = time.monotonic()
+        self.alone_since = self.person_joined = None
+
     def _track_person_time(self, status):
         """Note when the robot practises alone and when the person joins; say so once."""
         now = time.monotonic()
+        if status.strategy == 'practice':
+            return
         if not status.human_involved and phase_label(status.phase, '') in ('training',
                                                                             'updating'):
             if self.alone_since is None:
@@ -504,6 +540,7 @@ def run_session(settings: SessionSettings, options) -> int:
              if live_input and options.stand_in == 'none' else None)
     code = 0
     start = time.monotonic()
+    started = time.strftime('%Y-%m-%dT%H:%M:%S')
     restarts = 0
     try:
         if live_input and not wait_for_input(
@@ -511,6 +548,22 @@ def run_session(settings: SessionSettings, options) -> int:
                                     parameters['human'].get('device', '')),
                 executor, options.input_wait, stop_reason):
             return 2
+        if options.display:
+            supervisor.start('display', display_command(options, params_dir, run_dir))
+            print(f'[session] display: see {run_dir / logs / "display.log"} for its address '
+                  f'(http://127.0.0.1:<port>/ for the person, /console for the experimenter)',
+                  flush=True)
+        if options.practice:
+            practice_started = time.strftime('%Y-%m-%dT%H:%M:%S')
+            practice_code = run_practice(settings, options, params_dir, env, progress,
+                                         executor, stop_reason)
+            index_session(settings, options, 'practice', practice_started, practice_code)
+            if practice_code != 0:
+                return practice_code
+            progress.restart()
+            started = time.strftime('%Y-%m-%dT%H:%M:%S')
+            if guard is not None:
+                guard.resumed()  # nothing to resume: an input lost in practice is only told
         # The recorder first, so it sees the first state; the sim before the agent resets it.
         for node in ('recorder', 'sim', 'human', 'agent'):
             if node not in parameters:
@@ -519,11 +572,6 @@ def run_session(settings: SessionSettings, options) -> int:
             supervisor.start(node, [str(executable_path(package, executable)), '--ros-args',
                                     '--params-file', str(params_path)],
                              niceness=options.recorder_niceness if node == 'recorder' else 0)
-        if options.display:
-            supervisor.start('display', display_command(options, params_dir, run_dir))
-            print(f'[session] display: see {run_dir / logs / "display.log"} for its address '
-                  f'(http://127.0.0.1:<port>/ for the person, /console for the experimenter)',
-                  flush=True)
         while True:
             executor.spin_once(timeout_sec=0.1)
             if stop_reason:
@@ -561,6 +609,9 @@ def run_session(settings: SessionSettings, options) -> int:
                     first = finished[0]
                 if first.name == 'agent' and first.returncode == 0:
                     print('[session] the agent finished the session', flush=True)
+                    if options.tlx:
+                        wait_for_tlx(run_dir / 'tlx.yaml', settings.session_id, executor,
+                                     options.tlx_wait, stop_reason)
                 elif first.name == 'agent' and first.returncode == EXIT_OPERATOR_ABORT:
                     message = progress.status.message if progress.status else ''
                     print(f'[session] the operator aborted the session ({message}); stopping '
@@ -602,7 +653,150 @@ def run_session(settings: SessionSettings, options) -> int:
                   flush=True)
     if settings.record and options.report and (code == 0 or progress.episodes):
         report(settings, run_dir)
+    index_session(settings, options, 'condition', started, code)
     return code
+
+
+def index_session(settings: SessionSettings, options, kind: str, started: str,
+                  code: int) -> None:
+    """Add the session to the study's per-subject index (with --study-dir)."""
+    if not options.study_dir:
+        return
+    from hrc_live.study import append_index, IndexEntry, load_registry, position_of
+
+    session_id = settings.session_id + ('-practice' if kind == 'practice' else '')
+    run_dir = pathlib.Path(settings.runs_dir) / session_id
+    tlx = run_dir.parent / settings.session_id / 'tlx.yaml'
+    entry = IndexEntry(
+        subject_id=settings.subject_id, session_id=session_id, case=settings.case, kind=kind,
+        position=position_of(load_registry(options.study_dir), settings.subject_id,
+                             settings.case),
+        started=started, ended=time.strftime('%Y-%m-%dT%H:%M:%S'), exit_code=int(code),
+        bags=str((pathlib.Path(settings.bags_dir) / session_id).resolve()),
+        run_dir=str(run_dir.resolve()),
+        tlx_file=str(tlx.resolve()) if options.tlx and kind == 'condition' else '')
+    path = append_index(options.study_dir, entry)
+    print(f'[session] {kind} {session_id} added to the study index {path}', flush=True)
+
+
+def practice_subtask(human_dof: str) -> str:
+    """Return the subtask the person holds alone on their degree of freedom."""
+    return 'slider' if human_dof == 'translation' else 'pendulum'
+
+
+def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, env: dict,
+                 progress: 'Progress', executor, stop_reason: list) -> int:
+    """Run the practice: the person alone on their degree of freedom, realtime, no robot.
+
+    The sim runs ``options.practice`` episodes by itself (start on launch, auto reset,
+    waiting for no robot); the human node and the recorder run as in the condition; the runner
+    announces the practice on /hrc/session (strategy ``practice``) so the human node, the page
+    and the recorder know the roles. Recorded as the session ``<session-id>-practice``.
+    Returns the exit code (0 = every practice episode ran).
+    """
+    from dataclasses import replace
+
+    from hrc_common import qos, topics
+    from hrc_common.contract import DOF_INDEX
+    from hrc_common.executables import executable_path
+    from hrc_msgs.msg import SessionStatus, TaskState
+
+    practice = replace(settings, session_id=f'{settings.session_id}-practice', resume_from='')
+    parameters = compose(practice, params_dir)
+    parameters.pop('agent')
+    parameters['sim'].update(start_on_launch=True, auto_reset=True,
+                             max_episodes=options.practice, expected_actors=['human'])
+    if person_input(settings, options):
+        parameters['human']['on_input_lost'] = ('sim' if options.stand_in == 'sim'
+                                                else 'zero')
+    run_dir = pathlib.Path(settings.runs_dir) / practice.session_id
+    if settings.record:
+        parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
+    params_path, _ = write_session_files(practice, parameters, run_dir)
+    supervisor = Supervisor(run_dir / 'logs', env)
+    human_dof = parameters['human']['dof']
+    robot_dof = parameters['sim']['robot_dof']
+    node = progress.node
+    publisher = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
+    finished = []
+
+    def announce(done: int) -> None:
+        publisher.publish(SessionStatus(
+            session_id=practice.session_id, case_id=settings.case, strategy='practice',
+            training_step=0, training_step_count=1, robot_dof=DOF_INDEX[robot_dof],
+            human_dof=DOF_INDEX[human_dof], human_involved=True,
+            human_subtasks=[practice_subtask(human_dof)], episode=done, total_episodes=done,
+            human_involved_episodes=done, phase=int(Phase.TRAINING),
+            message=f'practice: episode {min(done + 1, options.practice)} of '
+                    f'{options.practice}, the person alone (the robot does not act)'))
+
+    def on_state(state) -> None:
+        if (state.truncated or state.terminated) and state.episode not in finished:
+            finished.append(state.episode)
+            announce(len(finished))
+
+    subscription = node.create_subscription(TaskState, topics.STATE, on_state, qos.STATE_QOS)
+    announce(0)
+    print(f'[session] practice: {options.practice} episodes of the person alone on the '
+          f'{human_dof} (realtime, the robot does not act), recorded as {practice.session_id}',
+          flush=True)
+    code = 0
+    try:
+        for name in ('recorder', 'human'):
+            if name in parameters:
+                package, executable, _ = NODES[name]
+                supervisor.start(name, [str(executable_path(package, executable)),
+                                        '--ros-args', '--params-file', str(params_path)])
+        # The sim starts its first episode at launch: only once the others listen.
+        listeners = 1 + len(supervisor.processes) + (1 if options.display else 0)
+        deadline = time.monotonic() + 60.0
+        while (node.count_subscribers(topics.STATE) < listeners
+               and time.monotonic() < deadline and not stop_reason):
+            executor.spin_once(timeout_sec=0.1)
+        package, executable, _ = NODES['sim']
+        supervisor.start('sim', [str(executable_path(package, executable)), '--ros-args',
+                                 '--params-file', str(params_path)])
+        while not stop_reason:
+            executor.spin_once(timeout_sec=0.1)
+            exited = supervisor.exited()
+            if exited:
+                first = exited[0]
+                if first.name != 'sim' or first.returncode != 0:
+                    print(f'[session] practice: node {first.name} stopped unexpectedly '
+                          f'({describe_exit(first.returncode)}):\n{first.tail()}',
+                          file=sys.stderr, flush=True)
+                    code = 1
+                break
+        if stop_reason:
+            code = 130 if stop_reason[0] == 'SIGINT' else 143
+    finally:
+        supervisor.stop_all(('human', 'sim', 'recorder'))
+        node.destroy_subscription(subscription)
+        node.destroy_publisher(publisher)
+    print(f'[session] practice done: {len(finished)} of {options.practice} episodes'
+          if code == 0 else f'[session] practice stopped ({describe_exit(code)})', flush=True)
+    return code
+
+
+def wait_for_tlx(path: pathlib.Path, session_id: str, executor, timeout: float,
+                 stop_reason: list) -> bool:
+    """Keep the page up until the person sent the NASA-TLX of this session (or timeout)."""
+    print(f'[session] waiting up to {timeout:.0f} s for the NASA-TLX on the page (Ctrl-C '
+          f'skips it)', flush=True)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not stop_reason:
+        try:
+            answers = yaml.safe_load(path.read_text()) or []
+        except (OSError, yaml.YAMLError):
+            answers = []
+        if any(isinstance(answer, dict) and answer.get('session_id') == session_id
+               for answer in answers):
+            print(f'[session] NASA-TLX stored in {path}', flush=True)
+            return True
+        executor.spin_once(timeout_sec=0.2)
+    stop_reason.clear()  # Ctrl-C here only skips the questionnaire
+    print('[session] no NASA-TLX answer: the session ends without it', flush=True)
+    return False
 
 
 def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) -> list:

@@ -1,0 +1,251 @@
+"""The study protocol (pure): subject registry, counterbalanced case order, per-subject index.
+
+A study lives in one folder (``--study-dir``, default ``study``):
+
+* ``subjects.yaml``: the pseudonymous registry: per subject its id (the pseudonym, e.g.
+  ``P07``: letters, digits, ``_ . -``), consent ``yes``/``no`` and the date it was recorded,
+  the registration date and, once assigned, its case order. No names: the registry takes no
+  other fields (a name, e-mail or birth date cannot be stored by mistake); the key that links a
+  pseudonym to a person stays on paper, outside this software.
+* ``index.yaml``: one entry per session a subject took part in (practice or condition): the
+  session id, case, kind, position in the subject's order, start and end, exit code, and the
+  files of the session (bags, run folder, NASA-TLX), so a report can tabulate by subject.
+
+Both files hold subject ids, so they are written with mode 0600 (owner only), atomically.
+
+Counterbalancing (a modelling choice; Williams 1949, "Experimental designs balanced for the
+estimation of residual effects of treatments", Aust. J. Sci. Res. A 2:149-168): for an even
+number of cases one Williams square (n rows): each case once in each position and each case
+directly followed by each other case exactly once; for an odd number the square and its mirror
+(2n rows) give the same first-order balance. Subject k (in registration order) takes row
+k mod rows.
+"""
+
+from dataclasses import asdict, dataclass, field
+import datetime
+import pathlib
+import typing
+
+from hrc_common.contract import atomic_write, id_problem, PERSONAL_FILE_MODE
+import yaml
+
+SUBJECTS_FILE = 'subjects.yaml'
+INDEX_FILE = 'index.yaml'
+CONSENT_VALUES = ('yes', 'no')
+SUBJECT_FIELDS = ('id', 'consent', 'consent_date', 'registered', 'order')
+SESSION_KINDS = ('practice', 'condition')
+PAPER_CASES = (1, 2, 3, 4, 5, 6)
+
+
+class StudyError(ValueError):
+    """A registry, order or index problem; the message lists every reason."""
+
+
+@dataclass
+class Subject:
+    """One pseudonymous subject of the registry."""
+
+    id: str
+    consent: str                # 'yes' or 'no'
+    consent_date: str           # ISO date the consent answer was recorded
+    registered: str             # ISO date of registration
+    order: list = field(default_factory=list)   # the subject's cases in order ([] = none yet)
+
+
+def _date_problem(text, what: str) -> str:
+    try:
+        datetime.date.fromisoformat(str(text))
+    except ValueError:
+        return f'{what} {text!r} is not a date (YYYY-MM-DD)'
+    return ''
+
+
+def subject_problems(record) -> list:
+    """Return every reason why ``record`` (a mapping) is not a valid registry entry."""
+    if not isinstance(record, dict):
+        return [f'entry {record!r} is not a mapping']
+    reasons = []
+    extra = sorted(set(record) - set(SUBJECT_FIELDS))
+    if extra:
+        reasons.append(f'fields {extra} are not allowed (the registry holds no names or other '
+                       f'personal data: only {list(SUBJECT_FIELDS)})')
+    problem = id_problem(record.get('id'), 'subject id')
+    if problem:
+        reasons.append(problem)
+    if record.get('consent') not in CONSENT_VALUES:
+        reasons.append(f"consent must be 'yes' or 'no', got {record.get('consent')!r}")
+    for name in ('consent_date', 'registered'):
+        problem = _date_problem(record.get(name), name)
+        if problem:
+            reasons.append(problem)
+    order = record.get('order', [])
+    if not isinstance(order, list) or any(case not in PAPER_CASES for case in order) \
+            or len(set(order)) != len(order):
+        reasons.append(f'order must list distinct paper cases 1..6, got {order!r}')
+    return [f'subject {record.get("id")!r}: {reason}' for reason in reasons]
+
+
+def load_registry(folder) -> list:
+    """Return the Subjects of ``folder``/subjects.yaml ([] if there is none); check every entry."""
+    path = pathlib.Path(folder) / SUBJECTS_FILE
+    if not path.is_file():
+        return []
+    document = yaml.safe_load(path.read_text()) or []
+    if not isinstance(document, list):
+        raise StudyError(f'{path}: not a list of subjects')
+    reasons = [reason for record in document for reason in subject_problems(record)]
+    ids = [record.get('id') for record in document if isinstance(record, dict)]
+    reasons += [f'subject {id_!r} is registered twice' for id_ in sorted(set(ids))
+                if ids.count(id_) > 1]
+    if reasons:
+        raise StudyError(f'{path}: ' + '; '.join(reasons))
+    return [Subject(**{'order': [], **record}) for record in document]
+
+
+def save_registry(folder, subjects: list) -> pathlib.Path:
+    """Write the registry (0600, atomically)."""
+    path = pathlib.Path(folder) / SUBJECTS_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write(path, yaml.safe_dump([asdict(subject) for subject in subjects],
+                                      sort_keys=False), mode=PERSONAL_FILE_MODE)
+    return path
+
+
+def register(subjects: list, subject_id: str, consent: str, date: str,
+             today: str = None) -> Subject:
+    """Add a subject or record a new consent answer; return the entry (raise StudyError)."""
+    today = today or datetime.date.today().isoformat()
+    record = {'id': subject_id, 'consent': consent, 'consent_date': date, 'registered': today}
+    existing = next((subject for subject in subjects if subject.id == subject_id), None)
+    if existing is not None:
+        record['registered'], record['order'] = existing.registered, existing.order
+    reasons = subject_problems(record)
+    if reasons:
+        raise StudyError('; '.join(reasons))
+    if existing is not None:
+        existing.consent, existing.consent_date = consent, date
+        return existing
+    subject = Subject(**record)
+    subjects.append(subject)
+    return subject
+
+
+def consent_problem(subjects: list, subject_id: str) -> str:
+    """Return why ``subject_id`` may not take part now ('' = registered with consent yes)."""
+    subject = next((subject for subject in subjects if subject.id == subject_id), None)
+    if subject is None:
+        return (f'subject {subject_id!r} is not in the registry: register them first '
+                f'(study register {subject_id} --consent yes)')
+    if subject.consent != 'yes':
+        return (f'subject {subject_id!r} has consent {subject.consent!r} (recorded '
+                f'{subject.consent_date}): no session without consent')
+    return ''
+
+
+# ---------------------------------------------------------------------------- counterbalancing
+
+def williams_rows(count: int) -> list:
+    """Return the rows of a Williams design over ``count`` items (indices 0..count-1).
+
+    Even ``count``: one square (count rows); odd: the square and its mirror (2*count rows).
+    """
+    if count < 1:
+        raise StudyError('at least one case is needed')
+    # First row: 0, 1, n-1, 2, n-2, ... ; row r adds r to every entry (mod n).
+    first, low, high = [0], 1, count - 1
+    while len(first) < count:
+        first.append(low)
+        low += 1
+        if len(first) < count:
+            first.append(high)
+            high -= 1
+    rows = [[(item + shift) % count for item in first] for shift in range(count)]
+    if count % 2 == 1:
+        rows += [list(reversed(row)) for row in rows]
+    return rows
+
+
+def case_orders(cases: typing.Sequence[int]) -> list:
+    """Return the counterbalanced orders of ``cases`` (the researcher's set, default 1..6)."""
+    cases = list(cases)
+    problems = [case for case in cases if case not in PAPER_CASES]
+    if problems or len(set(cases)) != len(cases) or not cases:
+        raise StudyError(f'cases must be distinct paper cases 1..6, got {cases}')
+    return [[cases[index] for index in row] for row in williams_rows(len(cases))]
+
+
+def assign_orders(subjects: list, cases: typing.Sequence[int] = PAPER_CASES) -> list:
+    """Give every consenting subject without an order the next row; return those assigned.
+
+    Rows go by position among the subjects with an order (registration order), so a subject
+    added later continues the rotation and earlier assignments never change.
+    """
+    orders = case_orders(cases)
+    assigned = []
+    taken = sum(1 for subject in subjects if subject.order)
+    for subject in subjects:
+        if subject.order or subject.consent != 'yes':
+            continue
+        subject.order = orders[taken % len(orders)]
+        taken += 1
+        assigned.append(subject)
+    return assigned
+
+
+# ---------------------------------------------------------------------------- session index
+
+@dataclass
+class IndexEntry:
+    """One session a subject took part in."""
+
+    subject_id: str
+    session_id: str
+    case: int
+    kind: str                   # practice | condition
+    position: int               # 1-based position of the case in the subject's order (0 = ?)
+    started: str                # ISO date-time
+    ended: str
+    exit_code: int
+    bags: str                   # folder of the session's bags
+    run_dir: str                # logs, parameters, checkpoints, report
+    tlx_file: str = ''          # raw NASA-TLX answers ('' = none asked)
+
+
+def load_index(folder) -> list:
+    """Return the IndexEntries of ``folder``/index.yaml ([] if none)."""
+    path = pathlib.Path(folder) / INDEX_FILE
+    if not path.is_file():
+        return []
+    document = yaml.safe_load(path.read_text()) or []
+    try:
+        return [IndexEntry(**record) for record in document]
+    except TypeError as error:
+        raise StudyError(f'{path}: an entry does not fit: {error}') from None
+
+
+def append_index(folder, entry: IndexEntry) -> pathlib.Path:
+    """Add one entry to the index (0600, atomically)."""
+    if entry.kind not in SESSION_KINDS:
+        raise StudyError(f'kind must be one of {SESSION_KINDS}, got {entry.kind!r}')
+    path = pathlib.Path(folder) / INDEX_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    entries = load_index(folder) + [entry]
+    atomic_write(path, yaml.safe_dump([asdict(item) for item in entries], sort_keys=False),
+                 mode=PERSONAL_FILE_MODE)
+    return path
+
+
+def position_of(subjects: list, subject_id: str, case: int) -> int:
+    """Return the 1-based position of ``case`` in the subject's order (0 if not in it)."""
+    subject = next((subject for subject in subjects if subject.id == subject_id), None)
+    if subject is None or case not in subject.order:
+        return 0
+    return subject.order.index(case) + 1
+
+
+def by_subject(entries: list) -> dict:
+    """Return {subject id: [entries in order of start]}."""
+    table = {}
+    for entry in sorted(entries, key=lambda item: item.started):
+        table.setdefault(entry.subject_id, []).append(entry)
+    return table

@@ -1,0 +1,101 @@
+"""The study's command line: register subjects, assign case orders, plan sessions, list the index.
+
+    ros2 run hrc_live study register P07 --consent yes            # consent dated today
+    ros2 run hrc_live study assign                                 # Williams square over 1..6
+    ros2 run hrc_live study assign --cases 1 2 5                   # the researcher's set
+    ros2 run hrc_live study plan P07                               # the session commands
+    ros2 run hrc_live study index                                  # sessions per subject
+
+Everything lives in ``--study-dir`` (default ``study``): ``subjects.yaml`` and ``index.yaml``,
+mode 0600 (hrc_live.study). Exit codes: 0 done, 2 bad usage or a rejected entry (every reason
+printed).
+"""
+
+import argparse
+import datetime
+import shlex
+import sys
+
+from hrc_live.study import (assign_orders, by_subject, consent_problem, load_index,
+                            load_registry, PAPER_CASES, register, save_registry, StudyError)
+
+
+def parse_args(argv=None):
+    """Parse the command line."""
+    parser = argparse.ArgumentParser(prog='study', description='Pseudonymous subject registry, '
+                                     'counterbalanced case orders and the per-subject session '
+                                     'index of an hrc study (no names are stored).')
+    parser.add_argument('--study-dir', default='study', help='folder of the study files')
+    commands = parser.add_subparsers(dest='command', required=True)
+    add = commands.add_parser('register', help='add a subject or record a new consent answer')
+    add.add_argument('subject_id', help='the pseudonym (e.g. P07), never a name')
+    add.add_argument('--consent', required=True, choices=('yes', 'no'))
+    add.add_argument('--date', default=None, help='date of the consent answer (default today)')
+    assign = commands.add_parser('assign', help='give consenting subjects their case order')
+    assign.add_argument('--cases', type=int, nargs='+', default=list(PAPER_CASES),
+                        help='the cases to counterbalance (default 1..6)')
+    plan = commands.add_parser('plan', help="print the commands of a subject's sessions")
+    plan.add_argument('subject_id')
+    plan.add_argument('--practice', type=int, default=3,
+                      help='practice episodes before each condition (default 3; 0 = none)')
+    plan.add_argument('--human', default='device', choices=('device', 'joy'))
+    commands.add_parser('index', help='list the sessions per subject')
+    return parser.parse_args(argv)
+
+
+def plan_commands(subject, study_dir: str, practice: int, human: str) -> list:
+    """Return the session command lines of ``subject``'s conditions, in order."""
+    lines = []
+    for position, case in enumerate(subject.order, start=1):
+        command = ['ros2', 'run', 'hrc_bringup', 'session', '--case', str(case), '--mode',
+                   'realtime', '--human', human, '--display', '--tlx', '--subject-id',
+                   subject.id, '--study-dir', study_dir]
+        if practice:
+            command += ['--practice', str(practice)]
+        lines.append(f'# condition {position} of {len(subject.order)}: case {case}')
+        lines.append(shlex.join(command))
+    return lines
+
+
+def main(argv=None) -> int:
+    """Entry point of ``ros2 run hrc_live study``."""
+    options = parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        subjects = load_registry(options.study_dir)
+        if options.command == 'register':
+            date = options.date or datetime.date.today().isoformat()
+            subject = register(subjects, options.subject_id, options.consent, date)
+            path = save_registry(options.study_dir, subjects)
+            print(f'{subject.id}: consent {subject.consent} ({subject.consent_date}); '
+                  f'registry {path} ({len(subjects)} subjects)')
+        elif options.command == 'assign':
+            assigned = assign_orders(subjects, options.cases)
+            save_registry(options.study_dir, subjects)
+            for subject in assigned:
+                print(f'{subject.id}: cases in the order {subject.order}')
+            if not assigned:
+                print('nobody to assign (every consenting subject has an order)')
+        elif options.command == 'plan':
+            problem = consent_problem(subjects, options.subject_id)
+            if problem:
+                raise StudyError(problem)
+            subject = next(s for s in subjects if s.id == options.subject_id)
+            if not subject.order:
+                raise StudyError(f'{subject.id} has no case order yet: run "study assign"')
+            print('\n'.join(plan_commands(subject, options.study_dir, options.practice,
+                                          options.human)))
+        else:
+            for subject_id, entries in by_subject(load_index(options.study_dir)).items():
+                print(f'{subject_id}:')
+                for entry in entries:
+                    print(f'  {entry.started}  {entry.kind:9s} case {entry.case} (position '
+                          f'{entry.position})  {entry.session_id}  exit {entry.exit_code}'
+                          + (f'  TLX {entry.tlx_file}' if entry.tlx_file else ''))
+    except StudyError as error:
+        print(f'study: {error}', file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
