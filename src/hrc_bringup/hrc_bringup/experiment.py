@@ -33,6 +33,7 @@ import json
 import os
 import pathlib
 import shlex
+import shutil
 import socket
 import subprocess
 import sys
@@ -82,9 +83,13 @@ def run_task(task: SessionTask) -> dict:
         bags_dir = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bags-')) if task.pull_bags \
             else pathlib.Path(task.bags_dir)
         runner = run_inprocess if task.engine == 'inprocess' else run_graph
-        outcome['exit_code'], outcome['error'] = runner(task, bags_dir)
-        if task.pull_bags:
-            outcome['bag_archive'] = pack_folder(bags_dir / task.session_id)
+        try:
+            outcome['exit_code'], outcome['error'] = runner(task, bags_dir)
+            if task.pull_bags:
+                outcome['bag_archive'] = pack_folder(bags_dir / task.session_id)
+        finally:
+            if task.pull_bags:
+                shutil.rmtree(bags_dir, ignore_errors=True)
     except Exception as error:   # a worker reports every failure back to the driver
         outcome['error'] = f'{type(error).__name__}: {error}'
     outcome['seconds'] = time.monotonic() - started

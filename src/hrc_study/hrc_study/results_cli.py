@@ -74,7 +74,8 @@ def main(argv=None) -> int:
               f'(Holm p = {finding.p_holm:.3g}; {finding.reason})')
     print('targets:')
     for target, measured, met in result['targets']:
-        print(f'  [{"met" if met else "NOT met"}] {target}: {measured}')
+        verdict = 'n/a' if met is None else ('met' if met else 'NOT met')
+        print(f'  [{verdict}] {target}: {measured}')
     name = 'your priorities' if arguments.weights else 'balanced'
     if name in result['choices']:
         print('strategy chooser:\n' + choice_markdown(result['choices'][name], name))
