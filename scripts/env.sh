@@ -1,4 +1,5 @@
 # Source this file to use the workspace: the venv (ROS 2 Jazzy prefix) and the colcon install.
+# Works from any directory: `source /path/to/hrc/scripts/env.sh` (bash).
 # shellcheck shell=bash
 _hrc_top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck disable=SC1091
@@ -8,4 +9,12 @@ export AMENT_PREFIX_PATH=$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}
 # shellcheck disable=SC1091
 source "$_hrc_top/install/setup.bash"
 export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
+# The pip wheels do not ship the ROS 2 CLI: without a real `ros2`, put hrc's shim on PATH
+# (scripts/bin/ros2: `ros2 run` with the same ament-index lookup; it says it is the shim).
+if ! command -v ros2 >/dev/null 2>&1; then
+  case ":$PATH:" in
+    *":$_hrc_top/scripts/bin:"*) ;;
+    *) export PATH="$_hrc_top/scripts/bin:$PATH" ;;
+  esac
+fi
 unset _hrc_top
