@@ -6,12 +6,16 @@ baseline of the benchmark "full graph over DDS vs the same pure components in on
 learning test's loop, and the tool for "episodes to convergence per case".
 
 A partner is a callable ``partner(state, subtasks) -> command in [-1, 1]`` on the human's
-degree of freedom (``ScriptedPartner``, or hrc_joystick_node's simulated human ``.act``). When
-the current training step does not involve the human its command is 0 and it is not called.
+degree of freedom (``ScriptedPartner``, or ``SimulatedHumanPartner``: hrc_joystick_node's
+simulated human, one person or a population). A partner with a ``start_episode(episode)``
+method is told each episode's index before it starts. When the current training step does not
+involve the human its command is 0 and it is not called.
 
 Command line::
 
     python -m hrc_agent_node.offline --case 2 --preset tuned --episodes 60 --seed 0
+    python -m hrc_agent_node.offline --case 2 --preset tuned --partner human:paper \
+        --population-every 1     # a new simulated person every episode (population training)
 """
 
 import argparse
@@ -22,7 +26,7 @@ import time
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.partners import ScriptedPartner
+from hrc_agent_node.partners import ScriptedPartner, SimulatedHumanPartner
 from hrc_common.params import with_overrides
 from hrc_sim_node.protocol import per_dof, roles
 
@@ -33,6 +37,8 @@ def run_episode(core: AgentCore, sim, partner, on_step=None):
     ``on_step(state, decision, human_action)`` is called after each decision, if given.
     """
     plan = core.start_episode()
+    if hasattr(partner, 'start_episode'):
+        partner.start_episode(plan.episode)
     state = sim.reset(plan.seed)
     human_subtasks = core.human_subtasks
     while not (state.truncated or state.terminated):
@@ -87,10 +93,23 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
     return summary
 
 
-def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0) -> ScriptedPartner:
-    """Return the scripted PD partner on the human's degree of freedom of ``core``'s case."""
-    return ScriptedPartner(core.human_dof, max_torque=core.params.max_torque, noise=noise,
-                           seed=seed)
+def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str = 'scripted',
+                 population_every: int = 0, control_period: float = 0.2):
+    """Return the partner on the human's degree of freedom of ``core``'s case.
+
+    ``kind``: ``scripted`` (the PD partner, ``noise`` = std of its command) or
+    ``human:<profile>`` (the simulated human of that profile; ``population_every`` N > 0 draws
+    a new person from the profile's population every N episodes).
+    """
+    if kind == 'scripted':
+        return ScriptedPartner(core.human_dof, max_torque=core.params.max_torque, noise=noise,
+                               seed=seed)
+    if not kind.startswith('human:'):
+        raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
+    from hrc_joystick_node.sim_human import load_profile
+
+    return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
+                                 control_period, population_every)
 
 
 def main(argv=None) -> int:
@@ -102,8 +121,13 @@ def main(argv=None) -> int:
     parser.add_argument('--preset', default='paper')
     parser.add_argument('--episodes', type=int, default=60, help='max training episodes')
     parser.add_argument('--evaluation-episodes', type=int, default=3)
+    parser.add_argument('--partner', default='scripted',
+                        help='scripted (PD partner) or human:<profile> (simulated human)')
     parser.add_argument('--partner-noise', type=float, default=0.0,
-                        help="std of the partner's command noise")
+                        help="std of the scripted partner's command noise")
+    parser.add_argument('--population-every', type=int, default=0,
+                        help="human partner: draw a new person from the profile's population "
+                             'every N episodes (0: the profile itself throughout)')
     parser.add_argument('--threads', type=int, default=1)
     parser.add_argument('--checkpoint', default=None, help='save a checkpoint here each episode')
     parser.add_argument('--resume', default=None, help='resume from this checkpoint')
@@ -126,7 +150,13 @@ def main(argv=None) -> int:
     core = AgentCore(params)
     if args.resume:
         load_into(core, args.resume)
-    partner = make_partner(core, args.partner_noise, args.seed)
+    physics_params = PhysicsParams()
+    try:
+        partner = make_partner(core, args.partner_noise, args.seed, args.partner,
+                               args.population_every, physics_params.control_period)
+    except (ValueError, KeyError) as error:
+        print(f'offline: {error}', file=sys.stderr)
+        return 2
 
     def report(result, stats):
         if args.quiet:
@@ -140,7 +170,7 @@ def main(argv=None) -> int:
               f'robot_effort={result.robot_effort:.3f}{" converged" if result.converged else ""}'
               f' {result.event}{update}', file=sys.stderr, flush=True)
 
-    with SliderPendulumBall(PhysicsParams()) as sim:
+    with SliderPendulumBall(physics_params) as sim:
         summary = run_session(core, sim, partner, args.checkpoint, report)
     print(json.dumps(summary, indent=2))
     return 0

@@ -1,6 +1,8 @@
-"""A scripted partner for tests and offline baselines: a PD controller on one degree of freedom.
+"""Partners of the offline loop: a scripted PD controller, and the simulated human (a population).
 
-Not a model of a person (``hrc_joystick_node``'s simulated human is): a deterministic,
+``ScriptedPartner`` is not a model of a person (``hrc_joystick_node``'s simulated human is,
+wrapped by ``SimulatedHumanPartner``, which can also draw a new person from the population
+around a profile every N episodes: population training): a deterministic,
 reproducible partner with which PPO runs can be compared. It has the signature every partner of
 :func:`hrc_agent_node.offline.run_session` has: ``partner(state, subtasks) -> command in [-1, 1]``
 where ``state`` has the PhysicsState attributes and ``subtasks`` are the ids the session assigns
@@ -71,3 +73,56 @@ class ScriptedPartner:
         if self.noise > 0:
             command += float(self.rng.normal(0.0, self.noise))
         return float(min(1.0, max(-1.0, command)))
+
+
+def person_seed(session_seed: int, draw: int) -> int:
+    """Return the population seed of the ``draw``-th person of a session (31-bit)."""
+    return int(np.random.SeedSequence([int(session_seed), int(draw), 0x9E3779B9])
+               .generate_state(1)[0] & 0x7FFFFFFF)
+
+
+class SimulatedHumanPartner:
+    """``hrc_joystick_node``'s simulated human as an offline partner, alone or as a population.
+
+    ``population_every`` 0: one person, the profile itself, for the whole session (fatigue,
+    practice and adaptation carry over between episodes). N > 0: population training, a new
+    person drawn with ``sample_person(profile, person_seed(seed, episode // N))`` every N
+    episodes (1: every episode), each new to the task. Every episode kind (training, judging,
+    evaluation) meets the person the rule gives, so judging and evaluation measure the team
+    with the training distribution. Call :meth:`start_episode` before each episode (the
+    offline loop does).
+    """
+
+    def __init__(self, profile, dof: str, seed: int = 0, control_period: float = 0.2,
+                 population_every: int = 0):
+        if population_every < 0:
+            raise ValueError(f'population_every must be >= 0, got {population_every}')
+        self.profile = profile
+        self.dof = dof
+        self.seed = int(seed)
+        self.control_period = float(control_period)
+        self.population_every = int(population_every)
+        self.draw = None          # index of the person drawn (None: the profile itself)
+        self.person = None        # the HumanProfile of the current person
+        self.human = None         # their SimulatedHuman
+
+    def start_episode(self, episode: int) -> None:
+        """Meet the person of ``episode`` (draw a new one when the rule says so); reset."""
+        from hrc_joystick_node.population import sample_person
+        from hrc_joystick_node.sim_human import SimulatedHuman
+
+        draw = int(episode) // self.population_every if self.population_every else None
+        if self.human is None or draw != self.draw:
+            self.draw = draw
+            self.person = self.profile if draw is None else \
+                sample_person(self.profile, person_seed(self.seed, draw))
+            seed = self.seed if draw is None else person_seed(self.seed, draw)
+            self.human = SimulatedHuman(self.person, self.dof, seed=seed,
+                                        control_period=self.control_period)
+        self.human.reset(int(episode))
+
+    def __call__(self, state, subtasks) -> float:
+        """Return the person's stick command in [-1, 1] for ``state``."""
+        if self.human is None:
+            raise RuntimeError('call start_episode() before the first command')
+        return float(self.human.act(state, list(subtasks)))
