@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import typing
 
 from hrc_common.contract import TRANSLATION
+from hrc_joystick_node.population import person_or_profile
 from hrc_joystick_node.sim_human import (BALL, default_profiles_path, load_profiles,
                                          normalize_subtasks, OWN_SUBTASK, SimulatedHuman)
 
@@ -56,7 +57,8 @@ class SimulatedHumanSide:
         if name not in profiles:
             raise ValueError(f'human.profile: {name!r} is not in {path} '
                              f'(known: {sorted(profiles)})')
-        self.profile = profiles[name]
+        # person N of the population around the profile (-1: the profile), as the human node
+        self.profile = person_or_profile(profiles[name], int(parameters.get('person', -1)))
         self.control_period = float(parameters['control_period'])
         self.seed = int(parameters['seed'])
         self.dof = parameters['dof']
