@@ -27,9 +27,7 @@ judged only on episodes trained under it.
 
 from dataclasses import dataclass
 
-import yaml
-
-from hrc_agent_node.task_tree import TaskTreeError
+from hrc_agent_node.task_tree import load_data_file, TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
 SELECTOR_PREFIX = 'direct:'
@@ -71,17 +69,8 @@ class Case:
 
 def load_cases(path, tree) -> dict:
     """Load every case of a cases file, resolved against ``tree``: {case id: Case}."""
-    try:
-        with open(path) as stream:
-            document = yaml.safe_load(stream)
-    except OSError as error:
-        raise CasesError(f'cannot read cases file {path}: {error}') from None
-    except yaml.YAMLError as error:
-        raise CasesError(f'cases file {path} is not valid YAML: {error}') from None
-    try:
-        return cases_from_dict(document, tree)
-    except CasesError as error:
-        raise CasesError(f'{path}: {error}') from None
+    return load_data_file(path, 'cases file', CasesError,
+                          lambda document: cases_from_dict(document, tree))
 
 
 def cases_from_dict(document, tree) -> dict:

@@ -23,6 +23,7 @@ training step (eq. 2).
 
 from dataclasses import dataclass
 import math
+import os
 
 import yaml
 
@@ -105,17 +106,8 @@ class TaskTree:
     @classmethod
     def from_file(cls, path, preset=None):
         """Load and validate a tree from a YAML file; ``preset`` None = the file's default."""
-        try:
-            with open(path) as stream:
-                document = yaml.safe_load(stream)
-        except OSError as error:
-            raise TaskTreeError(f'cannot read task tree file {path}: {error}') from None
-        except yaml.YAMLError as error:
-            raise TaskTreeError(f'task tree file {path} is not valid YAML: {error}') from None
-        try:
-            return cls.from_dict(document, preset)
-        except TaskTreeError as error:
-            raise TaskTreeError(f'{path}: {error}') from None
+        return load_data_file(path, 'task tree file', TaskTreeError,
+                              lambda document: cls.from_dict(document, preset))
 
     @classmethod
     def from_dict(cls, document, preset=None):
@@ -261,6 +253,28 @@ class TaskTree:
         for subtask_id in self.subtasks_at(self.levels[0]):
             describe(subtask_id, 0)
         return '\n'.join(lines)
+
+
+def load_data_file(path, what: str, error_type, build):
+    """Return ``build(document)`` of the YAML file ``path``; errors as ``error_type`` with path.
+
+    A missing, unreadable, non-regular (a FIFO would block), binary or non-YAML file is refused
+    with the reason, as is whatever ``build`` refuses with ``error_type``.
+    """
+    path = os.fspath(path)
+    if os.path.exists(path) and not os.path.isfile(path):
+        raise error_type(f'{what} {path} is not a regular file')
+    try:
+        with open(path, encoding='utf-8') as stream:
+            document = yaml.safe_load(stream)
+    except OSError as error:
+        raise error_type(f'cannot read {what} {path}: {error}') from None
+    except (UnicodeDecodeError, yaml.YAMLError) as error:
+        raise error_type(f'{what} {path} is not valid YAML text: {error}') from None
+    try:
+        return build(document)
+    except error_type as error:
+        raise error_type(f'{path}: {error}') from None
 
 
 def _parse_subtask(index, entry):

@@ -2,11 +2,13 @@
 
 The task tree and the cases file are rewritten at every path with values of the wrong shape
 (a number, a list of lists, a string, null, an empty mapping or list, ...): loading raises
-TaskTreeError / CasesError (a reason), never another exception. At the node, such a file and a
+TaskTreeError / CasesError (a reason), never another exception; so do binary files, FIFOs and
+directories. At the node, such a file and a
 session id that would leave the checkpoint directory end with exit code 2 and the reason.
 """
 
 import copy
+import os
 import pathlib
 
 import pytest
@@ -16,7 +18,7 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import FORMAT, FORMAT_VERSION
 from hrc_agent_node.config import AgentParams, repository_params_dir
-from hrc_agent_node.strategies import cases_from_dict, CasesError
+from hrc_agent_node.strategies import cases_from_dict, CasesError, load_cases
 from hrc_agent_node.task_tree import TaskTree, TaskTreeError
 from hrc_common.params import checked, ParameterError, with_overrides
 
@@ -83,6 +85,25 @@ def test_the_reported_tree_files_give_their_reason(path, value, reason):
     with pytest.raises(TaskTreeError) as error:
         TaskTree.from_dict(replaced(load('task_tree.yaml'), path, value))
     assert reason in str(error.value)
+
+
+@pytest.mark.parametrize('kind, reason', [
+    ('binary', 'is not valid YAML text'), ('fifo', 'is not a regular file'),
+    ('directory', 'is not a regular file'), ('missing', 'cannot read'),
+])
+def test_unreadable_data_files_are_refused_with_a_reason(tmp_path, kind, reason):
+    path = tmp_path / 'data.yaml'
+    if kind == 'binary':
+        path.write_bytes(bytes(range(256)))
+    elif kind == 'fifo':
+        os.mkfifo(path)        # opening it would block until a writer comes
+    elif kind == 'directory':
+        path.mkdir()
+    tree = TaskTree.from_file(PARAMS / 'task_tree.yaml')
+    with pytest.raises(TaskTreeError, match=reason):
+        TaskTree.from_file(path)
+    with pytest.raises(CasesError, match=reason):
+        load_cases(path, tree)
 
 
 @pytest.mark.parametrize('session_id', ['../../x', '/tmp/elsewhere', '.hidden', 'a/b', '-p'])
