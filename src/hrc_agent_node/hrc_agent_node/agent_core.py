@@ -443,15 +443,15 @@ class AgentCore:
         """Close the running episode at its final state; update counters and the strategy.
 
         ``human_action``: as for :meth:`act`, the human's answer to the final state under
-        ``same_step`` (None there: the last observed one stands in); it enters only the
+        ``same_step`` (None there: the last observed one, or 0, stands in); it enters only the
         observation of the final state that a truncated episode's value is bootstrapped from.
         """
         log = self._require_episode()
         if not (final_state.truncated or final_state.terminated):
             raise ValueError('end_episode needs the final state (truncated or terminated)')
         plan = log.plan
-        if human_action is None and self.needs_human_action and log.human_actions:
-            human_action = log.human_actions[-1]
+        if human_action is None and self.needs_human_action:
+            human_action = log.human_actions[-1] if log.human_actions else 0.0
         final_human_action = self.observed_human_action(final_state, human_action)
         last = self._close_pending(final_state) if log.pending is not None else None
         terminated = bool(final_state.terminated)

@@ -45,3 +45,16 @@ def test_same_step_source_observes_the_answer_to_the_same_state():
         with pytest.raises(ValueError, match="needs the human's answer"):
             core.act(state)
         assert core.act(state, human_action=0.3).record.observed_human_action == 0.3
+
+
+def test_same_step_episode_ending_at_its_first_state_needs_no_answer():
+    """States lost: the final state arrives first; the episode closes without a human answer."""
+    core = core_for(6, 'same_step')
+    with SliderPendulumBall(PhysicsParams(episode_duration=0.4)) as sim:
+        core.start_episode()
+        sim.reset(seed=1)
+        state = sim.step_normalized(0.0, 0.0)
+        final = sim.step_normalized(0.0, 0.0)
+        assert final.truncated and not state.truncated
+        result = core.end_episode(final)
+    assert result.steps == 0 and core.total_episodes == 1
