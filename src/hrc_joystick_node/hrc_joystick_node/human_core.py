@@ -31,13 +31,14 @@ import typing
 from hrc_common.dof import check_dof, DOFS, TRANSLATION
 from hrc_common.params import param, ParameterError
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
-                                      PAUSE, SIM, stick_command, StickReading, ZERO)
+                                      MODEL, PAUSE, SIM, stick_command, StickReading, ZERO)
 from hrc_joystick_node.population import person_or_profile
 from hrc_joystick_node.sim_human import (BALL, HumanProfile, normalize_subtasks, OWN_SUBTASK,
                                          SimulatedHuman)
 
-# HumanAction.SOURCE_* of hrc_msgs (a test keeps them equal), by input name.
-SOURCE_CODE = {DEVICE: 0, JOY: 1, SIM: 2, ZERO: 4}
+# HumanAction.SOURCE_* of hrc_msgs (a test keeps them equal), by input name; a cloned model
+# is a simulated human (its detail names the file).
+SOURCE_CODE = {DEVICE: 0, JOY: 1, SIM: 2, MODEL: 2, ZERO: 4}
 
 
 @dataclass
@@ -45,8 +46,8 @@ class HumanParams:
     """Parameters of the human node (mirrored in params/human.yaml)."""
 
     input: str = param('auto', 'where the command comes from: auto = the device if it opens, '
-                       'else /joy if a publisher is seen; sim = the simulated human',
-                       choices=INPUT_MODES)
+                       'else /joy if a publisher is seen; sim = the simulated human; model = '
+                       'a cloned human model (model_file)', choices=INPUT_MODES)
     device: str = param('/dev/input/js0', 'Linux joystick device (or a FIFO/file carrying its '
                         'js_event stream)')
     axis: int = param(1, 'joystick axis that drives the command, same index on the device and '
@@ -88,6 +89,14 @@ class HumanParams:
                         low=-1, high=2 ** 31 - 1)
     seed: int = param(0, 'seed of the simulated human (with the episode index)', low=0,
                       high=2 ** 31 - 1)
+    model_file: str = param('', 'cloned human-model checkpoint (.pt, hrc_joystick_node.'
+                            'human_model) used with input model')
+
+    def check(self):
+        """Return the reasons the parameters do not fit together."""
+        if self.input == MODEL and not self.model_file:
+            return ['model_file: input model needs a checkpoint path']
+        return []
 
 
 class HumanAnswer(typing.NamedTuple):
@@ -177,7 +186,12 @@ class HumanCore:
         """Return the subtasks before a session says: the own level-2 one (and the ball)."""
         return [OWN_SUBTASK[dof]] + ([BALL] if self.params.hold_ball else [])
 
-    def _new_sim_human(self, dof: str) -> SimulatedHuman:
+    def _new_sim_human(self, dof: str):
+        if self.params.input == MODEL:
+            from hrc_joystick_node.human_model import ClonedHuman
+
+            return ClonedHuman(self.params.model_file, dof, seed=self.params.seed,
+                               control_period=self.params.control_period)
         return SimulatedHuman(self.profile, dof, seed=self.params.seed,
                               control_period=self.params.control_period)
 
@@ -260,13 +274,17 @@ class HumanCore:
                                                   params.enable_button >= 0, params.deadzone,
                                                   params.invert)
             return command, engaged, active, reading.name + (f' ({why})' if why else '')
-        if active == SIM:
+        if active in (SIM, MODEL):
             if (episode != self._sim_episode or self._sim_step is None
                     or step <= self._sim_step):
                 self.sim_human.reset(episode)
                 self._sim_episode = episode
             self._sim_step = step
             command = self.sim_human.act(state, self.subtasks, now=stamp_ns * 1e-9)
+            if active == MODEL:
+                note = self.sim_human.note
+                return command, True, MODEL, f'model {params.model_file}' + (
+                    f' ({note})' if note else '')
             detail = params.profile + (f' person {params.person}' if params.person >= 0 else '')
             if params.input != SIM:  # standing in for a missing or lost joystick: say so
                 detail += f' ({self.selector.status_line()})'

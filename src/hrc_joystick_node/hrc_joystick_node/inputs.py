@@ -5,6 +5,7 @@ Inputs (parameter ``input``):
 * ``device``: a Linux joystick device (see :mod:`hrc_joystick_node.js_event`);
 * ``joy``: ``sensor_msgs/Joy`` on ``/joy`` as a stock ``joy``/``joy_linux`` node publishes it;
 * ``sim``: the simulated human (:mod:`hrc_joystick_node.sim_human`);
+* ``model``: a human model cloned from recordings (:mod:`hrc_joystick_node.human_model`);
 * ``auto``: the device if it opens, else ``/joy`` if a publisher is seen; re-evaluated
   continuously, so a device that appears later takes over.
 
@@ -26,7 +27,8 @@ SIM = 'sim'
 AUTO = 'auto'
 ZERO = 'zero'
 PAUSE = 'pause'
-INPUT_MODES = (AUTO, DEVICE, JOY, SIM)
+MODEL = 'model'
+INPUT_MODES = (AUTO, DEVICE, JOY, SIM, MODEL)
 FALLBACKS = (PAUSE, ZERO, SIM)
 OK, MISSING, LOST = 'ok', 'missing', 'lost'
 
@@ -122,8 +124,8 @@ class InputSelector:
             raise ValueError(f'on_input_lost must be one of {FALLBACKS}, got {on_input_lost!r}')
         self.mode = mode
         self.on_input_lost = on_input_lost
-        self.active = None  # DEVICE, JOY, SIM or ZERO
-        self.state = MISSING if mode != SIM else OK  # OK, MISSING or LOST
+        self.active = None  # DEVICE, JOY, SIM, MODEL or ZERO
+        self.state = OK if mode in (SIM, MODEL) else MISSING  # OK, MISSING or LOST
         self.reason = ''
         self.lost_count = 0  # times a joystick input went away
         self._had_real_input = False
@@ -145,8 +147,8 @@ class InputSelector:
     def update(self, device_present: bool, device_status: str, joy_alive: bool,
                joy_status: str) -> typing.Optional[str]:
         """Re-evaluate; return a log line when the active input or its state changed."""
-        if self.mode == SIM:
-            choice, reason = SIM, 'input is sim'
+        if self.mode in (SIM, MODEL):
+            choice, reason = self.mode, f'input is {self.mode}'
         elif self.mode == DEVICE:
             choice, reason = (DEVICE, device_status) if device_present else (None,
                                                                             device_status)

@@ -489,6 +489,8 @@ def test_drives_the_real_sim_node_in_lockstep_without_a_missing_command(start_no
     ({'input': 'keyboard'}, "input: 'keyboard' is not one of"),
     ({'profile': 'expert'}, "profile: 'expert' is not in"),
     ({'on_input_lost': 'panic'}, "on_input_lost: 'panic' is not one of"),
+    ({'input': 'model'}, 'model_file: input model needs a checkpoint path'),
+    ({'input': 'model', 'model_file': '/nonexistent/clone.pt'}, 'cannot read'),
 ])
 def test_bad_parameters_exit_2_with_the_reason(start_node, parameters, reason):
     process = start_node('hrc_joystick_node', 'human_node', parameters=parameters)
