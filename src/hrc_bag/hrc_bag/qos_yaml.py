@@ -18,15 +18,13 @@ Policies are written as the lower-case names rmw uses (rmw_qos_*_policy_to_str);
 seconds and nanoseconds.
 """
 
+from hrc_common.contract import NS_PER_S as NANOSECONDS
 import yaml
 
 # libyaml's parser and emitter when PyYAML has them (the pure-Python ones cost ms per file)
 _LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 _DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
 
-NANOSECONDS = 1_000_000_000
-# RMW_DURATION_INFINITE: what rmw reports for "no deadline / lifespan / lease".
-INFINITE_NS = 2**63 - 1
 # Durations this long or longer mean "infinite" (older rmw wrote other sentinel values).
 INFINITE_THRESHOLD_NS = 0x7FFFFFFF * NANOSECONDS
 

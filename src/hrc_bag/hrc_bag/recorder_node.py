@@ -19,6 +19,8 @@ import time
 
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
+from hrc_common.contract import (AGENT_STEP_TYPE, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
+                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
 from hrc_common.nodes import run_node
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.node import Node
@@ -40,13 +42,13 @@ EXIT_RECORDING_FAILED = 3
 # Types of the hrc graph's topics (by default name), so they are subscribed before anyone
 # publishes; and the QoS contract their publishers offer.
 KNOWN_TOPICS = {
-    hrc_topics.STATE: ('hrc_msgs/msg/TaskState', hrc_qos.STATE_QOS),
-    hrc_topics.ROBOT_CMD_WRENCH: ('geometry_msgs/msg/WrenchStamped', hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_CMD_WRENCH: ('geometry_msgs/msg/WrenchStamped', hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_ACTION: ('hrc_msgs/msg/HumanAction', hrc_qos.HUMAN_ACTION_QOS),
-    hrc_topics.SESSION: ('hrc_msgs/msg/SessionStatus', hrc_qos.SESSION_QOS),
-    hrc_topics.EPISODE: ('hrc_msgs/msg/EpisodeSummary', hrc_qos.EPISODE_QOS),
-    hrc_topics.AGENT_STEP: ('hrc_msgs/msg/AgentStep', hrc_qos.AGENT_STEP_QOS),
+    hrc_topics.STATE: (TASK_STATE_TYPE, hrc_qos.STATE_QOS),
+    hrc_topics.ROBOT_CMD_WRENCH: (WRENCH_STAMPED_TYPE, hrc_qos.COMMAND_QOS),
+    hrc_topics.HUMAN_CMD_WRENCH: (WRENCH_STAMPED_TYPE, hrc_qos.COMMAND_QOS),
+    hrc_topics.HUMAN_ACTION: (HUMAN_ACTION_TYPE, hrc_qos.HUMAN_ACTION_QOS),
+    hrc_topics.SESSION: (SESSION_STATUS_TYPE, hrc_qos.SESSION_QOS),
+    hrc_topics.EPISODE: (EPISODE_SUMMARY_TYPE, hrc_qos.EPISODE_QOS),
+    hrc_topics.AGENT_STEP: (AGENT_STEP_TYPE, hrc_qos.AGENT_STEP_QOS),
 }
 
 

@@ -11,13 +11,13 @@ from dataclasses import dataclass
 import pathlib
 import typing
 
+from hrc_common.contract import NS_PER_S as NANOSECONDS
 from hrc_common.params import param
 
 from hrc_bag import bag_reader
 from hrc_bag.qos_yaml import duration_ns, load_profiles
 
 ALL_TOPICS = '*'
-NANOSECONDS = 1_000_000_000
 
 
 @dataclass

@@ -26,17 +26,15 @@ import typing
 
 import yaml
 
+# Topics are found by type, so remapped recordings are analysed too.
+from hrc_common.contract import (AGENT_STEP_TYPE, DOF_NAME as DOF_NAMES, DOFS,
+                                 EPISODE_SUMMARY_TYPE as EPISODE_TYPE, HUMAN_ACTION_TYPE,
+                                 other_dof, SESSION_STATUS_TYPE as SESSION_TYPE)
+
 from hrc_bag import bag_reader
 from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.format import SESSION_RECORD
 
-# Topics are found by type, so remapped recordings are analysed too.
-EPISODE_TYPE = 'hrc_msgs/msg/EpisodeSummary'
-SESSION_TYPE = 'hrc_msgs/msg/SessionStatus'
-AGENT_STEP_TYPE = 'hrc_msgs/msg/AgentStep'
-HUMAN_ACTION_TYPE = 'hrc_msgs/msg/HumanAction'
-
-DOF_NAMES = {0: 'translation', 1: 'rotation'}
 STRATEGY_TITLES = {
     'responsibility_guided': 'Learn task first (responsibility-guided)',
     'level_guided': 'Learn human first (level-guided)',
@@ -464,8 +462,7 @@ def figure_actions(rows, path, seconds: float = 4.0, start: float = 0.0) -> None
             axis.set_visible(False)
             continue
         row, trace = rows[index], traces[index]
-        human_dof = {'translation': 'rotation', 'rotation': 'translation'}.get(row.robot_dof,
-                                                                              '?')
+        human_dof = other_dof(row.robot_dof) if row.robot_dof in DOFS else '?'
         if trace:
             for key, label in (('robot', f'robot ({row.robot_dof or "?"})'),
                                ('human', f'human ({human_dof})')):
