@@ -9,6 +9,10 @@ Phases (``SessionStatus.phase``)
     ('training', ...); ``Phase.from_label(text)``; ``phase_label(code, default=None)`` for a
     raw code (an unknown code gives ``default``, or 'phase N'); ``FINISHED_PHASES`` (done,
     aborted); ``ACTIVE_PHASES`` (training, updating, evaluation).
+Human input sources (``HumanAction.source``)
+    ``InputSource`` -- IntEnum whose values equal ``hrc_msgs/msg/HumanAction`` ``SOURCE_*``;
+    ``InputSource.X.label`` ('device', 'joy', 'simulated', 'replay', 'none');
+    ``source_label(code, default=None)``.
 Degrees of freedom and the wrench axis convention
     ``TRANSLATION``, ``ROTATION``, ``DOFS`` (in ``SessionStatus.DOF_*`` order), ``DOF_INDEX``,
     ``DOF_NAME``, ``check_dof``, ``other_dof``, ``dof_name(code, default=None)``,
@@ -82,6 +86,32 @@ def phase_label(code: int, default: str = None) -> str:
         return Phase(code).label
     except ValueError:
         return default if default is not None else f'phase {code}'
+
+
+# --------------------------------------------------------------------------- input sources
+
+
+class InputSource(enum.IntEnum):
+    """Where the human's command came from; values equal hrc_msgs/msg/HumanAction SOURCE_*."""
+
+    DEVICE = 0      # a Linux joystick device (/dev/input/jsN)
+    JOY = 1         # sensor_msgs/Joy on /joy
+    SIMULATED = 2   # the simulated human model
+    REPLAY = 3      # republished from a recording
+    NONE = 4        # no input: zero command held
+
+    @property
+    def label(self) -> str:
+        """Return the lower-case name shown to users ('device', ...)."""
+        return self.name.lower()
+
+
+def source_label(code: int, default: str = None) -> str:
+    """Return the label of a raw SOURCE_* code; ``default`` (or 'source N') if unknown."""
+    try:
+        return InputSource(code).label
+    except ValueError:
+        return default if default is not None else f'source {code}'
 
 
 # --------------------------------------------------------------------------- degrees of freedom

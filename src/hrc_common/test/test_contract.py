@@ -27,6 +27,16 @@ def test_phases_equal_the_message_constants():
         Phase.from_label('resting')
 
 
+def test_input_sources_equal_the_message_constants():
+    from hrc_msgs.msg import HumanAction
+    declared = {name for name in dir(HumanAction) if name.startswith('SOURCE_')}
+    assert declared == {f'SOURCE_{source.name}' for source in contract.InputSource}
+    for source in contract.InputSource:
+        assert getattr(HumanAction, f'SOURCE_{source.name}') == source.value
+    assert contract.source_label(2) == 'simulated' and contract.source_label(9, '?') == '?'
+    assert contract.source_label(9) == 'source 9'
+
+
 def test_dof_indices_and_types_equal_the_messages():
     from hrc_msgs.msg import HumanAction, SessionStatus
     assert contract.DOF_INDEX == {TRANSLATION: SessionStatus.DOF_TRANSLATION,
