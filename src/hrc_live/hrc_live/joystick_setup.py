@@ -4,9 +4,12 @@
     ros2 run hrc_live joystick_setup /dev/input/js0 --output joystick.yaml      # guided
     ros2 run hrc_live joystick_setup /dev/input/js0 --non-interactive --detect 5
 
-Guided (a terminal): a refreshed line shows every axis and button; then the operator pushes the
-chosen stick in the direction that should mean "+" (slider up, right end of the pendulum up),
-lets go (the rest noise gives the deadzone), and presses the deadman button if one is wanted.
+Guided (a terminal): a refreshed line shows every axis and button at every step; the operator
+pushes the chosen stick in the direction that should mean "+" (slider up, right end of the
+pendulum up), lets go (the largest deviation at rest gives the deadzone), and presses the
+deadman button if one is wanted. Each step can be kept or redone; a last step shows the command
+the human node would send while the operator moves the stick, and any one step can be redone
+from there before the file is written.
 ``--non-interactive`` does the same from what the device reports during ``--detect`` seconds:
 the axis moved most, its direction (inversion), its first value (the rest), the button held.
 Flags (``--axis``, ``--invert``, ``--deadzone``, ``--enable-button``) override any detection.
@@ -55,6 +58,8 @@ DEADZONE_MAX = 0.5
 # A stick counts as moved when it left its rest by at least this much (normalized).
 MIN_DEFLECTION = 0.3
 REFRESH_S = 0.1
+# Seconds the released stick is watched for its rest noise.
+REST_WATCH_S = 1.5
 
 
 @dataclass
@@ -113,7 +118,10 @@ class AxisTrace:
     first: float
     last: float
     peak: float                 # the value farthest from ``first``
-    rest_noise: float = 0.0     # largest |value| while the operator was told to let go
+    largest: float = 0.0        # the largest |value| seen in the window (the rest: its noise)
+
+    def __post_init__(self):
+        self.largest = max(self.largest, abs(self.first), abs(self.peak), abs(self.last))
 
     @property
     def deflection(self) -> float:
@@ -171,6 +179,7 @@ class JoystickWatcher:
                     self.watch.axes[event.number] = AxisTrace(value, value, value)
                     continue
                 trace.last = value
+                trace.largest = max(trace.largest, abs(value))
                 if abs(value - trace.first) > abs(trace.peak - trace.first):
                     trace.peak = value
             elif event.value:
@@ -298,8 +307,12 @@ class Console:
 
 
 def watch_until(watcher: JoystickWatcher, console: Console, seconds: float = None,
-                until_enter: bool = False, show: bool = True) -> None:
-    """Read the device, refreshing the live line, for ``seconds`` or until Enter is pressed."""
+                until_enter: bool = False, show: bool = True, line=None) -> None:
+    """Read the device, refreshing the live line, for ``seconds`` or until Enter is pressed.
+
+    ``line`` returns the live line (default: every axis and button).
+    """
+    line = line or watcher.live_line
     deadline = None if seconds is None else watcher.clock() + seconds
     last_shown = 0.0
     while True:
@@ -308,7 +321,7 @@ def watch_until(watcher: JoystickWatcher, console: Console, seconds: float = Non
             raise RuntimeError(f'the joystick went away: {watcher.device.status}')
         now = watcher.clock()
         if show and now - last_shown >= (REFRESH_S if console.tty else 5 * REFRESH_S):
-            console.live(watcher.live_line())
+            console.live(line())
             last_shown = now
         if deadline is not None and now >= deadline:
             break
@@ -321,50 +334,130 @@ def watch_until(watcher: JoystickWatcher, console: Console, seconds: float = Non
             time.sleep(min(REFRESH_S, max(0.0, deadline - now)) if deadline else REFRESH_S)
     watcher.poll()  # what came with the Enter key counts too
     if show:
-        console.live(watcher.live_line())
+        console.live(line())
         console.say('')
 
 
+def read_answer() -> str:
+    """Return the operator's next line, stripped and lower case."""
+    return sys.stdin.readline().strip().lower()
+
+
+def command_line(watcher: JoystickWatcher, chosen: dict) -> str:
+    """Return the live check line: the raw axis and the command the human node would send."""
+    from hrc_joystick_node.js_event import shape_axis
+
+    axis = chosen['axis']
+    raw = watcher.device.axis(axis)
+    command = shape_axis(raw, chosen['deadzone'], chosen['invert'])
+    button = chosen['enable_button']
+    held = button < 0 or bool(watcher.device.buttons.get(button))
+    if not held:
+        command = 0.0
+    bar = int(round(10 * command))
+    gauge = ('-' * (10 + min(bar, 0)) + '#' * -min(bar, 0) + '|' + '#' * max(bar, 0)
+             + '-' * (10 - max(bar, 0)))
+    deadman = '' if button < 0 else (' deadman held' if held else ' deadman UP: zero')
+    return f'axis {axis} reads {raw:+.2f} -> command {command:+.2f} [{gauge}]{deadman}'
+
+
 def guided(watcher: JoystickWatcher, options, console: Console) -> tuple:
-    """Ask the operator step by step; return (axis, invert, deadzone, enable_button, notes)."""
+    """Ask the operator step by step; return (axis, invert, deadzone, enable_button, notes).
+
+    Live values show at every step. After each step the operator keeps it (Enter) or redoes it
+    (r); a final step shows the command the human node would send while the operator moves the
+    stick, and any step can be redone from there (its number) before the file is written.
+    """
     console.say('Move the sticks and press the buttons: their values show below. '
                 'Press Enter to continue.')
     watch_until(watcher, console, until_enter=True)
-    axis, invert = options.axis, options.invert
-    if axis is None or invert is None:
+    chosen = {'axis': options.axis, 'invert': options.invert, 'deadzone': options.deadzone,
+              'enable_button': options.enable_button}
+
+    def axis_step():
         watcher.start()  # before asking: what the operator does next is all in the window
         console.say('Push the stick the person will use all the way in the direction that '
                     'should mean "+" (slider up, right end of the pendulum up), hold it there, '
                     'and press Enter.')
         watch_until(watcher, console, until_enter=True)
-        detected = chosen_axis(watcher.watch) if axis is None else axis
+        detected = chosen_axis(watcher.watch) if options.axis is None else options.axis
         if detected is None or detected not in watcher.watch.axes:
-            raise RuntimeError('no axis moved far enough: run again and push the stick fully')
-        axis = detected
-        if invert is None:
-            invert = inversion(watcher.watch.axes[axis])
-        console.say(f'axis {axis}' + (' (inverted)' if invert else ''))
-    deadzone = options.deadzone
-    if deadzone is None:
-        console.say('Let go of the stick and press Enter (its rest position gives the '
-                    'deadzone).')
-        watch_until(watcher, console, until_enter=True, show=False)
+            console.say(f'no axis moved by {MIN_DEFLECTION} or more: push the stick fully')
+            return False
+        chosen['axis'] = detected
+        if options.invert is None:
+            chosen['invert'] = inversion(watcher.watch.axes[detected])
+        console.say(f'axis {detected}' + (' (inverted)' if chosen['invert'] else ''))
+        return True
+
+    def rest_step():
+        console.say('Let go of the stick and press Enter; then keep your hands off for '
+                    f'{REST_WATCH_S:.1f} s (its rest position gives the deadzone).')
+        watch_until(watcher, console, until_enter=True)
         watcher.start()
-        watch_until(watcher, console, seconds=1.0, show=False)
-        trace = watcher.watch.axes.get(axis)
-        rest = max(abs(trace.first), abs(trace.peak)) if trace is not None else 0.0
-        deadzone = deadzone_from_rest(rest)
-        console.say(f'at rest the axis reads up to {rest:.3f}: deadzone {deadzone}')
-    enable_button = options.enable_button
-    if enable_button is None:
+
+        def rest_line():
+            trace = watcher.watch.axes.get(chosen['axis'])
+            largest = trace.largest if trace is not None else 0.0
+            return (f'rest watch: axis {chosen["axis"]} reads '
+                    f'{watcher.device.axis(chosen["axis"]):+.3f}, largest so far {largest:.3f}')
+        watch_until(watcher, console, seconds=REST_WATCH_S, line=rest_line)
+        trace = watcher.watch.axes.get(chosen['axis'])
+        rest = trace.largest if trace is not None else 0.0
+        chosen['deadzone'] = deadzone_from_rest(rest)
+        console.say(f'at rest the axis reads up to {rest:.3f} (the largest deviation seen): '
+                    f'deadzone {chosen["deadzone"]}')
+        return True
+
+    def button_step():
         watcher.start()
         console.say('Press and hold the button that must be held to act (a deadman button) '
                     'and press Enter; or press Enter alone for none.')
-        watch_until(watcher, console, until_enter=True, show=False)
-        enable_button = chosen_button(watcher.held_buttons())
-        console.say(f'enable button {enable_button}' if enable_button >= 0
+        watch_until(watcher, console, until_enter=True)
+        chosen['enable_button'] = chosen_button(watcher.held_buttons())
+        console.say(f'enable button {chosen["enable_button"]}' if chosen['enable_button'] >= 0
                     else 'no enable button')
-    return axis, invert, deadzone, enable_button, 'chosen with the guided set-up'
+        return True
+
+    steps = [('the axis and its direction', axis_step, options.axis is None
+              or options.invert is None),
+             ('the rest (deadzone)', rest_step, options.deadzone is None),
+             ('the deadman button', button_step, options.enable_button is None)]
+    steps = [(name, step) for name, step, wanted in steps if wanted]
+    if chosen['axis'] is None and not any(step is axis_step for _, step in steps):
+        raise RuntimeError('no axis given')
+
+    def run(index):
+        name, step = steps[index]
+        while True:
+            done = step()
+            console.say(f'Step {index + 1} of {len(steps)} ({name}): press Enter to keep it, '
+                        f'or r and Enter to redo it.' if done else
+                        f'Step {index + 1} of {len(steps)} ({name}) failed: press Enter to '
+                        f'redo it.')
+            answer = read_answer()
+            if done and answer != 'r':
+                return
+
+    for index in range(len(steps)):
+        run(index)
+    while True:
+        console.say('Check: move the stick through its whole range (and release the deadman '
+                    'button, if any); the command the person would send shows live. Press '
+                    'Enter when done.')
+        watch_until(watcher, console, until_enter=True,
+                    line=lambda: command_line(watcher, chosen))
+        redo = ' or a step number (' + ', '.join(
+            f'{index + 1} = {name}' for index, (name, _) in enumerate(steps)) + ') to redo it' \
+            if steps else ''
+        console.say(f'Press Enter to write the file, c to check again{redo}.')
+        answer = read_answer()
+        if answer == '':
+            break
+        if answer.isdigit() and 1 <= int(answer) <= len(steps):
+            run(int(answer) - 1)
+    return (chosen['axis'], chosen['invert'], chosen['deadzone'], chosen['enable_button'],
+            'chosen with the guided set-up')
 
 
 def detect(watcher: JoystickWatcher, options, console: Console) -> tuple:

@@ -120,7 +120,7 @@ def test_lists_devices_and_says_when_there_are_none(tmp_path):
     assert result.returncode == 1 and 'no joystick devices' in result.stdout
 
 
-def test_guided_set_up_at_a_terminal(fifo, tmp_path):
+def test_guided_set_up_at_a_terminal_with_live_values_a_redo_and_a_check(fifo, tmp_path):
     path, writer = fifo
     os.write(writer, initial_state())
     output_file = tmp_path / 'joystick.yaml'
@@ -129,29 +129,56 @@ def test_guided_set_up_at_a_terminal(fifo, tmp_path):
                                stdin=helper_side, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT)
     os.close(helper_side)
-    answers = {
-        'Move the sticks': b'',
-        'Push the stick': pack_event(10, -32767, JS_EVENT_AXIS, 1),   # axis 1 fully up
-        'Let go of the stick': pack_event(20, 2000, JS_EVENT_AXIS, 1),  # rests a bit off
-        'Press and hold the button': pack_event(30, 1, JS_EVENT_BUTTON, 2),
-    }
+
+    def send(events=b'', answer=b'\n'):
+        def act():
+            os.write(writer, events)
+            os.write(terminal, answer)
+        return act
+
+    def rest_noise(time_ms, peak):
+        # Once the rest watch shows its first live line: a twitch to `peak`, back to 1000.
+        return lambda: os.write(writer, pack_event(time_ms, peak, JS_EVENT_AXIS, 1)
+                                + pack_event(time_ms + 1, 1000, JS_EVENT_AXIS, 1))
+
+    # (the line the helper prints, what the operator does then), in order.
+    script = [
+        ('Move the sticks', send()),
+        ('Push the stick', send(pack_event(10, -32767, JS_EVENT_AXIS, 1))),  # axis 1 fully up
+        ('Step 1 of 3', send()),
+        ('Let go of the stick', send(pack_event(20, 2000, JS_EVENT_AXIS, 1))),
+        ('rest watch: axis 1', rest_noise(21, 2500)),   # live values during the rest watch
+        ('Step 2 of 3', send(answer=b'r\n')),   # redo the rest step
+        ('Let go of the stick', send(pack_event(23, 1500, JS_EVENT_AXIS, 1))),
+        ('rest watch: axis 1', rest_noise(24, 1800)),
+        ('Step 2 of 3', send()),
+        ('Press and hold the button', send(pack_event(30, 1, JS_EVENT_BUTTON, 2))),
+        ('axes 0:', lambda: None),               # live values while the button is held
+        ('Step 3 of 3', send()),
+        ('Check: move the stick', send(pack_event(40, -16384, JS_EVENT_AXIS, 1))),
+        ('Press Enter to write the file', send()),
+    ]
     output = []
     try:
         for raw in process.stdout:
             line = raw.decode()
             output.append(line)
-            for prompt, events in answers.items():
-                if line.startswith(prompt):
-                    os.write(writer, events)
-                    os.write(terminal, b'\n')
+            if script and line.startswith(script[0][0]):
+                script.pop(0)[1]()
         assert process.wait(timeout=60) == 0, ''.join(output)
     finally:
         os.close(terminal)
     text = ''.join(output)
+    assert not script, (script, text)
     assert 'axis 1\n' in text  # pushed up = + in the Joy convention: not inverted
-    rest = 2000 / 32767
-    assert f'at rest the axis reads up to {rest:.3f}: deadzone {deadzone_from_rest(rest)}' \
-        in text
+    # The rest is the largest deviation seen, from the redone step: 1800, not 1000 or 1500.
+    rest = 1800 / 32767
+    assert (f'at rest the axis reads up to {rest:.3f} (the largest deviation seen): deadzone '
+            f'{deadzone_from_rest(rest)}') in text
+    assert text.count('Let go of the stick') == 2
+    # The check shows the command the human node would send (half up, deadman held).
+    shaped = (16384 / 32767 - deadzone_from_rest(rest)) / (1 - deadzone_from_rest(rest))
+    assert f'axis 1 reads +0.50 -> command {shaped:+.2f}' in text and 'deadman held' in text
     assert yaml.safe_load(output_file.read_text())['human']['ros__parameters'] == {
         'input': 'device', 'device': str(path), 'axis': 1, 'invert': False,
         'deadzone': deadzone_from_rest(rest), 'enable_button': 2}
