@@ -1,7 +1,7 @@
 """Experiment runner: paper cases x seeds (x simulated-human profiles), headless, then the study.
 
     ros2 run hrc_bringup experiment --seeds 10                       # local process pool
-    ros2 run hrc_bringup experiment --seeds 10 --profiles paper paper_symmetric
+    ros2 run hrc_bringup experiment --seeds 10 --profiles paper paper_symmetric:5
     ros2 run hrc_bringup experiment --seeds 10 --ray                 # a local Ray instance
     ros2 run hrc_bringup experiment --seeds 10 --ray-address auto    # an existing Ray cluster
     ros2 run hrc_bringup experiment --seeds 2 --engine graph         # the ROS graph per session
@@ -234,8 +234,9 @@ def parse_args(argv=None):
     parser.add_argument('--seeds', type=int, default=10,
                         help='seeds per case, each a different simulated person (default 10)')
     parser.add_argument('--first-seed', type=int, default=0, help='first seed (default 0)')
-    parser.add_argument('--profiles', nargs='+', default=[''],
-                        help='simulated-human profiles (params/sim_human.yaml); each runs '
+    parser.add_argument('--profiles', nargs='+', default=[''], metavar='PROFILE[:SEEDS]',
+                        help='simulated-human profiles (params/sim_human.yaml), each with '
+                        'its own number of seeds if given (default --seeds); each runs '
                         "every case and seed (default: the human node's profile)")
     parser.add_argument('--same-person', action='store_true',
                         help='every seed with the profile itself (default: seed N is person '
@@ -282,8 +283,15 @@ def parse_args(argv=None):
         reasons.append(f'--cpus-per-session must be > 0, got {options.cpus_per_session}')
     if options.ray and options.ray_address:
         reasons.append('--ray starts a local instance; --ray-address joins one: give one')
-    if len(set(options.profiles)) != len(options.profiles):
-        reasons.append(f'--profiles repeats a profile: {options.profiles}')
+    options.profile_seeds = {}
+    for text in options.profiles:
+        profile, colon, count = text.partition(':')
+        if colon and not (count.isdigit() and int(count) >= 1):
+            reasons.append(f'--profiles {text!r}: seeds after ":" must be an integer >= 1')
+            continue
+        if profile in options.profile_seeds:
+            reasons.append(f'--profiles repeats {profile!r}')
+        options.profile_seeds[profile] = int(count) if colon else options.seeds
     from hrc_bringup.plan import parse_override
     for override in options.overrides:
         try:
@@ -304,7 +312,8 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
     params_dir = str((pathlib.Path(options.params_dir) if options.params_dir
                       else default_params_dir()).resolve())
     return [SessionTask(case=case, seed=seed, profile=profile,
-                        session_id=session_id_of(case, seed, profile, options.profiles),
+                        session_id=session_id_of(case, seed, profile,
+                                                 list(options.profile_seeds)),
                         engine=options.engine, bags_dir=str(bags_dir.resolve()),
                         runs_dir=str(runs_dir.resolve()),
                         training_episodes=options.episodes,
@@ -312,8 +321,8 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
                         overrides=person_override(options, seed) + tuple(options.overrides),
                         params_dir=params_dir,
                         pull_bags=options.pull_bags)
-            for profile in options.profiles
-            for seed in range(options.first_seed, options.first_seed + options.seeds)
+            for profile, seeds in options.profile_seeds.items()
+            for seed in range(options.first_seed, options.first_seed + seeds)
             for case in options.cases]
 
 
@@ -342,6 +351,7 @@ def main(argv=None) -> int:
     bags_dir.mkdir(parents=True, exist_ok=True)
     runs_dir.mkdir(parents=True, exist_ok=True)
     tasks = plan_tasks(options, bags_dir, runs_dir)
+    uncommitted = _uncommitted_sources()
     started_at = time.strftime('%Y-%m-%d %H:%M:%S %Z')
     start = time.monotonic()
     try:
@@ -349,8 +359,10 @@ def main(argv=None) -> int:
     except Exception as error:   # Ray not reachable: say so, no traceback
         print(f'[experiment] cannot start the executor: {error}', file=sys.stderr)
         return 1
-    print(f'[experiment] {name}: {len(tasks)} sessions ({len(options.cases)} cases x '
-          f'{options.seeds} seeds x {len(options.profiles)} profiles), engine '
+    profiles = ', '.join(f'{profile or "default"}: {seeds} seeds'
+                         for profile, seeds in options.profile_seeds.items())
+    print(f'[experiment] {name}: {len(tasks)} sessions ({len(options.cases)} cases; '
+          f'{profiles}), engine '
           f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
     outcomes = []
 
@@ -379,6 +391,7 @@ def main(argv=None) -> int:
               'engine': options.engine, 'executor': description, 'sessions': len(tasks),
               'failed': failed, 'wall_seconds': wall, 'started': started_at,
               'host_cpus': os.cpu_count(), 'version': _version(),
+              'uncommitted': uncommitted,
               'tasks': [asdict(task) for task in tasks],
               'outcomes': sorted(outcomes, key=lambda outcome: outcome['session_id'])}
     (bags_dir / 'experiment.json').write_text(json.dumps(record, indent=1))
@@ -390,6 +403,20 @@ def main(argv=None) -> int:
     from hrc_study import results_cli
     code = results_cli.main([str(bags_dir), '--out', out])
     return 1 if failed or code else 0
+
+
+def _uncommitted_sources() -> list:
+    """Return the source files that differ from the commit (run from a checkout), else [].
+
+    The sessions run the code as it is on disk: the record says when that is not a commit.
+    """
+    try:
+        status = subprocess.run(['git', 'status', '--porcelain', '--', 'src', 'params'],
+                                capture_output=True, text=True, timeout=10)
+    except (OSError, subprocess.TimeoutExpired):
+        return []
+    return [line[3:] for line in status.stdout.splitlines()
+            if line[:2].strip() and not line.startswith('??')] if status.returncode == 0 else []
 
 
 def _version() -> str:
