@@ -23,11 +23,11 @@ import math
 import threading
 import typing
 
-from hrc_common.contract import BODY_COLOURS, rgb8
+from hrc_common.contract import BODY_COLOURS, InputSource, rgb8
 from hrc_sim_node.physics import (BEAM_HEIGHT, body_poses, PhysicsParams, PhysicsState,
                                   ROD_RADIUS, SLIDER_SIZE)
 # HumanAction.SOURCE_* order.
-SOURCE_NAMES = ('device', 'joy', 'simulated', 'replay', 'none')
+SOURCE_NAMES = tuple(source.label for source in InputSource)
 
 # The bodies' colours (hrc_common.contract, as the sim draws them) as 8-bit RGB, and the page's.
 COLORS = {**{name: rgb8(colour) for name, colour in BODY_COLOURS.items()},
