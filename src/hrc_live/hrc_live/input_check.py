@@ -20,8 +20,9 @@ import os
 import stat
 import termios
 
-# HumanAction.SOURCE_NONE
-SOURCE_NONE = 4
+from hrc_common.contract import InputSource
+
+SOURCE_NONE = int(InputSource.NONE)
 NOT_INVOLVED = 'not involved'
 
 
