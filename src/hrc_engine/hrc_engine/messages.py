@@ -8,14 +8,13 @@ the graph. ``hrc_bag.session_writer`` encodes them to CDR.
 
 from dataclasses import dataclass, field
 
-from hrc_common.contract import DOF_INDEX, Phase, wrench_axis
+from hrc_common.contract import DOF_INDEX, InputSource, Phase, wrench_axis
 from hrc_sim_node.commands import HUMAN, ROBOT
 from hrc_sim_node.protocol import stamp_fields
 
 FRAME = 'world'
-# HumanAction.SOURCE_* (hrc_msgs/msg/HumanAction.msg)
-SOURCE_SIMULATED = 2
-SOURCE_NONE = 4
+SOURCE_SIMULATED = int(InputSource.SIMULATED)
+SOURCE_NONE = int(InputSource.NONE)
 
 
 def header(stamp: int) -> dict:
