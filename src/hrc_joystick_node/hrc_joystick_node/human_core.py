@@ -28,6 +28,7 @@ The input status (:class:`InputStatus`) is what the node publishes on ``/hrc/hum
 from dataclasses import dataclass
 import typing
 
+from hrc_common.contract import InputSource
 from hrc_common.dof import check_dof, DOFS, TRANSLATION
 from hrc_common.params import param, ParameterError
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
@@ -36,9 +37,11 @@ from hrc_joystick_node.population import person_or_profile
 from hrc_joystick_node.sim_human import (BALL, HumanProfile, normalize_subtasks, OWN_SUBTASK,
                                          SimulatedHuman)
 
-# HumanAction.SOURCE_* of hrc_msgs (a test keeps them equal), by input name; a cloned model
-# is a simulated human (its detail names the file).
-SOURCE_CODE = {DEVICE: 0, JOY: 1, SIM: 2, MODEL: 2, ZERO: 4}
+# HumanAction.SOURCE_* by input name; a cloned model is a simulated human (its detail names
+# the file).
+SOURCE_CODE = {name: int(source) for name, source in (
+    (DEVICE, InputSource.DEVICE), (JOY, InputSource.JOY), (SIM, InputSource.SIMULATED),
+    (MODEL, InputSource.SIMULATED), (ZERO, InputSource.NONE))}
 
 
 @dataclass
