@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 
 from hrc_common.testing import executable_path, wait_for
@@ -22,9 +21,8 @@ import yaml
 
 from hrc_bag import bag_reader
 from hrc_bag.format import SESSION_RECORD
-from hrc_bag.recovery import recover_file
 from hrc_bag.session_writer import contract_descriptions
-from hrc_bag.synthetic import episode_messages, loss_window, publish_until, SyntheticSession
+from hrc_bag.synthetic import kill_trial, SyntheticSession
 
 EXIT_RECORDING_FAILED = 3
 
@@ -216,13 +214,6 @@ LOSS_BOUND = 1.0                # s, what the open episode may lose on this shar
 TRIALS = 4
 
 
-def file_counts(path) -> dict:
-    counts = {}
-    for message in bag_reader.scan_file(path).messages:
-        counts[message.topic] = counts.get(message.topic, 0) + 1
-    return counts
-
-
 def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test_node,
                                                                 tmp_path, isolation):
     """Every episode finished FINISHED_BEFORE_KILL before the kill is closed and whole."""
@@ -237,48 +228,19 @@ def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test
         session = SyntheticSession(test_node, session_id, case_id=1, seed=trial,
                                    prefix=isolation.prefix)
         assert session.wait_for_subscribers(), recorder.output
-        folder = tmp_path / session_id
-        # a first episode proves that every topic is matched (not part of the trial)
-        session.publish_status(0)
-        session.publish_episode(0, steps=5, step_period=0.005)
-        wait_listed(folder, 1, recorder)
-        killed = threading.Event()
-        kill_time = []
-
-        def kill():
-            kill_time.append(time.time_ns())
-            os.killpg(recorder.process.pid, signal.SIGKILL)
-            killed.set()
-
-        timer = threading.Timer(chance.uniform(1.2, 3.0), kill)
-        timer.start()
-        summaries = publish_until(session, killed.is_set, first_episode=1)
-        timer.join()
+        result = kill_trial(session, recorder.process.pid, tmp_path / session_id,
+                            chance.uniform(1.2, 3.0))
         recorder.process.wait(timeout=10)
-        kill_ns = kill_time[0]
-
-        listed = listed_files(folder)
-        expected = episode_messages(session.published)
-        finished = [episode for episode, published in summaries.items()
-                    if kill_ns - published > FINISHED_BEFORE_KILL * 1e9]
+        finished = result.finished(FINISHED_BEFORE_KILL)
         assert finished, f'trial {trial}: no episode finished before the kill'
         for episode in finished:
-            name = f'{session_id}_ep{episode:04d}.mcap'
-            assert name in listed, (trial, episode, listed)
-            assert bag_reader.is_complete(folder / name)
-            counts = file_counts(folder / name)
-            for topic, count in expected[episode].items():
-                assert counts.get(isolation.name(topic), 0) == count, (trial, episode, topic)
-
-        # the open episode: finished by recovery, it lacks only its last fraction of a second
-        recorded = {}
-        for path in sorted(folder.glob('*.mcap')):
-            if path.name not in listed:
-                recover_file(path)
-            for topic, count in file_counts(path).items():
-                topic = topic[len(isolation.prefix):]
-                recorded[topic] = recorded.get(topic, 0) + count
-        losses.append(loss_window(session, recorded, kill_ns))
+            assert f'{session_id}_ep{episode:04d}.mcap' in result.closed, (trial, episode,
+                                                                           result.closed)
+            assert bag_reader.is_complete(tmp_path / session_id /
+                                          f'{session_id}_ep{episode:04d}.mcap')
+        assert result.misplaced == {} and result.undelivered == {}, (
+            trial, result.misplaced, result.undelivered)
+        losses.append(result.loss)
     assert max(losses) < LOSS_BOUND, losses
 
 
