@@ -243,23 +243,31 @@ class StepProtocol:
         self.counters[name] += 1
         self.totals[name] += 1
 
+    def is_answer(self, stamp: int) -> bool:
+        """Return True when a command stamped ``stamp`` (ns) would be read, not stale.
+
+        Lockstep: the stamp of the awaited state; realtime: of any state of the episode.
+        (The node checks this before it decodes a command: a flood of stale ones costs little.)
+        """
+        if not self.active:
+            return False
+        if self.mode == LOCKSTEP:
+            return stamp == self.awaited
+        return (self._episode_first_stamp is not None
+                and self._episode_first_stamp <= stamp <= self.sim_time_ns
+                and (stamp - self._episode_first_stamp) % self.period_ns == 0)
+
     def on_command(self, actor: str, stamp: int, wrench, now: float) -> CommandResult:
         """Read one command of ``actor`` (a Wrench-like object) stamped ``stamp`` (ns).
 
-        ``now`` is a monotonic wall time (s), used in realtime for the command's age.
+        ``now`` is a monotonic wall time (s), used in realtime for the command's age. The
+        wrench is not read when the command is stale (it may be None then).
         """
         if not self.active:
             self._count(actor + '_between_episodes')
             return CommandResult(actor, 'between_episodes', stamp)
-        if self.mode == LOCKSTEP:
-            awaited = self.awaited
-            valid = stamp == awaited
-        else:
-            awaited = self.sim_time_ns
-            valid = (self._episode_first_stamp is not None
-                     and self._episode_first_stamp <= stamp <= self.sim_time_ns
-                     and (stamp - self._episode_first_stamp) % self.period_ns == 0)
-        if not valid:
+        awaited = self.awaited if self.mode == LOCKSTEP else self.sim_time_ns
+        if not self.is_answer(stamp):
             self._count(actor + '_stale')
             return CommandResult(actor, 'stale', stamp, awaited)
         dof = self.dof_of[actor]

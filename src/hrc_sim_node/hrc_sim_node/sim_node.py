@@ -25,6 +25,7 @@ Operator abort (``/hrc/session`` with phase ``aborted``): a running episode stop
 sim holds (no more steps or states, nothing applied) until ``/hrc/sim/reset`` is called again.
 """
 
+import struct
 import time
 
 from builtin_interfaces.msg import Time
@@ -45,6 +46,7 @@ from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image
 from std_msgs.msg import ColorRGBA
@@ -56,6 +58,19 @@ __all__ = ['SimNode', 'SimParams', 'LOCKSTEP', 'REALTIME', 'main']
 WARN_THROTTLE_S = 2.0
 # /clock: reliable, so best-effort (rclpy's TimeSource) and reliable subscribers both match.
 CLOCK_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE)
+# The sim's command subscriptions keep this many samples (KEEP_LAST). With depth 1 (the
+# contract's), a second publisher flooding the topic (about 40k/s here) or sending 1 MiB
+# commands replaced the actor's matching command in the reader's queue before the executor
+# took it; the sim also drains the queue in one turn (_on_raw_command). Depth is not part of
+# QoS matching, so the publishers keep the contract's QoS. Memory: small commands are ~100 B;
+# giant ones arrive slowly (tens per second) and are drained as they come.
+COMMAND_SUBSCRIPTION_DEPTH = 1000
+COMMAND_SUBSCRIPTION_QOS = QoSProfile(
+    history=qos.COMMAND_QOS.history, depth=COMMAND_SUBSCRIPTION_DEPTH,
+    reliability=qos.COMMAND_QOS.reliability, durability=qos.COMMAND_QOS.durability,
+    deadline=qos.COMMAND_QOS.deadline)
+# Commands read from a subscription's queue in one turn of the executor at most (fairness).
+COMMAND_DRAIN_LIMIT = 10000
 # Period (s) of the free-run timer: as short as possible, the timer is re-armed every step.
 FREE_RUN_PERIOD_S = 1e-6
 
@@ -90,12 +105,14 @@ class SimNode(Node):
         self._image_pub = (self.create_publisher(Image, topics.CAMERA_IMAGE, qos.VISUAL_QOS)
                            if params.camera_rate > 0 else None)
         self._command_topics = {}
+        self._command_subscriptions = {}
         for actor, topic in ((ROBOT, topics.ROBOT_CMD_WRENCH), (HUMAN, topics.HUMAN_CMD_WRENCH)):
             events = SubscriptionEventCallbacks(
                 deadline=lambda event, actor=actor: self._on_deadline_missed(actor, event))
             subscription = self.create_subscription(
-                WrenchStamped, topic, lambda msg, actor=actor: self._on_command(actor, msg),
-                qos.COMMAND_QOS, event_callbacks=events)
+                WrenchStamped, topic, lambda data, actor=actor: self._on_raw_command(actor, data),
+                COMMAND_SUBSCRIPTION_QOS, event_callbacks=events, raw=True)
+            self._command_subscriptions[actor] = subscription
             self._command_topics[actor] = subscription.topic_name
         self.create_subscription(SessionStatus, topics.SESSION, self._on_session,
                                  qos.SESSION_QOS)
@@ -287,12 +304,32 @@ class SimNode(Node):
         self._advance(order)
 
     # -- inputs --------------------------------------------------------------------------------
-    def _on_command(self, actor: str, message: WrenchStamped):
-        header = message.header.stamp
-        result = self.protocol.on_command(actor, stamp_ns(header.sec, header.nanosec),
-                                          message.wrench, time.monotonic())
+    def _on_raw_command(self, actor: str, data: bytes):
+        """Read a command, then drain the commands queued behind it in the same turn.
+
+        One message per turn of the executor is far slower than a second publisher can flood
+        the topic (about 2k vs 40k/s here), so the reader's queue stayed full and the actor's
+        matching command was pushed out of it. Draining, with the stamp read from the CDR
+        bytes before anything is decoded, keeps up with such a flood.
+        """
+        self._read_command(actor, data)
+        subscription = self._command_subscriptions[actor]
+        with subscription.handle:
+            for _ in range(COMMAND_DRAIN_LIMIT):
+                taken = subscription.handle.take_message(WrenchStamped, True)
+                if taken is None:
+                    return
+                self._read_command(actor, taken[0])
+
+    def _read_command(self, actor: str, data: bytes):
+        sec, nanosec = command_stamp(data)
+        stamp = stamp_ns(sec, nanosec)
+        wrench = None
+        if self.protocol.is_answer(stamp):
+            wrench = deserialize_message(data, WrenchStamped).wrench
+        result = self.protocol.on_command(actor, stamp, wrench, time.monotonic())
         if result.kind == 'stale':
-            self._warn_stale(actor, (header.sec, header.nanosec), result.awaited)
+            self._warn_stale(actor, (sec, nanosec), result.awaited)
         elif result.kind == 'refused':
             self._warn(actor + '_refused', f'refused {actor} command at step '
                        f'{self.protocol.step}: {result.command.refused}; the step counts it '
@@ -381,6 +418,17 @@ class SimNode(Node):
     def close(self):
         """Release PyBullet."""
         self.physics.close()
+
+
+def command_stamp(data: bytes) -> tuple:
+    """Return (sec, nanosec) of a CDR-serialized WrenchStamped without decoding it.
+
+    The header's stamp comes first, after the 4-byte encapsulation (byte 1: 1 = little
+    endian). Too short: (-1, 0), which no state carries.
+    """
+    if len(data) < 12:
+        return -1, 0
+    return struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
 
 
 def state_message(state, episode: int, stamp: Time, missing: dict) -> TaskState:

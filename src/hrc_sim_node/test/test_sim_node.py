@@ -3,6 +3,7 @@
 from dataclasses import fields
 import math
 import pathlib
+import re
 import statistics
 
 from hrc_common.params import as_dict, load_yaml
@@ -323,3 +324,45 @@ def test_the_last_uint32_episode_index_holds_instead_of_wrapping(start_node, sim
     assert printed(process, 'episode 4294967295 is the last index a uint32 holds')
     sim_client.spin(0.3)
     assert [s.episode for s in sim_client.states] == [4294967295, 4294967295]
+
+
+FLOOD = pathlib.Path(__file__).with_name('flood.py')
+
+
+@pytest.mark.parametrize('topic, actor, frame_id_bytes, at_least', [
+    ('/hrc/human/cmd_wrench', 'human', 8, 1000),             # a flood of small commands
+    ('/hrc/robot/cmd_wrench', 'robot', 1024 * 1024, 10),    # giant commands (1 MiB)
+])
+def test_a_second_publisher_cannot_push_out_the_actors_matching_command(
+        start_node, sim_client, ros_env, topic, actor, frame_id_bytes, at_least):
+    """Without draining the queue (and a deeper one) matching commands were lost."""
+    import subprocess
+    import sys
+
+    process = start_sim(start_node, sim_client, episode_duration=6.0, **PATIENT)
+    flooder = subprocess.Popen([sys.executable, str(FLOOD), topic, str(frame_id_bytes)],
+                               env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                               text=True)
+    try:
+        assert sim_client.wait(lambda: sim_client.node.count_publishers(topic) >= 2, 30)
+        sim_client.reset(seed=0)
+        state = sim_client.next_state(0)
+        # The flood reaches the sim (reported at WARN, naming the topic's publishers).
+        assert printed(process, f'{actor} command stamped (12345, 0) answers no state', 30)
+        for step in range(30):
+            sim_client.answer('robot', state, force_z=0.5)
+            sim_client.answer('human', state, torque_x=-0.1)
+            state = sim_client.next_state(step + 1)
+    finally:
+        flooder.terminate()
+        flooder.wait(timeout=10)
+    missing = [s.step for s in sim_client.states
+               if s.robot_command_missing or s.human_command_missing]
+    assert missing == [], f'matching commands lost in steps {missing}'
+    assert all((s.applied_force, s.applied_torque) == (0.5, -0.1) for s in sim_client.states[1:])
+    assert printed(process, f'2 publisher(s) on {topic}: ') and 'gid 010f' in process.output
+    assert printed(process, 'episode 0 truncated after 30 steps')
+    flood = int(re.search(f'{actor}_stale ([0-9]+)', process.output).group(1))
+    assert flood >= at_least, f'only {flood} flood commands reached the sim'
+    # Throttled: a few warnings for the whole flood.
+    assert process.output.count('answers no state') <= 2 + 6 * 2
