@@ -303,7 +303,7 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         lines.append('The robot works alone in this step.')
     if snapshot.alone is not None and (snapshot.alone.episodes or snapshot.alone.ended is None):
         lines.append(snapshot.alone.words(now))
-    if in_episode:
+    if in_episode and session.human_involved:   # lonely episodes run faster than the clock
         steps_left = max(0, snapshot.physics.steps_per_episode - state.step)
         lines.append(f'Time left: {steps_left * snapshot.physics.control_period:.0f} s')
     lines.append(f'Episodes with you so far: {episodes_with_person(snapshot)}')

@@ -34,6 +34,7 @@ class Scene {
     this.canvas.height = Math.max(1, Math.round(box.height * ratio));
     this.cssWidth = box.width;
     this.cssHeight = box.height;
+    this.drawnKey = null;
     this.fitBounds();
   }
 
@@ -55,6 +56,7 @@ class Scene {
 
   setGeometry(geometry) {
     this.geometry = geometry;
+    this.drawnKey = null;
     this.fitBounds();
   }
 
@@ -91,17 +93,23 @@ class Scene {
   frame(time) {
     requestAnimationFrame((next) => this.frame(next));
     if (!this.geometry || !this.fit) return;
-    const c = this.context, g = this.geometry, ratio = this.canvas.width / this.cssWidth;
-    c.setTransform(ratio, 0, 0, ratio, 0, 0);
-    c.fillStyle = g.colors.background;
-    c.fillRect(0, 0, this.cssWidth, this.cssHeight);
-    const pose = this.state ? this.estimate(time) : {slider: 0, angle: 0, ball: 0};
-    this.draw(pose);
-    this.drawn = pose;
     const stats = this.stats;
     stats.frames += 1;
     stats.frameTimes.push(time);
     if (stats.frameTimes.length > 600) stats.frameTimes.shift();
+    const pose = this.state ? this.estimate(time) : {slider: 0, angle: 0, ball: 0};
+    // Nothing moves (the sim holds, or between episodes): do not redraw the same picture.
+    const key = [pose.slider, pose.angle, pose.ball].map((v) => v.toFixed(5)).join(',')
+      + `,${this.canvas.width},${this.canvas.height}`;
+    if (key === this.drawnKey && this.pendingLatency === null) return;
+    this.drawnKey = key;
+    const c = this.context, g = this.geometry, ratio = this.canvas.width / this.cssWidth;
+    c.setTransform(ratio, 0, 0, ratio, 0, 0);
+    c.fillStyle = g.colors.background;
+    c.fillRect(0, 0, this.cssWidth, this.cssHeight);
+    this.draw(pose);
+    this.drawn = pose;
+    stats.draws = (stats.draws || 0) + 1;
     if (this.state && this.pendingLatency !== null) {
       // The state is on screen with this frame: wall time now minus its send time.
       stats.latencies.push(performance.timeOrigin + performance.now() - this.pendingLatency);
@@ -176,7 +184,7 @@ function sceneStats(scene, seconds) {
   const recent = times.filter((t) => now - t <= seconds * 1000);
   const lat = scene.stats.latencies.slice().sort((a, b) => a - b);
   const pick = (q) => lat.length ? lat[Math.min(lat.length - 1, Math.floor(q * lat.length))] : null;
-  return {fps: recent.length / seconds, latency_median_ms: pick(0.5), latency_p95_ms: pick(0.95),
+  return {fps: recent.length / seconds, draws: scene.stats.draws || 0, latency_median_ms: pick(0.5), latency_p95_ms: pick(0.95),
           latencies: lat.length, frames: scene.stats.frames, statesDrawn: scene.stats.statesDrawn,
           lastDrawnStep: scene.stats.lastDrawnStep, lastDrawnEpisode: scene.stats.lastDrawnEpisode};
 }
