@@ -7,7 +7,7 @@ and documented choices where it does not. Mirrored in ``params/agent.yaml``.
 from dataclasses import dataclass
 import os
 
-from hrc_common.contract import id_problem
+from hrc_common.contract import id_problem, make_session_id
 from hrc_common.params import param
 
 PACKAGE = 'hrc_agent_node'
@@ -146,7 +146,7 @@ class AgentParams:
     @property
     def effective_session_id(self) -> str:
         """Return session_id, or the id derived from case and seed when it is empty."""
-        return self.session_id or f'case{self.case}_seed{self.seed}'
+        return self.session_id or make_session_id(self.case, self.seed, timestamped=False)
 
 
 def share_file(name: str) -> str:
