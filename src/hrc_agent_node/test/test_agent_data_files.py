@@ -113,7 +113,7 @@ def test_session_ids_that_name_other_paths_are_refused(session_id):
 
 
 def test_derived_and_plain_session_ids_are_accepted():
-    assert AgentCore(with_overrides(AgentParams(), case=3, seed=4)).session_id == 'case3_seed4'
+    assert AgentCore(with_overrides(AgentParams(), case=3, seed=4)).session_id == 'case3-seed4'
     checked(with_overrides(AgentParams(), session_id='case2-seed0-20261130-201500'))
 
 
