@@ -18,14 +18,15 @@ checked against :data:`LAYOUT` (every problem reported at once) before anything 
 Written atomically (temporary file, then rename) so a crash never leaves half a checkpoint.
 """
 
+import io
 import os
 import pickle
-import tempfile
 import warnings
 
 import torch
 
 from hrc_agent_node.ppo import BUFFER_FIELDS
+from hrc_common.contract import atomic_write
 from hrc_common.params import as_dict
 
 FORMAT = 'hrc_agent_checkpoint'
@@ -77,19 +78,12 @@ def make_checkpoint(core) -> dict:
 
 
 def save_checkpoint(core, path) -> str:
-    """Write ``core``'s checkpoint to ``path`` atomically; return the path."""
+    """Write ``core``'s checkpoint to ``path`` atomically and durably; return the path."""
     path = os.fspath(path)
-    directory = os.path.dirname(os.path.abspath(path))
-    os.makedirs(directory, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix='.checkpoint-', suffix='.tmp', dir=directory)
-    try:
-        with os.fdopen(handle, 'wb') as stream:
-            torch.save(make_checkpoint(core), stream)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    buffer = io.BytesIO()
+    torch.save(make_checkpoint(core), buffer)
+    atomic_write(path, buffer.getvalue())
     return path
 
 
