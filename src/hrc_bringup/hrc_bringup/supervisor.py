@@ -2,7 +2,8 @@
 
 Each node runs in its own process group, started exactly as ``ros2 run`` would
 (``<prefix>/lib/<pkg>/<exe>``), with its output written to ``<log_dir>/<name>.log``. Children get
-``PR_SET_PDEATHSIG`` so that even a SIGKILLed supervisor leaves no orphan behind.
+``PR_SET_PDEATHSIG`` so that even a SIGKILLed supervisor leaves no orphan behind. Logs may
+quote the subject id or notes (a live session), so they are owner-only (0600).
 """
 
 import ctypes
@@ -12,6 +13,8 @@ import pathlib
 import signal
 import subprocess
 import time
+
+from hrc_common.contract import PERSONAL_FILE_MODE
 
 PR_SET_PDEATHSIG = 1
 
@@ -81,7 +84,9 @@ class Supervisor:
     def start(self, name: str, command: list, niceness: int = 0) -> ManagedProcess:
         """Start ``command`` as the process called ``name`` (``niceness`` > 0: lower priority)."""
         log_path = self.log_dir / f'{name}.log'
-        with open(log_path, 'wb') as log:
+        descriptor = os.open(log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, PERSONAL_FILE_MODE)
+        os.fchmod(descriptor, PERSONAL_FILE_MODE)   # also when the file existed
+        with os.fdopen(descriptor, 'wb') as log:
             popen = subprocess.Popen(command, env=self.env, stdout=log,
                                      stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                      start_new_session=True, preexec_fn=_child_setup(niceness))

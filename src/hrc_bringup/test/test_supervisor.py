@@ -26,6 +26,7 @@ def test_exit_is_noticed_and_described(tmp_path):
     assert [process.name for process in exited] == ['crasher']
     assert describe_exit(exited[0].returncode) == 'exit code 3'
     assert 'boom' in exited[0].tail()
+    assert exited[0].log_path.stat().st_mode & 0o777 == 0o600   # logs may quote the subject id
     assert supervisor.running() == ['sleeper']
     codes = supervisor.stop_all()
     assert codes['sleeper'] == -signal.SIGINT or codes['sleeper'] == 1  # KeyboardInterrupt
