@@ -31,7 +31,9 @@ Episode boundaries (the rule; the node turns messages into the events used here)
 
 Messages are handled in the order DDS received them (their log time), after ``reorder_window``
 seconds: rclpy's executor takes one message per subscription in turn, so a recorder that lags
-behind gets a topic's messages later than another topic's received after them.
+behind gets a topic's messages later than another topic's received after them. When it lags
+more than that (a loaded machine), the wait follows the lag (1.5 times the largest of the last
+second), so an episode file is not closed before its messages queued in DDS are in.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
 exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus
@@ -86,6 +88,12 @@ class SessionSeen:
 
     status: dict
 
+
+# the wait for late messages follows the executor's lag of the last second, times 1.5, up to
+# 5 s (a log time older than that comes from another clock, e.g. a test's synthetic times)
+LAG_MEMORY_NS = 1_000_000_000
+LAG_FACTOR = 1.5
+LAG_LIMIT_NS = 5_000_000_000
 
 # the types whose messages mark episode boundaries (the node deserializes only these)
 BOUNDARY_TYPES = (TASK_STATE_TYPE, EPISODE_SUMMARY_TYPE, SESSION_STATUS_TYPE)
@@ -144,6 +152,8 @@ class EpisodeRecorder:
         self._wall_clock = wall_clock       # ns since the epoch, the clock of the log times
         self._reorder = []                  # heap of (log time, arrival, message, event)
         self._arrivals = itertools.count()
+        # (arrival ns, lag ns) of the last LAG_MEMORY_NS, lags decreasing: a sliding maximum
+        self._lags = collections.deque()
         self.session_id = params.session_id or str(self.session_config.get('session_id', ''))
         self.folder = None
         self.index = None
@@ -317,11 +327,31 @@ class EpisodeRecorder:
         if self.failed is not None:
             raise self.failed
         heapq.heappush(self._reorder, (message.log_time, next(self._arrivals), message, event))
+        now = self._wall_clock()
+        lag = now - message.log_time
+        while self._lags and self._lags[-1][1] <= lag:
+            self._lags.pop()
+        self._lags.append((now, lag))
         self.tick()
 
+    def waiting_window(self, now: int) -> int:
+        """Return how long (ns) a message waits for others: reorder_window or the lag.
+
+        When the executor falls behind (a loaded machine), the messages it hands over now
+        were received up to ``lag`` ago, and those of other topics received as early may
+        still be queued: the wait grows to LAG_FACTOR times the largest lag of the last
+        LAG_MEMORY_NS (at most LAG_LIMIT_NS), and shrinks back when the recorder caught up.
+        """
+        while self._lags and self._lags[0][0] < now - LAG_MEMORY_NS:
+            self._lags.popleft()
+        lag = self._lags[0][1] if self._lags else 0
+        return max(int(self.params.reorder_window * 1e9),
+                   min(int(LAG_FACTOR * lag), LAG_LIMIT_NS))
+
     def _release(self, everything: bool = False) -> None:
-        """Handle the waiting messages received more than reorder_window ago."""
-        threshold = self._wall_clock() - int(self.params.reorder_window * 1e9)
+        """Handle the waiting messages received more than waiting_window ago."""
+        now = self._wall_clock()
+        threshold = now - self.waiting_window(now)
         while self._reorder and (everything or self._reorder[0][0] <= threshold):
             _, _, message, event = heapq.heappop(self._reorder)
             self._handle(message, event)

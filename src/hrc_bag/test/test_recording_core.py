@@ -168,6 +168,42 @@ def test_messages_are_handled_in_reception_order_after_the_reorder_window(tmp_pa
         'w_ep0000.mcap', 'w_ep0001.mcap']
 
 
+def test_the_wait_follows_the_executors_lag_so_a_file_closes_with_all_its_messages(tmp_path):
+    """A loaded recorder gets states 0.6 s late but the summary at once: the wait grows."""
+    wall = [0]
+    recorder = EpisodeRecorder(
+        RecorderParams(output_dir=str(tmp_path), session_id='lag', reorder_window=0.2),
+        lambda topic, type_name: TopicDescription(type_name, (PROFILE,), ''),
+        clock=FakeClock(), wall_clock=lambda: wall[0])
+    millisecond = 1_000_000
+    start = 10_000 * millisecond
+
+    def receive(topic, message, received_at, now):
+        wall[0] = now
+        type_name = type_name_of(message)
+        recorder.record(RawMessage(topic, type_name, serialize_message(message),
+                                   received_at, received_at), boundary_event(type_name, message))
+
+    for step in range(3):                 # received at 10.0 s + 10 ms steps, served 0.6 s late
+        receive('/hrc/state', TaskState(episode=0, step=step), start + step * 10 * millisecond,
+                start + 600 * millisecond)
+    # the summary's queue is short: served 50 ms after it was received, before states 3, 4
+    receive('/hrc/episode', EpisodeSummary(episode=0), start + 300 * millisecond,
+            start + 350 * millisecond + 300 * millisecond)
+    wall[0] = start + 800 * millisecond
+    recorder.tick()                       # a fixed 0.2 s window would close episode 0 here
+    receive('/hrc/state', TaskState(episode=0, step=3), start + 30 * millisecond,
+            start + 850 * millisecond)
+    receive('/hrc/state', TaskState(episode=0, step=4, truncated=True),
+            start + 40 * millisecond, start + 860 * millisecond)
+    wall[0] = start + 3000 * millisecond
+    recorder.tick()
+    assert [info.name for info in recorder.closed_files] == ['lag_ep0000.mcap']
+    assert file_topics(tmp_path / 'lag' / 'lag_ep0000.mcap') == ['/hrc/state'] * 5 + [
+        '/hrc/episode']
+    recorder.close()
+
+
 def test_messages_go_to_the_file_of_their_episode_whatever_their_order(tmp_path):
     """Episode fields and command stamps route messages even when served out of order."""
     clock = FakeClock()
