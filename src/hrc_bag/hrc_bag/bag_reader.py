@@ -10,6 +10,7 @@ is reported as incomplete. Decoding uses the ``ros2msg`` schemas stored in the f
 from dataclasses import dataclass, field
 import io
 import pathlib
+import stat
 import struct
 import typing
 
@@ -17,6 +18,7 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
+import yaml
 
 from hrc_bag.qos_yaml import load_yaml
 
@@ -168,13 +170,95 @@ def read_metadata(path) -> dict:
     return scan_file(path, topics=()).metadata
 
 
-def read_bag_metadata_yaml(folder) -> dict:
-    """Return ``rosbag2_bagfile_information`` of a session folder's metadata.yaml (or {})."""
+class BagError(ValueError):
+    """A path given as a bag is not one (not MCAP, empty, not a regular file): the reasons."""
+
+
+def file_problem(path) -> typing.Optional[str]:
+    """Return why ``path`` is not an MCAP file that can be read, or None.
+
+    Checked without opening anything but regular files (a FIFO would block the reader): the
+    file must exist, be a regular file, be readable, and start with the MCAP magic.
+    """
+    path = pathlib.Path(path)
+    try:
+        status = path.stat()
+    except OSError as error:
+        return f'{path}: {error.strerror or error}'
+    if not stat.S_ISREG(status.st_mode):
+        kind = ('a FIFO' if stat.S_ISFIFO(status.st_mode) else
+                'a folder' if stat.S_ISDIR(status.st_mode) else
+                'a device' if stat.S_ISCHR(status.st_mode) or stat.S_ISBLK(status.st_mode)
+                else 'a socket' if stat.S_ISSOCK(status.st_mode) else 'not a regular file')
+        return f'{path}: is {kind}, not an MCAP file'
+    if status.st_size == 0:
+        return f'{path}: is empty, not an MCAP file'
+    try:
+        with open(path, 'rb') as stream:
+            start = stream.read(len(MCAP_MAGIC))
+    except OSError as error:
+        return f'{path}: cannot be read: {error.strerror or error}'
+    if start != MCAP_MAGIC[:len(start)] or len(start) < len(MCAP_MAGIC):
+        return f'{path}: is not an MCAP file (it does not start with the MCAP magic bytes)'
+    return None
+
+
+def bag_problems(path) -> list:
+    """Return the reasons why a file or session folder cannot be read as a bag (all of them)."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        return [f'{path}: does not exist']
+    if path.is_dir():
+        if not is_session_folder(path):
+            return [f'{path}: holds neither metadata.yaml nor .mcap files']
+        return [problem for problem in map(file_problem, session_files(path)) if problem]
+    problem = file_problem(path)
+    return [problem] if problem else []
+
+
+def check_bag(path) -> None:
+    """Raise BagError with every reason why ``path`` is not a readable bag."""
+    problems = bag_problems(path)
+    if problems:
+        raise BagError('; '.join(problems))
+
+
+def bag_metadata_yaml(folder) -> tuple:
+    """Return (``rosbag2_bagfile_information`` or {}, problem) of a folder's metadata.yaml.
+
+    ``problem`` is '' when the file is missing (a folder of MCAP files only) or fine, else why
+    it cannot be used (unreadable, not YAML, a list or a string, fields of the wrong shape);
+    the bag tools then read the MCAP files of the folder instead.
+    """
     path = pathlib.Path(folder) / METADATA_FILE
     if not path.is_file():
-        return {}
-    document = load_yaml(path.read_text()) or {}
-    return document.get('rosbag2_bagfile_information', {}) or {}
+        return {}, ''
+    try:
+        document = load_yaml(path.read_text())
+    except (OSError, UnicodeDecodeError) as error:
+        return {}, f'{path} cannot be read ({error}): using the MCAP files of the folder'
+    except yaml.YAMLError as error:
+        first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
+        return {}, f'{path} is not YAML ({first_line}): using the MCAP files of the folder'
+    if document is None:
+        return {}, ''
+    information = (document.get('rosbag2_bagfile_information')
+                   if isinstance(document, dict) else None)
+    if not isinstance(information, dict):
+        shape = (type(document).__name__ if not isinstance(document, dict)
+                 else 'a mapping without rosbag2_bagfile_information')
+        return {}, (f'{path} is not rosbag2 metadata ({shape}): using the MCAP files of '
+                    f'the folder')
+    files = information.get('relative_file_paths') or []
+    if not isinstance(files, list) or not all(isinstance(name, str) for name in files):
+        return {}, (f'{path}: relative_file_paths is not a list of names: using the MCAP '
+                    f'files of the folder')
+    return information, ''
+
+
+def read_bag_metadata_yaml(folder) -> dict:
+    """Return ``rosbag2_bagfile_information`` of a session folder's metadata.yaml (or {})."""
+    return bag_metadata_yaml(folder)[0]
 
 
 def is_session_folder(path) -> bool:

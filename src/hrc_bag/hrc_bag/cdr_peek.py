@@ -51,3 +51,46 @@ def peek(type_name: str, data: bytes) -> tuple:
     except struct.error:
         return None, None
     return stamp, episode
+
+
+HUMAN_ACTION_TYPE = 'hrc_msgs/msg/HumanAction'
+# the fields human_action() reads, in the order of the .msg (checked against it at run time)
+_HUMAN_ACTION_LAYOUT = [('std_msgs/Header', 'header'), ('uint32', 'episode'),
+                        ('uint32', 'step'), ('float64', 'command'), ('uint8', 'dof'),
+                        ('uint8', 'source'), ('string', 'source_detail'), ('bool', 'engaged')]
+
+
+@functools.lru_cache(maxsize=None)
+def _human_action_readable() -> bool:
+    try:
+        return msgdefs.fields(HUMAN_ACTION_TYPE) == _HUMAN_ACTION_LAYOUT
+    except (msgdefs.DefinitionNotFound, ValueError):
+        return False
+
+
+def human_action(data: bytes) -> typing.Optional[tuple]:
+    """Return (stamp ns, episode, step, source, engaged) of a CDR HumanAction, or None.
+
+    None when the installed HumanAction has other fields than this reader knows, or the bytes
+    are cut. Offsets are aligned to each field's size from the payload start (XCDR1).
+    """
+    if not _human_action_readable() or len(data) < ENCAPSULATION + 12:
+        return None
+    order = '<' if data[1] == 1 else '>'
+    try:
+        seconds, nanoseconds, length = struct.unpack_from(order + 'iII', data, ENCAPSULATION)
+        position = 12 + length
+        position += -position % 4
+        episode, step = struct.unpack_from(order + 'II', data, ENCAPSULATION + position)
+        position += 8
+        position += -position % 8                   # float64 command
+        position += 8
+        _, source = struct.unpack_from('BB', data, ENCAPSULATION + position)
+        position += 2
+        position += -position % 4                   # string source_detail
+        (length,) = struct.unpack_from(order + 'I', data, ENCAPSULATION + position)
+        position += 4 + length
+        (engaged,) = struct.unpack_from('B', data, ENCAPSULATION + position)
+    except struct.error:
+        return None
+    return seconds * 1_000_000_000 + nanoseconds, episode, step, source, bool(engaged)

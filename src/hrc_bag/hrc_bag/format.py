@@ -21,8 +21,10 @@ statistics and summary offsets, and holds:
 * the ``hrc_session`` metadata record (:func:`session_record`: session id, episode, case,
   strategy, roles, seeds, versions, the session configuration as YAML, the writer's
   parameters, the last SessionStatus, when it was written), written first;
-* at close, rosbag2's own ``rosbag2`` record (this file's bag metadata), then summary,
-  indexes, footer; the file is fsynced before metadata.yaml lists it.
+* at close, the ``hrc_episode`` record (:class:`HumanInputTally`: which input drove the
+  human in this episode, steps per source) and rosbag2's own ``rosbag2`` record (this file's
+  bag metadata), then summary, indexes, footer; the file is fsynced before metadata.yaml
+  lists it.
 
 A file holding personal data (a session configuration with a non-empty ``subject_id`` or
 ``notes``) is created owner-only (0600), and so is a metadata.yaml that names them.
@@ -50,7 +52,7 @@ import typing
 from hrc_common.contract import atomic_write, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
 from mcap.writer import CompressionType, IndexType, Writer
 
-from hrc_bag import msgdefs
+from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
 
 BAG_VERSION = 9                 # rosbag2 metadata version written (ROS 2 Jazzy)
@@ -59,6 +61,7 @@ PROFILE = 'ros2'
 SCHEMA_ENCODING = 'ros2msg'
 MESSAGE_ENCODING = 'cdr'
 SESSION_RECORD = 'hrc_session'  # name of the MCAP metadata record with the session config
+EPISODE_RECORD = 'hrc_episode'  # name of the record of what the file's episode held (at close)
 ROSBAG2_RECORD = 'rosbag2'      # name of rosbag2's own metadata record
 METADATA_FILE = 'metadata.yaml'
 END_FILE_SUFFIX = '_end'
@@ -316,6 +319,79 @@ def unused_path(folder, stem: str) -> pathlib.Path:
     return path
 
 
+# -- the human's input sources of an episode -------------------------------------------------
+
+@functools.lru_cache(maxsize=None)
+def source_names() -> dict:
+    """Return {HumanAction.source code: name}: device, joy, simulated, replay, none."""
+    names = {}
+    for constant, value in msgdefs.constants(cdr_peek.HUMAN_ACTION_TYPE).items():
+        if constant.startswith('SOURCE_') and value.isdigit():
+            names[int(value)] = constant[len('SOURCE_'):].lower()
+    return names
+
+
+def source_name(code: int) -> str:
+    """Return the name of a HumanAction.source code ('source N' if unknown)."""
+    return source_names().get(code, f'source {code}')
+
+
+class HumanInputTally:
+    """Count one episode's human steps per input source (HumanAction.source).
+
+    ``record()`` is the ``hrc_episode`` metadata record every episode file gets at close:
+    ``human_source`` the source of most engaged steps (of most steps when the human was never
+    engaged; '' without HumanAction), ``human_sources`` every source seen, most steps first,
+    ``human_steps`` / ``human_engaged_steps`` YAML {source: steps}, ``control_period`` the
+    simulation time between two steps (s, from the stamps; '' if unknown).
+    """
+
+    def __init__(self):
+        self.steps = collections.Counter()          # source name -> steps
+        self.engaged = collections.Counter()        # source name -> engaged steps
+        self._seen = set()                          # (episode, step): a repeat counts once
+        self._first = None                          # (step, stamp ns)
+        self._last = None
+
+    def add(self, stamp: int, episode: int, step: int, source: int, engaged: bool) -> None:
+        """Count one HumanAction."""
+        if (episode, step) in self._seen:
+            return
+        self._seen.add((episode, step))
+        name = source_name(source)
+        self.steps[name] += 1
+        if engaged:
+            self.engaged[name] += 1
+        if self._first is None or step < self._first[0]:
+            self._first = (step, stamp)
+        if self._last is None or step > self._last[0]:
+            self._last = (step, stamp)
+
+    def add_cdr(self, data: bytes) -> None:
+        """Count a HumanAction given as CDR bytes (ignored when it cannot be read)."""
+        fields = cdr_peek.human_action(data)
+        if fields is not None:
+            self.add(*fields)
+
+    @property
+    def control_period(self) -> typing.Optional[float]:
+        """Return the simulation time between two steps (s), or None."""
+        if self._first is None or self._last[0] == self._first[0]:
+            return None
+        return (self._last[1] - self._first[1]) / 1e9 / (self._last[0] - self._first[0])
+
+    def record(self) -> dict:
+        """Return the ``hrc_episode`` record fields (strings)."""
+        counts = self.engaged if self.engaged else self.steps
+        ranked = [name for name, _ in self.steps.most_common()]
+        period = self.control_period
+        return {'human_source': counts.most_common(1)[0][0] if counts else '',
+                'human_sources': ','.join(ranked),
+                'human_steps': dump_yaml(dict(self.steps)),
+                'human_engaged_steps': dump_yaml(dict(self.engaged)),
+                'control_period': '' if period is None else repr(period)}
+
+
 # -- one MCAP file ---------------------------------------------------------------------------
 
 class EpisodeFile:
@@ -339,6 +415,7 @@ class EpisodeFile:
         self.start = 0
         self.end = 0
         self.closed = False
+        self.human = HumanInputTally()
         try:
             # O_EXCL: never overwrite a file of an earlier recording
             descriptor = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
@@ -368,6 +445,8 @@ class EpisodeFile:
         except OSError as error:
             raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
         self.topic_counts[message.topic] += 1
+        if message.type_name == cdr_peek.HUMAN_ACTION_TYPE:
+            self.human.add_cdr(message.data)
         if self.message_count == 0:
             self.start = self.end = message.log_time
         self.start = min(self.start, message.log_time)
@@ -406,6 +485,8 @@ class EpisodeFile:
         info = self.info()
         try:
             self._writer.flush()
+            self._writer.add_metadata(EPISODE_RECORD, {
+                'message_count': str(self.message_count), **self.human.record()})
             own_metadata = bag_metadata([info], topic_entries(info), custom_data or {})
             self._writer.add_metadata(ROSBAG2_RECORD,
                                       {'serialized_metadata': dump_yaml(own_metadata)})

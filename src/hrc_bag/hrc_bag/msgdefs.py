@@ -79,6 +79,18 @@ def fields(type_name: str) -> list:
     return result
 
 
+def constants(type_name: str) -> dict:
+    """Return {NAME: value text} of the constants of ``type_name`` (``uint8 NAME=3``)."""
+    found = {}
+    for line in message_text(type_name).splitlines():
+        line = line.split('#', 1)[0].strip()
+        if '=' not in line or len(line.split()) < 2:
+            continue
+        declaration, value = line.split('=', 1)
+        found[declaration.split()[-1]] = value.strip()
+    return found
+
+
 def field_types(text: str, package: str) -> list:
     """Return the message types the fields of a .msg ``text`` use, as ``pkg/Type``, sorted.
 

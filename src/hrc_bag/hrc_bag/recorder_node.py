@@ -19,8 +19,6 @@ import time
 
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
-from hrc_common.contract import (AGENT_STEP_TYPE, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
-                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
 from hrc_common.nodes import run_node
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.node import Node
@@ -41,15 +39,8 @@ EXIT_RECORDING_FAILED = 3
 
 # Types of the hrc graph's topics (by default name), so they are subscribed before anyone
 # publishes; and the QoS contract their publishers offer.
-KNOWN_TOPICS = {
-    hrc_topics.STATE: (TASK_STATE_TYPE, hrc_qos.STATE_QOS),
-    hrc_topics.ROBOT_CMD_WRENCH: (WRENCH_STAMPED_TYPE, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_CMD_WRENCH: (WRENCH_STAMPED_TYPE, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_ACTION: (HUMAN_ACTION_TYPE, hrc_qos.HUMAN_ACTION_QOS),
-    hrc_topics.SESSION: (SESSION_STATUS_TYPE, hrc_qos.SESSION_QOS),
-    hrc_topics.EPISODE: (EPISODE_SUMMARY_TYPE, hrc_qos.EPISODE_QOS),
-    hrc_topics.AGENT_STEP: (AGENT_STEP_TYPE, hrc_qos.AGENT_STEP_QOS),
-}
+KNOWN_TOPICS = {topic: (type_name, hrc_qos.OF_TOPIC[topic])
+                for topic, type_name in hrc_topics.TYPES.items()}
 
 
 def message_class(type_name: str):

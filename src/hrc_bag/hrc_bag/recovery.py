@@ -12,8 +12,8 @@ import pathlib
 
 from hrc_bag.bag_reader import scan_records
 from hrc_bag.qos_yaml import load_yaml
-from hrc_bag.format import (describe_error, EpisodeFile, FileInfo, RawMessage,
-                            RecordingError, ROSBAG2_RECORD, TopicDescription)
+from hrc_bag.format import (describe_error, EPISODE_RECORD, EpisodeFile, FileInfo,
+                            RawMessage, RecordingError, ROSBAG2_RECORD, TopicDescription)
 
 
 def _description(channel, schemas) -> TopicDescription:
@@ -33,7 +33,9 @@ def recover_file(path, compression: str = 'zstd') -> FileInfo:
         schemas, channels, messages, metadata, _ = scan_records(path)
     except OSError as error:
         raise RecordingError(f'cannot read {path}: {describe_error(error)}') from error
+    # written again at close, from the messages
     metadata.pop(ROSBAG2_RECORD, None)
+    metadata.pop(EPISODE_RECORD, None)
     temporary = path.with_name(f'.{path.name}.recovering')
     try:
         mode = path.stat().st_mode & 0o777          # a personal file stays owner-only

@@ -50,15 +50,7 @@ from hrc_bag.format import (DEFAULT_CHUNK_SIZE, EpisodeFile, episode_file_stem, 
                             session_record, SessionIndex, TopicDescription, type_hash, unused_path)
 
 # The type of each topic of the graph (by default name).
-TOPIC_TYPES = {
-    hrc_topics.STATE: contract.TASK_STATE_TYPE,
-    hrc_topics.ROBOT_CMD_WRENCH: contract.WRENCH_STAMPED_TYPE,
-    hrc_topics.HUMAN_CMD_WRENCH: contract.WRENCH_STAMPED_TYPE,
-    hrc_topics.HUMAN_ACTION: contract.HUMAN_ACTION_TYPE,
-    hrc_topics.SESSION: contract.SESSION_STATUS_TYPE,
-    hrc_topics.EPISODE: contract.EPISODE_SUMMARY_TYPE,
-    hrc_topics.AGENT_STEP: contract.AGENT_STEP_TYPE,
-}
+TOPIC_TYPES = hrc_topics.TYPES
 
 
 def contract_descriptions() -> dict:

@@ -5,19 +5,19 @@ import os
 import subprocess
 import sys
 
-from hrc_msgs.msg import SessionStatus
+from hrc_msgs.msg import HumanAction, SessionStatus
 from mcap.reader import make_reader
 import pytest
 from rclpy.serialization import serialize_message
 from rosbags.rosbag2 import Reader
 import yaml
 
-from hrc_bag import bag_reader, report
-from hrc_bag.format import (contract_description, MessageEncoder, plain_values, RawMessage,
-                            SESSION_RECORD)
+from hrc_bag import bag_reader, cdr_peek, report
+from hrc_bag.format import (contract_description, EPISODE_RECORD, MessageEncoder,
+                            plain_values, RawMessage, SESSION_RECORD)
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, EpisodeRecorder
-from hrc_bag.session_writer import contract_descriptions, TOPIC_TYPES
+from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
 from hrc_bag.synthetic import SyntheticSession, type_name_of
 
 START_NS = 1_700_000_000_000_000_000
@@ -178,7 +178,9 @@ def test_the_files_are_the_recorders_files(both):
         ours, theirs = _file_layout(writer_folder / name), _file_layout(recorder_folder / name)
         for key in ('profile', 'channels', 'counts', 'compression'):
             assert ours[key] == theirs[key], (name, key)
-        assert set(ours['records']) == set(theirs['records']) == {SESSION_RECORD, 'rosbag2'}
+        assert set(ours['records']) == set(theirs['records']) == {SESSION_RECORD, 'rosbag2',
+                                                                  EPISODE_RECORD}
+        assert ours['records'][EPISODE_RECORD] == theirs['records'][EPISODE_RECORD], name
         ours_record, theirs_record = ours['records'][SESSION_RECORD], \
             theirs['records'][SESSION_RECORD]
         assert set(ours_record) == set(theirs_record)
@@ -206,3 +208,36 @@ def test_the_encoder_refuses_unknown_fields_and_takes_objects():
     status = SessionStatus(episode=4, session_id='x', robot_subtasks=['slider'])
     assert encoder.encode('hrc_msgs/msg/SessionStatus', status) == encoder.encode(
         'hrc_msgs/msg/SessionStatus', plain_values(status))
+
+
+@pytest.mark.parametrize('frame_id, detail', [('', ''), ('world', 'x'), ('abc', '/dev/input/js0')])
+def test_the_human_action_is_read_from_cdr_whatever_the_string_lengths(frame_id, detail):
+    message = HumanAction(episode=7, step=3, command=-0.5, dof=1,
+                          source=HumanAction.SOURCE_JOY, source_detail=detail, engaged=True)
+    message.header.stamp.sec, message.header.stamp.nanosec = 5, 9
+    message.header.frame_id = frame_id
+    assert cdr_peek.human_action(serialize_message(message)) == (5_000_000_009, 7, 3,
+                                                                 HumanAction.SOURCE_JOY, True)
+
+
+def test_each_episode_records_which_input_drove_the_human(tmp_path):
+    writer = SessionWriter(tmp_path, 'src', descriptions={})
+    writer.begin_episode(0)
+    sources = [HumanAction.SOURCE_DEVICE] * 3 + [HumanAction.SOURCE_SIMULATED] * 5
+    for step, source in enumerate(sources):
+        action = {'header': {'stamp': {'sec': step // 5, 'nanosec': step % 5 * 200_000_000}},
+                  'episode': 0, 'step': step, 'source': source, 'engaged': step != 7}
+        writer.write('/hrc/human/action', action, START_NS + step)
+        writer.write('/hrc/human/action', action, START_NS + step)        # a repeat: once
+    writer.end_episode()
+    writer.begin_episode(1)
+    writer.end_episode()
+    record = bag_reader.read_metadata(tmp_path / 'src' / 'src_ep0000.mcap')[EPISODE_RECORD]
+    assert record['human_source'] == 'simulated'           # 4 engaged steps against 3
+    assert record['human_sources'] == 'simulated,device'
+    assert yaml.safe_load(record['human_steps']) == {'device': 3, 'simulated': 5}
+    assert yaml.safe_load(record['human_engaged_steps']) == {'device': 3, 'simulated': 4}
+    assert float(record['control_period']) == pytest.approx(0.2)
+    assert record['message_count'] == '16'
+    empty = bag_reader.read_metadata(tmp_path / 'src' / 'src_ep0001.mcap')[EPISODE_RECORD]
+    assert empty['human_source'] == '' and empty['control_period'] == ''
