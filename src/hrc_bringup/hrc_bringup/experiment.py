@@ -370,6 +370,7 @@ def main(argv=None) -> int:
         archive = outcome.pop('bag_archive', None)
         if archive is not None:
             unpack_folder(archive, bags_dir, outcome['session_id'])
+        outcome['finished_after'] = time.monotonic() - start   # s since the sweep started
         outcomes.append(outcome)
         status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
         print(f'[experiment] {outcome["session_id"]} on {outcome["host"]} in '
