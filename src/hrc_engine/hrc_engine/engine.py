@@ -34,7 +34,7 @@ import typing
 
 import yaml
 
-from hrc_engine import messages
+from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
 
 # The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns):
@@ -92,6 +92,7 @@ class SessionResult:
     bag_dir: str = ''                   # '' when not recorded
     run_dir: str = ''
     counters: dict = field(default_factory=dict)  # the sim's command events (all zero here)
+    episode_seconds: list = field(default_factory=list)  # wall s of each episode's steps
 
 
 def compose_parameters(config: EngineConfig) -> tuple:
@@ -163,24 +164,31 @@ class InProcessSession:
                                if checkpoint_root and config.checkpoints else None)
         self.writer = None
         self.episodes = []
+        self.episode_seconds = []        # wall s of each episode's steps (no update, no save)
         self.steps = 0
         self._stamps = {}                # step -> stamp (ns) of the running episode's states
 
     # -- recording --------------------------------------------------------------------------
     def _open_bags(self) -> None:
-        from hrc_bag.session_writer import SessionWriter
+        from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
         from hrc_bringup.plan import write_session_files
 
         _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
         text = config_path.read_text()
+        self._types = dict(TOPIC_TYPES)
         self.writer = SessionWriter(self.settings.bags_dir, self.session_id,
                                     session_config=yaml.safe_load(text),
                                     session_config_text=text,
                                     descriptions=topic_descriptions())
 
     def _write(self, topic: str, message: dict) -> None:
-        if self.writer is not None:
+        if self.writer is None:
+            return
+        if topic == '/hrc/session':
+            # as plain values: the writer keeps the last one for the hrc_session record
             self.writer.write(topic, message, self.clock())
+        else:
+            self.writer.write(topic, cdr.encode(self._types[topic], message), self.clock())
 
     def _announce(self, text: str) -> None:
         """Publish a SessionStatus as the agent does (and tell the human the roles)."""
@@ -212,13 +220,14 @@ class InProcessSession:
             summary, self.episodes, self.steps, time.perf_counter() - started,
             str(pathlib.Path(self.settings.bags_dir) / self.session_id)
             if self.writer is not None else '', str(self.run_dir),
-            dict(self.protocol.totals))
+            dict(self.protocol.totals), self.episode_seconds)
 
     def _episode(self) -> None:
         """One episode: reset, the lockstep steps, the episode's end as the agent handles it."""
         from hrc_sim_node.commands import HUMAN, ROBOT
 
         core, protocol, physics = self.core, self.protocol, self.physics
+        started = time.perf_counter()
         plan = core.start_episode()
         self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
                        f'starting: ' + core.status_line())
@@ -228,7 +237,7 @@ class InProcessSession:
             self.writer.begin_episode(plan.episode)
         stamp = self._publish_state(state, {})
         while not (state.truncated or state.terminated):
-            answer = self.human.answer(plan.episode, state)
+            answer = self.human.answer(plan.episode, state, stamp)
             human_wrench = messages.wrench_on(answer.dof, answer.wrench)
             # The human's answer to the same state only when the core asks for it (same_step).
             decision = core.act(state, answer.command if core.needs_human_action else None)
@@ -247,6 +256,7 @@ class InProcessSession:
             state = physics.step(order.force, order.torque)
             stamp = self._publish_state(state, order.missing)
             self.steps += 1
+        self.episode_seconds.append(time.perf_counter() - started)
         self._finish_episode(state, stamp)
 
     def _publish_state(self, state, missing: dict) -> int:
