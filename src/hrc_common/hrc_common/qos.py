@@ -4,6 +4,7 @@ A deadline is a contract both sides must offer/request alike (an offered deadlin
 the requested one makes the pair incompatible), hence the shared constants.
 """
 
+from hrc_common import topics
 from rclpy.duration import Duration
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
@@ -32,3 +33,14 @@ JOY_QOS = qos_profile_sensor_data
 # Visualization (image, markers): best effort, only the newest matters.
 VISUAL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                         reliability=ReliabilityPolicy.BEST_EFFORT)
+
+# The profile each topic of the session graph (hrc_common.topics.TYPES) is published with.
+OF_TOPIC = {
+    topics.STATE: STATE_QOS,
+    topics.ROBOT_CMD_WRENCH: COMMAND_QOS,
+    topics.HUMAN_CMD_WRENCH: COMMAND_QOS,
+    topics.HUMAN_ACTION: HUMAN_ACTION_QOS,
+    topics.SESSION: SESSION_QOS,
+    topics.EPISODE: EPISODE_QOS,
+    topics.AGENT_STEP: AGENT_STEP_QOS,
+}

@@ -1,4 +1,10 @@
-"""Default topic and service names of the hrc graph (all remappable with --ros-args -r)."""
+"""Default topic and service names of the hrc graph (all remappable with --ros-args -r).
+
+``TYPES`` gives the message type of each hrc topic (type names of ``hrc_common.contract``).
+"""
+
+from hrc_common.contract import (AGENT_STEP_TYPE, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
+                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
 
 STATE = '/hrc/state'
 ROBOT_CMD_WRENCH = '/hrc/robot/cmd_wrench'
@@ -12,3 +18,14 @@ JOY = '/joy'
 CAMERA_IMAGE = '/hrc/sim/image'
 MARKERS = '/hrc/sim/markers'
 RESET_SERVICE = '/hrc/sim/reset'
+
+# The type of each topic of the session graph (by default name): what a recording holds.
+TYPES = {
+    STATE: TASK_STATE_TYPE,
+    ROBOT_CMD_WRENCH: WRENCH_STAMPED_TYPE,
+    HUMAN_CMD_WRENCH: WRENCH_STAMPED_TYPE,
+    HUMAN_ACTION: HUMAN_ACTION_TYPE,
+    SESSION: SESSION_STATUS_TYPE,
+    EPISODE: EPISODE_SUMMARY_TYPE,
+    AGENT_STEP: AGENT_STEP_TYPE,
+}
