@@ -25,7 +25,6 @@ status. The session pauses on ``pause_requested`` (see the package README).
 """
 
 import time
-import typing
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
@@ -40,7 +39,7 @@ from sensor_msgs.msg import Joy
 from hrc_joystick_node.human_core import HumanAnswer, HumanCore, HumanParams, InputStatus
 from hrc_joystick_node.inputs import DEVICE, JOY, JoyInput, StickReading
 from hrc_joystick_node.js_event import JoystickDevice
-from hrc_joystick_node.sim_human import default_profiles_path, load_profiles
+from hrc_joystick_node.sim_human import default_profiles_path, load_profiles, StateView
 
 SUMMARY = ('The human side of hrc: reads a Linux joystick device, sensor_msgs/Joy on /joy, or '
            'runs a simulated human, and answers every /hrc/state with /hrc/human/action and '
@@ -53,19 +52,6 @@ STATUS_HEARTBEAT = 1.0
 
 __all__ = ['HumanNode', 'HumanParams', 'HUMAN_INPUT', 'StateView', 'main', 'state_view',
            'status_message']
-
-
-class StateView(typing.NamedTuple):
-    """The PhysicsState attributes the simulated human reads, taken from a TaskState."""
-
-    step: int
-    time: float
-    slider_position: float
-    slider_velocity: float
-    pendulum_angle: float
-    pendulum_angular_velocity: float
-    ball_position: float
-    ball_velocity: float
 
 
 def state_view(message: TaskState, control_period: float) -> StateView:

@@ -298,6 +298,19 @@ def normalize_subtasks(subtasks) -> typing.Tuple[typing.List[str], typing.List[s
     return known, unknown
 
 
+class StateView(typing.NamedTuple):
+    """The PhysicsState attributes the simulated human reads (e.g. taken from a TaskState)."""
+
+    step: int
+    time: float  # s since the episode's reset
+    slider_position: float
+    slider_velocity: float
+    pendulum_angle: float
+    pendulum_angular_velocity: float
+    ball_position: float
+    ball_velocity: float
+
+
 class _Percept(typing.NamedTuple):
     slider: float
     slider_velocity: float

@@ -4,7 +4,6 @@ import dataclasses
 import math
 import pathlib
 import time
-import typing
 
 import numpy
 import pytest
@@ -12,27 +11,14 @@ import pytest
 from hrc_joystick_node.adaptation import steady_state_compensation, TwoRateAdaptation
 from hrc_joystick_node.fatigue import Fatigue, steady_state_level
 from hrc_joystick_node.population import (OFFSETS, person_or_profile, sample_person, SPREAD)
-from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman
+from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman, StateView
 
 REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 STEPS = 200  # control steps of a 40 s episode at 0.2 s
 
 
-class State(typing.NamedTuple):
-    """A PhysicsState-like state (the fatigue tests need no physics)."""
-
-    step: int
-    time: float
-    slider_position: float
-    slider_velocity: float
-    pendulum_angle: float
-    pendulum_angular_velocity: float
-    ball_position: float
-    ball_velocity: float
-
-
-STILL = State(0, 0.0, 0.01, 0.0, 0.1, 0.0, 0.02, 0.0)
+STILL = StateView(0, 0.0, 0.01, 0.0, 0.1, 0.0, 0.02, 0.0)
 
 
 def run_episodes(human, episodes, first_episode=0, stamps=False, episode_stride=1):
