@@ -20,10 +20,10 @@ from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 import yaml
 
+from hrc_bag.format import METADATA_FILE
 from hrc_bag.qos_yaml import load_yaml
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
-METADATA_FILE = 'metadata.yaml'
 
 # What a truncated record may raise while being parsed or decompressed.
 TRUNCATION_ERRORS = (McapError, EOFError, ValueError, struct.error, MemoryError)
@@ -171,7 +171,7 @@ def read_metadata(path) -> dict:
 
 
 class BagError(ValueError):
-    """A path given as a bag is not one (not MCAP, empty, not a regular file): the reasons."""
+    """Paths given as bags are not (not MCAP, empty, not a regular file): a reason a line."""
 
 
 def file_problem(path) -> typing.Optional[str]:
@@ -220,7 +220,7 @@ def check_bag(path) -> None:
     """Raise BagError with every reason why ``path`` is not a readable bag."""
     problems = bag_problems(path)
     if problems:
-        raise BagError('; '.join(problems))
+        raise BagError('\n'.join(problems))
 
 
 def bag_metadata_yaml(folder) -> tuple:

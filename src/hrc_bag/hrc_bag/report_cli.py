@@ -4,9 +4,10 @@ import argparse
 import sys
 
 DESCRIPTION = ('Analyse recorded hrc sessions: writes table2.md, table2.csv, sessions.csv, '
-               'fig5_training.png, fig6_actions.png, fig7_three_factor.png (+ .csv) into '
-               '--out. Sessions of the same case (different seeds) are pooled: mean and '
-               'sample standard deviation.')
+               'human_time.md (.csv: human time by input source), fig5_training.png, '
+               'fig6_actions.png, fig7_three_factor.png (+ .csv) into --out. Sessions of the '
+               'same case (different seeds) are pooled: mean and sample standard deviation. '
+               'Notices (a file not closed, an unusable metadata.yaml) go to stderr.')
 
 
 def parse_arguments(argv):
@@ -24,8 +25,9 @@ def parse_arguments(argv):
 
 
 def main(argv=None):
-    """Run the report; exit 1 when no session with episode summaries is found."""
+    """Run the report; exit 1 when no session is found or a file is not MCAP (the reason)."""
     arguments = parse_arguments(sys.argv[1:] if argv is None else argv)
+    from hrc_bag.bag_reader import BagError
     from hrc_bag.report import write_report
 
     def log(text):
@@ -34,13 +36,15 @@ def main(argv=None):
     try:
         result = write_report(arguments.paths, arguments.out, arguments.fig6_seconds,
                               arguments.fig6_start, log=log)
-    except FileNotFoundError as error:
-        log(str(error))
+    except (FileNotFoundError, BagError) as error:
+        for line in str(error).splitlines():
+            log(line)
         return 1
     if not result['rows']:
         log('no session with episode summaries found in ' + ', '.join(arguments.paths))
         return 1
     print(result['files']['table2.md'].read_text())
+    print(result['files']['human_time.md'].read_text())
     for name, path in result['files'].items():
         print(f'wrote {path}')
     return 0

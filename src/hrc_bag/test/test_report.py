@@ -138,3 +138,65 @@ def test_cli_writes_the_report_and_refuses_an_empty_folder(bags, tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 1
     assert 'no session with episode summaries' in done.stderr
+
+
+def test_human_time_is_counted_by_input_source(bags, written):
+    folder, _ = bags
+    together = report.load_session(folder / 'case5_seed1')       # 3 episodes with the human
+    assert report.human_time(together) == {'simulated': {
+        'seconds': pytest.approx(3 * 11 * 0.2), 'engaged_steps': 33, 'steps': 33,
+        'episodes': 3}}
+    alone_first = report.load_session(folder / 'case1_seed1')    # the first one without him
+    assert report.human_time(alone_first)['simulated']['engaged_steps'] == 22
+    assert report.human_time(alone_first)['simulated']['seconds'] == pytest.approx(4.4)
+    text = (written[1] / 'human_time.md').read_text()
+    assert '| case5_seed1 | 5 | simulated | 6.6 | 33 | 33 | 3 |' in text
+
+
+BAD_METADATA = {'binary': b'\xff\xfe\x00binary', 'not YAML': b'key: [unclosed\n',
+                'a list': b'- a\n- b\n', 'a string': b'just words\n'}
+
+
+@pytest.mark.parametrize('kind', sorted(BAD_METADATA))
+def test_an_unusable_metadata_yaml_falls_back_to_the_mcap_files(bags, tmp_path, kind):
+    import shutil
+    folder = tmp_path / 'case2_seed1'
+    shutil.copytree(bags[0] / 'case2_seed1', folder)
+    expected = report.load_session(bags[0] / 'case2_seed1')
+    (folder / 'metadata.yaml').write_bytes(BAD_METADATA[kind])
+    notices = []
+    sessions = report.load_sessions([folder], log=notices.append)
+    assert [summary.episode for summary in sessions[0].summaries] == [
+        summary.episode for summary in expected.summaries]
+    assert sessions[0].case_id == 2
+    assert len(notices) == 1 and 'using the MCAP files of the folder' in notices[0], notices
+
+
+def test_the_cli_refuses_files_that_are_not_mcap_with_the_reason(bags, tmp_path):
+    import os
+    command = [str(executable_path('hrc_bag', 'hrc_report')), '--out', str(tmp_path / 'out')]
+    empty = tmp_path / 'empty.mcap'
+    empty.write_bytes(b'')
+    text = tmp_path / 'text.mcap'
+    text.write_text('not a bag\n')
+    fifo = tmp_path / 'fifo.mcap'
+    os.mkfifo(fifo)
+    done = subprocess.run(command + [str(empty), str(text), str(fifo)], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 1, done.stderr
+    assert 'Traceback' not in done.stderr
+    assert f'{empty}: is empty, not an MCAP file' in done.stderr
+    assert f'{text}: is not an MCAP file' in done.stderr    # every reason at once
+    assert f'{fifo}: is a FIFO, not an MCAP file' in done.stderr
+    # in a session folder: every bad file is named at once
+    import shutil
+    folder = tmp_path / 'case4_seed2'
+    shutil.copytree(bags[0] / 'case4_seed2', folder)
+    (folder / 'zz_broken.mcap').write_text('garbage')
+    (folder / 'zz_empty.mcap').write_bytes(b'')
+    done = subprocess.run(command + [str(folder)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1
+    assert 'zz_broken.mcap: is not an MCAP file' in done.stderr
+    assert 'zz_empty.mcap: is empty' in done.stderr
+    done = subprocess.run(command + [str(fifo)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and 'is a FIFO, not an MCAP file' in done.stderr

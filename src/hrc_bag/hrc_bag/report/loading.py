@@ -1,0 +1,194 @@
+"""Load recorded sessions into per-episode records: the report's first layer (pure, no rclpy).
+
+:func:`load_sessions` (or :func:`load_session` for one) turns session folders written by the
+recorder (or by :class:`hrc_bag.session_writer.SessionWriter`) into :class:`Session` objects:
+per episode the decoded EpisodeSummary (``summaries``, by episode), the file(s) it was
+recorded in (``files_by_episode``) and the input that drove the human (``human_inputs``: the
+``hrc_episode`` record of its file), plus the session's SessionStatus messages, its
+configuration (the ``hrc_session`` record), case, strategy, robot DOF and seed. Topics are
+recognized by their type, whatever their (remapped) names. Metrics, tables and figures
+(:mod:`.metrics`, :mod:`.tables`, :mod:`.figures`) and the statistics of ``hrc_study`` build
+on these records.
+"""
+
+from dataclasses import dataclass, field
+import pathlib
+import typing
+
+from hrc_common.contract import (dof_name, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
+                                 SESSION_STATUS_TYPE)
+import yaml
+
+from hrc_bag import bag_reader
+from hrc_bag.format import EPISODE_RECORD, HumanInputTally, SESSION_RECORD
+from hrc_bag.qos_yaml import load_yaml
+
+
+@dataclass
+class Session:
+    """What the report uses of one recorded session."""
+
+    path: pathlib.Path
+    session_id: str
+    case_id: int                    # 0 = unknown / custom
+    strategy: str
+    robot_dof: str                  # translation | rotation | '' (unknown)
+    seed: str
+    config: dict
+    summaries: list                 # decoded EpisodeSummary, one per episode, by episode
+    statuses: list                  # decoded SessionStatus, in order
+    complete: bool                  # every file was closed properly
+    files_by_episode: dict = field(default_factory=dict)   # episode -> [file paths]
+    # episode -> the hrc_episode record of its file (which input drove the human, steps)
+    human_inputs: dict = field(default_factory=dict)
+    notices: list = field(default_factory=list)             # what the reader had to work around
+
+    @property
+    def training(self) -> list:
+        """Return the summaries of the training episodes."""
+        return [summary for summary in self.summaries if not summary.evaluation]
+
+    @property
+    def evaluation(self) -> list:
+        """Return the summaries of the evaluation episodes."""
+        return [summary for summary in self.summaries if summary.evaluation]
+
+
+def find_sessions(paths) -> list:
+    """Return the session folders under ``paths`` (session folders or folders of them)."""
+    found = []
+    for path in map(pathlib.Path, paths):
+        if bag_reader.is_session_folder(path):
+            found.append(path)
+        elif path.is_dir():
+            found += sorted(child for child in path.iterdir()
+                            if bag_reader.is_session_folder(child))
+        elif path.suffix == '.mcap' and path.exists():       # (a FIFO is refused later)
+            found.append(path)
+        else:
+            raise FileNotFoundError(f'{path}: neither a session folder nor a folder of them')
+    return found
+
+
+def topics_of_type(topics: dict, type_name: str) -> list:
+    """Return the names of the topics (bag_reader.TopicInfo by name) of ``type_name``."""
+    return sorted(name for name, info in topics.items() if info.type_name == type_name)
+
+
+def _config_of(metadata: dict) -> dict:
+    record = metadata.get(SESSION_RECORD, {})
+    try:
+        config = load_yaml(record.get('session_config', '') or '') or {}
+    except yaml.YAMLError:
+        config = {}
+    if not isinstance(config, dict):
+        config = {}
+    return config
+
+
+def _seed_of(config: dict, fallback: str) -> str:
+    seeds = config.get('seeds', config.get('seed'))
+    if isinstance(seeds, dict):
+        seeds = seeds.get('session', next(iter(seeds.values()), None))
+    return str(seeds) if seeds is not None else fallback
+
+
+def _human_inputs_of_file(file, metadata: dict, human_topics: list) -> dict:
+    """Return the file's hrc_episode record, or one counted from its HumanAction messages."""
+    record = metadata.get(EPISODE_RECORD)
+    if record is not None:
+        return dict(record)
+    tally = HumanInputTally()                 # a file left open, or older than the record
+    for message in bag_reader.scan_file(file, topics=human_topics).messages:
+        tally.add_cdr(message.data)
+    return tally.record()
+
+
+def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = None) -> Session:
+    """Read the summaries, statuses, configuration and human inputs of one session.
+
+    ``path``: a session folder (metadata.yaml and/or MCAP files) or one MCAP file. A
+    metadata.yaml that cannot be used is replaced by the folder's MCAP files (a notice says
+    so); a file that is not MCAP (empty, another format, a FIFO) raises
+    :class:`hrc_bag.bag_reader.BagError` with every reason.
+    """
+    path = pathlib.Path(path)
+    bag_reader.check_bag(path)
+    decoder = decoder or bag_reader.MessageDecoder()
+    notices = []
+    if path.is_dir():
+        _, problem = bag_reader.bag_metadata_yaml(path)
+        if problem:
+            notices.append(problem)
+    summaries, statuses = {}, []
+    config, record = {}, {}
+    complete = True
+    files_by_episode, human_inputs = {}, {}
+    topics = bag_reader.bag_topics(path)
+    episode_topics = topics_of_type(topics, EPISODE_SUMMARY_TYPE)
+    human_topics = topics_of_type(topics, HUMAN_ACTION_TYPE)
+    wanted = episode_topics + topics_of_type(topics, SESSION_STATUS_TYPE)
+    for file in bag_reader.session_files(path):
+        scan = bag_reader.scan_file(file, topics=wanted)
+        complete = complete and scan.complete
+        if not record and SESSION_RECORD in scan.metadata:
+            record = scan.metadata[SESSION_RECORD]
+            config = _config_of(scan.metadata)
+        episode = scan.metadata.get(SESSION_RECORD, {}).get('episode', '')
+        if episode != '':
+            files_by_episode.setdefault(int(episode), []).append(file)
+            human_inputs[int(episode)] = _human_inputs_of_file(file, scan.metadata,
+                                                               human_topics)
+        for message in scan.messages:
+            decoded = decoder.decode(message)
+            if message.topic in episode_topics:
+                # a late recorder gets earlier summaries again (transient local): keep one
+                summaries[decoded.episode] = decoded
+            else:
+                statuses.append(decoded)
+    if not complete:
+        notices.append('a file was not closed (recorder killed?): read up to its last chunk')
+    last = statuses[-1] if statuses else None
+    case_id = config.get('case', config.get('case_id'))
+    if case_id is None:
+        case_id = last.case_id if last is not None else (
+            next(iter(summaries.values())).case_id if summaries else 0)
+    strategy = config.get('strategy') or (last.strategy if last is not None else '')
+    roles = config.get('roles') if isinstance(config.get('roles'), dict) else {}
+    robot_dof = (roles.get('robot') or config.get('robot_dof')
+                 or (dof_name(last.robot_dof, '') if last else ''))
+    session_id = (record.get('session_id') or (last.session_id if last else '')
+                  or path.name)
+    return Session(path=path, session_id=session_id, case_id=int(case_id or 0),
+                   strategy=str(strategy), robot_dof=str(robot_dof),
+                   seed=_seed_of(config, session_id), config=config,
+                   summaries=[summaries[key] for key in sorted(summaries)], statuses=statuses,
+                   complete=complete, files_by_episode=files_by_episode,
+                   human_inputs=human_inputs, notices=notices)
+
+
+def load_sessions(paths, log=print,
+                  decoder: typing.Optional[bag_reader.MessageDecoder] = None) -> list:
+    """Return a :class:`Session` per recorded session under ``paths`` (the stable entry point).
+
+    ``paths``: session folders, folders of session folders, or MCAP files. Sessions without
+    any EpisodeSummary are skipped; every notice (skipped session, file not closed, unusable
+    metadata.yaml) goes to ``log`` prefixed with the session's path. Raises
+    FileNotFoundError for a path that holds no session and
+    :class:`hrc_bag.bag_reader.BagError` for files that are not MCAP.
+    """
+    decoder = decoder or bag_reader.MessageDecoder()
+    found = find_sessions(paths)
+    problems = [problem for path in found for problem in bag_reader.bag_problems(path)]
+    if problems:                                    # every reason at once
+        raise bag_reader.BagError('\n'.join(problems))
+    sessions = []
+    for path in found:
+        session = load_session(path, decoder)
+        for notice in session.notices:
+            log(f'{path}: {notice}')
+        if not session.summaries:
+            log(f'{path}: no episode summaries, skipped')
+            continue
+        sessions.append(session)
+    return sessions
