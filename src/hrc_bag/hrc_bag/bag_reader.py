@@ -10,6 +10,7 @@ is reported as incomplete. Decoding uses the ``ros2msg`` schemas stored in the f
 from dataclasses import dataclass, field
 import io
 import pathlib
+import re
 import stat
 import struct
 import typing
@@ -20,7 +21,7 @@ from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
 import yaml
 
-from hrc_bag.format import METADATA_FILE
+from hrc_bag.format import END_FILE_SUFFIX, METADATA_FILE
 from hrc_bag.qos_yaml import load_yaml
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
@@ -271,7 +272,8 @@ def session_files(path) -> list:
     """Return the MCAP files of a session folder in recording order (or ``[path]``).
 
     The files listed by metadata.yaml come first, in its order; files it does not list (an
-    episode that was open when the recorder died) follow, sorted by name.
+    episode that was open when the recorder died, or all of them when metadata.yaml is
+    missing or unusable) follow, by episode number, the end file last.
     """
     path = pathlib.Path(path)
     if path.is_file():
@@ -281,8 +283,17 @@ def session_files(path) -> list:
     listed = [path / pathlib.PurePath(name).name
               for name in read_bag_metadata_yaml(path).get('relative_file_paths', []) or []]
     listed = [file for file in listed if file.is_file()]
-    unlisted = sorted(set(path.glob('*.mcap')) - set(listed))
+    unlisted = sorted(set(path.glob('*.mcap')) - set(listed), key=recording_order)
     return listed + unlisted
+
+
+def recording_order(path) -> tuple:
+    """Return a sort key of episode files: by episode number, the end file last."""
+    stem = pathlib.Path(path).stem
+    match = re.search(r'_ep(\d+)(?:_\d+)?$', stem)
+    if match:
+        return (0, int(match.group(1)), stem)
+    return (2 if stem.endswith(END_FILE_SUFFIX) else 1, 0, stem)
 
 
 def iter_messages(path, topics=None) -> typing.Iterator[BagMessage]:

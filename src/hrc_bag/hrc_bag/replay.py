@@ -8,7 +8,6 @@ topic selection does not shift the timing.
 """
 
 from dataclasses import dataclass
-import pathlib
 import typing
 
 from hrc_common.contract import NS_PER_S as NANOSECONDS
@@ -46,10 +45,9 @@ class ReplayParams:
         reasons = []
         if not self.path:
             reasons.append('path: give an episode file or a session folder to play')
-        elif not pathlib.Path(self.path).exists():
-            reasons.append(f'path: {self.path} does not exist')
-        elif pathlib.Path(self.path).is_dir() and not bag_reader.is_session_folder(self.path):
-            reasons.append(f'path: {self.path} holds neither metadata.yaml nor .mcap files')
+        else:
+            # a missing path, a FIFO or device, an empty or non-MCAP file: each one named
+            reasons += [f'path: {problem}' for problem in bag_reader.bag_problems(self.path)]
         if not self.topics:
             reasons.append(f'topics: give topic names or [{ALL_TOPICS}]')
         return reasons

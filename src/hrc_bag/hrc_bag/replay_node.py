@@ -6,6 +6,7 @@ selects topics, skips ``start_offset`` seconds, and publishes ``/clock`` with th
 time. None of the original publishers need to run. Exits 0 at the end (unless ``loop``).
 """
 
+import pathlib
 import sys
 import threading
 import time
@@ -56,6 +57,10 @@ class ReplayNode(Node):
         self.params = declare_parameters(self, ReplayParams)
         self._publishers_by_topic = {}
         self._skip = set()
+        if pathlib.Path(self.params.path).is_dir():
+            _, problem = bag_reader.bag_metadata_yaml(self.params.path)
+            if problem:
+                self.get_logger().warning(problem)
         topics = bag_reader.bag_topics(self.params.path)
         for topic, info in sorted(topics.items()):
             if not self.params.selected(topic):

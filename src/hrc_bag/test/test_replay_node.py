@@ -14,7 +14,7 @@ import yaml
 
 from hrc_bag import bag_reader
 from hrc_bag.recorder_node import message_class
-from hrc_bag.replay import bag_start, publisher_qos, ReplayParams, Timeline
+from hrc_bag.replay import bag_start, playlist, publisher_qos, ReplayParams, Timeline
 from hrc_bag.synthetic import record_in_process, strategy_plan
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
@@ -178,3 +178,44 @@ def test_a_missing_bag_is_a_parameter_error(start_node, tmp_path):
                         parameters={'path': str(tmp_path / 'nothing')})
     assert replay.wait(timeout=60) == 2
     assert 'does not exist' in replay.output
+
+
+def test_fifo_empty_and_non_mcap_paths_are_refused_with_the_reason(tmp_path):
+    import os
+    fifo = tmp_path / 'pipe.mcap'
+    os.mkfifo(fifo)
+    empty = tmp_path / 'empty.mcap'
+    empty.write_bytes(b'')
+    text = tmp_path / 'notes.mcap'
+    text.write_text('not a bag')
+    folder = tmp_path / 'session'
+    folder.mkdir()
+    (folder / 'a_ep0000.mcap').write_bytes(b'')
+    for path, reason in ((fifo, 'is a FIFO, not an MCAP file'),
+                         (empty, 'is empty, not an MCAP file'),
+                         (text, 'is not an MCAP file'),
+                         (folder, 'a_ep0000.mcap: is empty, not an MCAP file')):
+        assert [problem for problem in ReplayParams(path=str(path)).check()
+                if reason in problem], (path, ReplayParams(path=str(path)).check())
+
+
+def test_a_fifo_is_refused_by_the_node_with_exit_2(start_node, tmp_path):
+    import os
+    fifo = tmp_path / 'pipe.mcap'
+    os.mkfifo(fifo)
+    replay = start_node('hrc_bag', 'replay_node', parameters={'path': str(fifo)})
+    assert replay.wait(timeout=60) == 2, replay.output
+    assert 'is a FIFO, not an MCAP file' in replay.output
+    assert 'Traceback' not in replay.output
+
+
+def test_a_session_with_an_unusable_metadata_yaml_is_played_from_its_files(tmp_path):
+    plan = strategy_plan('learn_together', 1, 0, 0)
+    record_in_process(tmp_path, 'bad', 5, 'learn_together', 3, plan, steps=4)
+    folder = tmp_path / 'bad'
+    expected = list(playlist(folder, ReplayParams(path=str(folder))))
+    (folder / 'metadata.yaml').write_text('- a list\n- not rosbag2 metadata\n')
+    assert ReplayParams(path=str(folder)).check() == []
+    played = list(playlist(folder, ReplayParams(path=str(folder))))
+    assert [message.data for message in played] == [message.data for message in expected]
+    assert played
