@@ -362,3 +362,41 @@ def test_an_unwritable_output_dir_is_a_recording_error(tmp_path):
     blocker.write_text('not a folder')
     with pytest.raises(RecordingError, match='cannot create the session folder'):
         make_recorder(blocker, FakeClock())
+
+
+def test_a_recovered_file_names_itself_not_its_temporary_file(recorded, tmp_path):
+    from hrc_bag.recovery import recover_file
+    folder, _ = recorded
+    path = tmp_path / 'core_ep0001.mcap'
+    data = (folder / 'core_ep0001.mcap').read_bytes()
+    path.write_bytes(data[:len(data) - 700])            # as a killed recorder leaves it
+    info = recover_file(path)
+    assert info.name == 'core_ep0001.mcap'
+    rosbag2 = yaml.safe_load(bag_reader.read_metadata(path)['rosbag2']['serialized_metadata'])
+    assert rosbag2['relative_file_paths'] == ['core_ep0001.mcap']
+    assert [entry['path'] for entry in rosbag2['files']] == ['core_ep0001.mcap']
+    assert not list(tmp_path.glob('.*recovering'))
+
+
+@pytest.mark.parametrize('personal', [{'subject_id': 'P07'}, {'notes': 'tired'}, {}])
+def test_bags_naming_a_subject_or_notes_are_owner_only(tmp_path, personal):
+    import os
+    from hrc_bag.recovery import recover_file
+    plan = strategy_plan('learn_together', 1, 0, 0)
+    config = {'session_id': 'p', 'case': 5, 'strategy': 'learn_together', **personal}
+    old_umask = os.umask(0o022)
+    try:
+        record_in_process(tmp_path, 'p', 5, 'learn_together', 1, plan, steps=3,
+                          session_config=config)
+    finally:
+        os.umask(old_umask)
+    expected = 0o600 if personal else 0o644
+    paths = sorted((tmp_path / 'p').iterdir())
+    assert {path.name for path in paths} == {'metadata.yaml', 'p_ep0000.mcap', 'p_end.mcap'}
+    assert {path.name: path.stat().st_mode & 0o777 for path in paths} == {
+        path.name: expected for path in paths}
+    episode = tmp_path / 'p' / 'p_ep0000.mcap'
+    data = episode.read_bytes()
+    episode.write_bytes(data[:len(data) - 300])
+    recover_file(episode)                                # recovery keeps the mode
+    assert episode.stat().st_mode & 0o777 == expected
