@@ -842,9 +842,10 @@ def report(settings: SessionSettings, run_dir: pathlib.Path) -> None:
     result = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')), str(bag_dir),
                              '--out', str(out_dir)], capture_output=True, text=True)
     print(result.stdout, end='')
+    for line in result.stderr.splitlines():     # the report's notices and reasons
+        print(f'[session] {line}', file=sys.stderr, flush=True)
     if result.returncode != 0:
-        print(f'[session] report failed ({describe_exit(result.returncode)}):\n{result.stderr}',
-              file=sys.stderr)
+        print(f'[session] report failed ({describe_exit(result.returncode)})', file=sys.stderr)
         return
     print(f'[session] bags: {bag_dir}   report and figures: {out_dir}', flush=True)
 
