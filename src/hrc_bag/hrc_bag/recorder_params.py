@@ -1,15 +1,14 @@
 """Parameters of the recorder node (pure, no rclpy): node ``recorder``, params/recorder.yaml."""
 
 from dataclasses import dataclass
-import re
 
+from hrc_common.contract import id_problem
 from hrc_common.params import param
 from hrc_common.topics import (AGENT_STEP, EPISODE, HUMAN_ACTION, HUMAN_CMD_WRENCH,
                                ROBOT_CMD_WRENCH, SESSION, STATE)
 
 DEFAULT_TOPICS = [STATE, ROBOT_CMD_WRENCH, HUMAN_CMD_WRENCH, HUMAN_ACTION, SESSION, EPISODE,
                   AGENT_STEP]
-SESSION_ID = re.compile(r'^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$')
 
 
 @dataclass
@@ -19,7 +18,8 @@ class RecorderParams:
     output_dir: str = param(
         'bags', 'folder that receives one subfolder per session (created if missing)')
     session_id: str = param(
-        '', 'session folder and file name prefix (letters, digits, _ . -); empty: the '
+        '', 'session folder and file name prefix (the contract id rule: 1..64 letters, '
+        "digits, '_', '.', '-'); empty: the "
         'session_config session_id, else the first /hrc/session, else the start time')
     session_config: str = param(
         '', 'YAML file with the session configuration (case, strategy, roles, seeds, every '
@@ -60,9 +60,9 @@ class RecorderParams:
     def check(self):
         """Return the reasons why fields that depend on each other are bad."""
         reasons = []
-        if self.session_id and not SESSION_ID.match(self.session_id):
-            reasons.append(f'session_id: {self.session_id!r} must be 1-100 letters, digits, '
-                           f'_ . - (no path separators)')
+        problem = id_problem(self.session_id, 'session_id') if self.session_id else None
+        if problem:
+            reasons.append(f'{problem} (it names the session folder and the files)')
         if not self.topics:
             reasons.append('topics: at least one topic is needed')
         if len(set(self.topics)) != len(self.topics):

@@ -53,15 +53,15 @@ import pathlib
 import time
 import typing
 
-from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, SESSION_STATUS_TYPE,
-                                 TASK_STATE_TYPE)
+from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem,
+                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE)
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem, file_mode,
                             plain_values, RawMessage, RecordingError, session_custom_data,
                             SESSION_RECORD, session_record, SessionIndex, TopicDescription,
                             unused_path)
-from hrc_bag.recorder_params import RecorderParams, SESSION_ID
+from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recovery import recover_file
 
 
@@ -191,7 +191,7 @@ class EpisodeRecorder:
     def _resolve_session_id(self) -> str:
         if self.last_status and self.last_status.get('session_id'):
             candidate = str(self.last_status['session_id'])
-            if SESSION_ID.match(candidate):
+            if id_problem(candidate) is None:
                 return candidate
             self._warn(f'session id {candidate!r} from /hrc/session is not usable as a folder '
                        f'name; using the start time instead')

@@ -333,7 +333,7 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
 def test_bad_parameters_exit_2_with_the_reason(start_node, tmp_path, isolation):
     recorder = start_recorder(start_node, isolation, tmp_path, 'bad/name')
     assert recorder.wait(timeout=60) == 2
-    assert "session_id: 'bad/name' must be" in recorder.output
+    assert "session_id 'bad/name' is not valid" in recorder.output
     assert not any(tmp_path.iterdir())
 
 
