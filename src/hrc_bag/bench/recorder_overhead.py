@@ -123,21 +123,24 @@ def run_sim(episodes: int, steps: int) -> dict:
             'steps_per_second': episodes * steps / elapsed}
 
 
-def start_recorder(output_dir: str, env: dict) -> subprocess.Popen:
+def start_recorder(output_dir: str, env: dict, changes=()) -> subprocess.Popen:
     from hrc_common.testing import executable_path
     command = [str(executable_path('hrc_bag', 'recorder_node')), '--ros-args', '-p',
-               f'output_dir:={output_dir}', '-p', 'session_id:=bench', '-p', 'close_grace:=0.2']
+               f'output_dir:={output_dir}', '-p', 'session_id:=bench']
+    for change in changes:                  # NAME=VALUE: a parameter other than its default
+        command += ['-p', change.replace('=', ':=', 1)]
     return subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.STDOUT, start_new_session=True)
 
 
-def measure(episodes: int, steps: int, with_recorder: bool, output_dir: str) -> dict:
+def measure(episodes: int, steps: int, with_recorder: bool, output_dir: str,
+            changes=()) -> dict:
     """Run the emulated lockstep graph once; return rates, recorder CPU and file sizes."""
     import rclpy
     env = dict(os.environ)
     actors = subprocess.Popen([sys.executable, __file__, '--actors'], env=env,
                               start_new_session=True)
-    recorder = start_recorder(output_dir, env) if with_recorder else None
+    recorder = start_recorder(output_dir, env, changes) if with_recorder else None
     rclpy.init()
     try:
         time.sleep(3.0)                     # processes start (the ROS wheels re-exec once)
@@ -174,6 +177,8 @@ def main(argv=None) -> int:
     parser.add_argument('--json', help='also write the results to this file')
     parser.add_argument('--keep', help='record into this folder (kept) instead of a temporary '
                         'one')
+    parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE',
+                        help='a recorder parameter other than its default')
     parser.add_argument('--actors', action='store_true', help=argparse.SUPPRESS)
     arguments = parser.parse_args(argv)
     if arguments.actors:
@@ -182,9 +187,11 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix='hrc_bag_bench_') as output_dir:
         output_dir = arguments.keep or output_dir
         without = measure(arguments.episodes, arguments.steps, False, output_dir)
-        with_recorder = measure(arguments.episodes, arguments.steps, True, output_dir)
+        with_recorder = measure(arguments.episodes, arguments.steps, True, output_dir,
+                                arguments.set)
     results = {'without_recorder': without, 'with_recorder': with_recorder}
-    print(f'lockstep message path, {arguments.episodes} episodes x {arguments.steps} steps:')
+    print(f'lockstep message path, {arguments.episodes} episodes x {arguments.steps} steps, '
+          f'recorder parameters changed: {arguments.set or "none"}:')
     print(f'  without recorder: {without["steps_per_second"]:8.1f} steps/s')
     print(f'  with recorder:    {with_recorder["steps_per_second"]:8.1f} steps/s')
     print(f'  recorder CPU:     {with_recorder["recorder_cpu_percent"]:8.1f} % of one core, '
