@@ -1,18 +1,21 @@
 #!/usr/bin/env python3
-"""Benchmark: lockstep control steps per second, full graph over DDS vs one process without ROS.
+"""Benchmark: lockstep control steps per second of the engines, measured in one run.
 
-    python bench/graph_rate.py --episodes 3 --case 2 --repeats 3
+    python bench/graph_rate.py --episodes 3 --case 2 --repeats 3     # from any directory
 
-Measures, within episodes (PPO updates between episodes excluded in both):
+Measures, within episodes (PPO updates between episodes excluded everywhere), in rounds that
+run each variant in turn so that a change of machine load hits them alike:
 
-1. in-process: the same pure components stepped in one Python process — physics core,
-   AgentCore (policy forward + bookkeeping), SimulatedHuman — no ROS;
-2. graph: `session` (sim, agent, human as separate processes over DDS) without the recorder,
-   timed by a listener on /hrc/state in this process;
-3. graph + recorder: the same with the MCAP recorder, for the recorder overhead.
+1. bare: physics core + AgentCore + simulated human stepped in a loop (``offline.run_episode``):
+   the floor, no protocol, no messages, no bags;
+2. engine: the in-process engine (``hrc_engine``: step protocol, messages, bags written);
+3. graph: ``session`` (sim, agent, human as separate processes over DDS), no recorder, timed
+   by a listener on /hrc/state in this process;
+4. graph + recorder: the same with the MCAP recorder.
 
-Prints steps/s (median over episodes) and the ratios. Numbers, not assertions: run it on a quiet
-machine and quote medians.
+Prints steps/s (median over episodes) of each, and the ratios of each round (median over the
+rounds): graph / engine, graph / bare, recorder overhead (steps/s and nodes' CPU), engine /
+bare. The parameters are the session's (params/ of this checkout, else the installed ones).
 """
 
 import argparse
@@ -25,33 +28,63 @@ import tempfile
 import threading
 import time
 
+REPOSITORY = pathlib.Path(__file__).resolve().parents[1]
 
-def in_process_rate(case: int, episodes: int, seed: int) -> float:
-    """Return median control steps/s of whole episodes stepped in one process."""
+
+def session_parameters(case: int, seed: int, episodes: int) -> dict:
+    """Return the session's composed node parameters (as ``session`` would run them)."""
+    from hrc_engine.engine import compose_parameters, EngineConfig
+    params_dir = REPOSITORY / 'params'
+    _, parameters = compose_parameters(EngineConfig(
+        case=case, seed=seed, training_episodes=episodes + 1, session_id='bench',
+        params_dir=str(params_dir) if params_dir.is_dir() else ''))
+    return parameters
+
+
+def bare_rate(case: int, episodes: int, seed: int) -> float:
+    """Return median steps/s of physics + AgentCore + simulated human in a plain loop."""
     from hrc_agent_node.agent_core import AgentCore
     from hrc_agent_node.config import AgentParams
     from hrc_agent_node.offline import run_episode
-    from hrc_common.params import load_yaml, with_overrides
-    from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+    from hrc_common.params import from_dict
+    from hrc_engine.human import SimulatedHumanSide
+    from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+    from hrc_sim_node.sim_params import SimParams
 
-    physics = PhysicsParams()
-    params = load_yaml(AgentParams, 'params/agent.yaml', 'agent')
-    params = with_overrides(params, case=case, seed=seed, max_training_episodes=episodes + 1,
-                            max_force=physics.max_force, max_torque=physics.max_torque,
-                            checkpoint_dir='')
-    core = AgentCore(params)
-    human = SimulatedHuman(load_profile('paper'), core.human_dof, seed=seed)
+    parameters = session_parameters(case, seed, episodes)
+    parameters['agent']['checkpoint_dir'] = ''
+    core = AgentCore(from_dict(AgentParams, parameters['agent']))
+    human = SimulatedHumanSide(parameters['human'])
+    human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
+    clock = {'stamp': 0}
+
+    def partner(state, subtasks):
+        clock['stamp'] += 200_000_000
+        return human.answer(core.episode, state, clock['stamp']).command
+
     rates = []
-    with SliderPendulumBall(physics) as sim:
-        for episode in range(episodes):
-            human.reset(episode)
+    sim_params = from_dict(SimParams, parameters['sim'])
+    with SliderPendulumBall(physics_params_of(sim_params)) as sim:
+        for _ in range(episodes):
             start = time.perf_counter()
-            result = run_episode(core, sim, human.act)
+            result = run_episode(core, sim, partner)
             rates.append(result.steps / (time.perf_counter() - start))
             if core.phase == 'updating':
                 core.update()
     return statistics.median(rates)
+
+
+def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path) -> float:
+    """Return median steps/s of the in-process engine's episodes (bags written)."""
+    from hrc_engine.engine import EngineConfig, run_session
+    params_dir = REPOSITORY / 'params'
+    result = run_session(EngineConfig(
+        case=case, seed=seed, training_episodes=episodes, evaluation_episodes=0,
+        session_id=f'engine-{time.time_ns()}', bags_dir=str(work / 'bags'),
+        runs_dir=str(work / 'runs'), params_dir=str(params_dir) if params_dir.is_dir() else ''))
+    steps = [episode['steps'] for episode in result.episodes]
+    return statistics.median(step / seconds
+                             for step, seconds in zip(steps, result.episode_seconds))
 
 
 class StateTimer:
@@ -106,21 +139,24 @@ class StateTimer:
         self.thread.join(timeout=5)
 
 
-def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int) -> dict:
+def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int,
+               work: pathlib.Path) -> dict:
     """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s}."""
-    from hrc_common.testing import executable_path
+    from hrc_common.executables import executable_path
 
     timer = StateTimer(domain_id)
-    work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bench-'))
+    name = f'graph-{time.time_ns()}'
     command = [str(executable_path('hrc_bringup', 'session')), '--case', str(case),
                '--seed', str(seed), '--episodes', str(episodes), '--eval-episodes', '0',
                '--domain-id', str(domain_id), '--no-report', '--bags-dir', str(work / 'bags'),
-               '--runs-dir', str(work / 'runs'), '--session-id', 'bench']
+               '--runs-dir', str(work / 'runs'), '--session-id', name]
+    if (REPOSITORY / 'params').is_dir():
+        command += ['--params-dir', str(REPOSITORY / 'params')]
     if not record:
         command.append('--no-record')
     before = os.times()
     start = time.perf_counter()
-    result = subprocess.run(command, capture_output=True, text=True)
+    result = subprocess.run(command, capture_output=True, text=True, cwd=work)
     wall = time.perf_counter() - start
     after = os.times()
     time.sleep(0.5)
@@ -128,50 +164,56 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
     if result.returncode != 0:
         raise RuntimeError(f'session failed:\n{result.stdout}\n{result.stderr}')
     rates = timer.episode_rates()
-    bag_bytes = sum(path.stat().st_size for path in (work / 'bags').rglob('*.mcap'))
     return {'rate': statistics.median(rates) if rates else float('nan'), 'episodes': len(rates),
             'cpu': (after.children_user + after.children_system)
-            - (before.children_user + before.children_system),
-            'wall': wall, 'bag_bytes_per_episode': bag_bytes / max(episodes, 1)}
+            - (before.children_user + before.children_system), 'wall': wall}
 
 
 def main() -> int:
-    """Run the three measurements and print them with their ratios."""
+    """Run the measurements in rounds and print them with their ratios."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--case', type=int, default=2)
     parser.add_argument('--episodes', type=int, default=3)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--domain-id', type=int, default=91)
-    parser.add_argument('--repeats', type=int, default=3, help='rounds of the three runs')
+    parser.add_argument('--repeats', type=int, default=3, help='rounds of the four runs')
     args = parser.parse_args()
 
-    print(f'machine: {os.cpu_count()} cores, python {sys.version.split()[0]}; case {args.case}, '
-          f'{args.episodes} episodes of 200 steps per measurement, {args.repeats} rounds '
-          f'(in-process, graph, graph + recorder in turn; ratios pair by pair)', flush=True)
+    load = os.getloadavg()[0]
+    print(f'machine: {os.cpu_count()} cores, load {load:.1f}, python {sys.version.split()[0]}; '
+          f'case {args.case}, {args.episodes} episodes of 200 steps per measurement, '
+          f'{args.repeats} rounds (bare, engine, graph, graph + recorder in turn)', flush=True)
     rounds = []
-    for round_index in range(args.repeats):
-        local = in_process_rate(args.case, args.episodes, args.seed)
-        bare = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id)
-        recorded = graph_rate(args.case, args.episodes, args.seed, True, args.domain_id)
-        rounds.append((local, bare, recorded))
-        print(f'round {round_index + 1}: in-process {local:6.0f} steps/s | graph '
-              f'{bare["rate"]:5.0f}'
-              f' steps/s (nodes CPU {bare["cpu"]:.1f} s) | graph + recorder '
-              f'{recorded["rate"]:5.0f} steps/s (nodes CPU {recorded["cpu"]:.1f} s, '
-              f'{recorded["bag_bytes_per_episode"] / 1024:.0f} KiB MCAP per episode)', flush=True)
+    with tempfile.TemporaryDirectory(prefix='hrc-bench-') as folder:
+        work = pathlib.Path(folder)
+        for index in range(args.repeats):
+            bare = bare_rate(args.case, args.episodes, args.seed)
+            engine = engine_rate(args.case, args.episodes, args.seed, work)
+            graph = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id, work)
+            recorded = graph_rate(args.case, args.episodes, args.seed, True, args.domain_id,
+                                  work)
+            rounds.append((bare, engine, graph, recorded))
+            print(f'round {index + 1}: bare {bare:5.0f} | engine {engine:5.0f} | graph '
+                  f'{graph["rate"]:5.0f} (nodes CPU {graph["cpu"]:.1f} s) | graph + recorder '
+                  f'{recorded["rate"]:5.0f} steps/s (nodes CPU {recorded["cpu"]:.1f} s)',
+                  flush=True)
     median = statistics.median
-    local = median(r[0] for r in rounds)
-    bare = median(r[1]['rate'] for r in rounds)
-    recorded = median(r[2]['rate'] for r in rounds)
-    print(f'median in-process (no ROS)      : {local:6.0f} steps/s')
-    print(f'median graph over DDS           : {bare:6.0f} steps/s  '
-          f'(real-time factor {bare * 0.2:.0f}x)')
-    print(f'median graph over DDS + recorder: {recorded:6.0f} steps/s')
-    print(f'ratio graph / in-process       : {median(r[1]["rate"] / r[0] for r in rounds):.2f}')
-    print(f'recorder overhead (steps/s)    : '
-          f'{median(1 - r[2]["rate"] / r[1]["rate"] for r in rounds) * 100:+.1f}%')
-    print(f'recorder overhead (nodes CPU)  : '
-          f'{median(r[2]["cpu"] / r[1]["cpu"] - 1 for r in rounds) * 100:+.1f}%')
+    print(f'median bare physics + policy + human: {median(r[0] for r in rounds):6.0f} steps/s')
+    print(f'median in-process engine (bags)     : {median(r[1] for r in rounds):6.0f} steps/s')
+    print(f'median graph over DDS               : {median(r[2]["rate"] for r in rounds):6.0f} '
+          f'steps/s')
+    print(f'median graph over DDS + recorder    : {median(r[3]["rate"] for r in rounds):6.0f} '
+          f'steps/s')
+    print(f'ratio graph / engine                : '
+          f'{median(r[2]["rate"] / r[1] for r in rounds):.2f}')
+    print(f'ratio graph / bare                  : '
+          f'{median(r[2]["rate"] / r[0] for r in rounds):.2f}')
+    print(f'ratio engine / bare                 : {median(r[1] / r[0] for r in rounds):.2f}')
+    print(f'recorder overhead (steps/s)         : '
+          f'{median(1 - r[3]["rate"] / r[2]["rate"] for r in rounds) * 100:+.1f}%')
+    print(f'recorder overhead (nodes CPU)       : '
+          f'{median(r[3]["cpu"] / r[2]["cpu"] - 1 for r in rounds) * 100:+.1f}%')
+    print(f'load average at the end             : {os.getloadavg()[0]:.1f}')
     return 0
 
 
