@@ -80,6 +80,20 @@ def session_records(folder):
     return records
 
 
+def run_to_the_end(watcher, command, log_path, timeout=300):
+    """Run a session runner to its end while the watcher listens; return (exit code, output)."""
+    with open(log_path, 'w+') as log:
+        runner = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, text=True)
+        try:
+            assert watcher.wait(lambda: runner.poll() is not None, timeout=timeout)
+        finally:
+            if runner.poll() is None:
+                runner.kill()
+                runner.wait()
+        log.seek(0)
+        return runner.returncode, log.read()
+
+
 @pytest.fixture
 def watcher(rclpy_context):
     watcher = Watcher(rclpy_context)
@@ -187,18 +201,9 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     # Resume from the checkpoint, one more training episode: the counters continue.
     watcher.wait(lambda: False, timeout=1.0)  # take in what is left of the first run
     first_state = len(watcher.states)
-    resumed_log = open(tmp_path / 'resumed.log', 'w+')
-    resumed = subprocess.Popen([session, *resume_args, '--episodes', str(finished + 1)],
-                               stdout=resumed_log, stderr=subprocess.STDOUT, text=True)
-    try:
-        assert watcher.wait(lambda: resumed.poll() is not None, timeout=300)
-    finally:
-        if resumed.poll() is None:
-            resumed.kill()
-            resumed.wait()
-    resumed_log.seek(0)
-    text = resumed_log.read()
-    assert resumed.returncode == 0, text
+    code, text = run_to_the_end(watcher, [session, *resume_args, '--episodes',
+                                          str(finished + 1)], tmp_path / 'resumed.log')
+    assert code == 0, text
     assert 'the agent finished the session' in text
     assert watcher.wait(lambda: watcher.phase() == SessionStatus.PHASE_DONE, 30)
     new_states = watcher.states[first_state:]
@@ -271,18 +276,9 @@ def check_clock_switch(watcher, clock, summaries):
 def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
         tmp_path, ros_domain_id, watcher, read_rosbag):
     clock = StateClock(watcher)
-    log = open(tmp_path / 'runner.log', 'w+')
-    runner = subprocess.Popen(case2_command(tmp_path, ros_domain_id, '--episodes', '8'),
-                              stdout=log, stderr=subprocess.STDOUT, text=True)
-    try:
-        assert watcher.wait(lambda: runner.poll() is not None, timeout=240)
-    finally:
-        if runner.poll() is None:
-            runner.kill()
-            runner.wait()
-    log.seek(0)
-    text = log.read()
-    assert runner.returncode == 0, text
+    code, text = run_to_the_end(watcher, case2_command(tmp_path, ros_domain_id, '--episodes',
+                                                       '8'), tmp_path / 'runner.log')
+    assert code == 0, text
     alone, together = check_clock_switch(watcher, clock, watcher.summaries)
     match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
                       r'practised alone: (\d+) episodes in (\d+) s', text)

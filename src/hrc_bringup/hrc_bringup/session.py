@@ -44,8 +44,8 @@ import time
 from hrc_common.contract import Phase, phase_label
 from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
                                         OPERATOR_SERVICES)
-from hrc_live.input_check import (device_missing_message, device_presence, joy_missing_message,
-                                  joystick_devices, lost_reason)
+from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
+                                  joy_missing_message, joystick_devices, lost_reason)
 import yaml
 
 from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, SessionSettings,
@@ -359,8 +359,7 @@ class InputGuard:
         self._trigger = Trigger
         self._session_status = SessionStatus
         self._topics, self._qos = topics, qos
-        self.lost_pub = node.create_publisher(String, '/hrc/session/input_lost',
-                                              qos.SESSION_QOS)
+        self.lost_pub = node.create_publisher(String, INPUT_LOST_TOPIC, qos.SESSION_QOS)
         self.lost_pub.publish(String(data=''))
         self.abort_client = node.create_client(Trigger, ABORT_SERVICE)
         node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,

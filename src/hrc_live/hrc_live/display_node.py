@@ -49,6 +49,7 @@ from hrc_live.display_core import (AgentPlan, console_document, DisplayModel, Hu
                                    overlay, overlay_document, ResultView, scene_geometry,
                                    SessionView, SOURCE_NAMES, state_document, StateView,
                                    status_document)
+from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_live.tlx import check_tlx, raw_tlx
 
 SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the person's page "
@@ -66,8 +67,6 @@ SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limi
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
 # Events kept per client before the oldest are dropped (a stalled browser must not grow memory).
 CLIENT_QUEUE = 200
-# Topic on which the session runner says why the person's input is lost ('' = it is back).
-INPUT_LOST_TOPIC = '/hrc/session/input_lost'
 
 
 @dataclass

@@ -23,6 +23,9 @@ import termios
 from hrc_common.contract import InputSource
 
 SOURCE_NONE = int(InputSource.NONE)
+# The session runner says on this topic (std_msgs/String, transient local) why the person's
+# input is lost ('' = it is not); the display node shows it on both pages.
+INPUT_LOST_TOPIC = '/hrc/session/input_lost'
 NOT_INVOLVED = 'not involved'
 
 

@@ -26,6 +26,7 @@ from hrc_common.params import as_dict, load_yaml
 from hrc_common.testing import wait_for
 from hrc_live.display_core import COLORS
 from hrc_live.display_node import DisplayParams
+from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import body_poses, PhysicsParams, PhysicsState
 import pytest
@@ -270,7 +271,7 @@ def test_console_shows_input_health_and_its_buttons_call_the_agent(graph):
     assert status(port)['console']['input']['healthy'] is False
     # The session runner says the joystick is gone: both pages say so.
     from std_msgs.msg import String
-    lost = agent.node.create_publisher(String, '/hrc/session/input_lost', qos.SESSION_QOS)
+    lost = agent.node.create_publisher(String, INPUT_LOST_TOPIC, qos.SESSION_QOS)
     lost.publish(String(data='/dev/input/js0 unplugged'))
     assert wait_for(lambda: 'joystick disconnected' in browser.find_element(
         'id', 'input').text, 20, 0.2)
