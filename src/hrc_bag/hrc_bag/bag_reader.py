@@ -348,16 +348,7 @@ def file_topics(path) -> dict:
     if summary is not None:
         schemas, channels = summary.schemas, summary.channels
     else:
-        schemas, channels = {}, {}
-        with open(path, 'rb') as stream:
-            try:
-                for record in StreamReader(stream).records:
-                    if isinstance(record, Schema):
-                        schemas[record.id] = record
-                    elif isinstance(record, Channel):
-                        channels[record.id] = record
-            except TRUNCATION_ERRORS:
-                pass
+        schemas, channels, _, _, _ = scan_records(path)     # a file left open
     topics = {}
     for channel in channels.values():
         schema = schemas.get(channel.schema_id)
