@@ -7,8 +7,8 @@ whole task with the simulated human) and each seed, trains both learners for ``-
 training episodes, one run after the other in this process (one core), appending each run to
 ``<out>/ppo_comparison.json`` as it finishes (a run already there is not repeated). Then
 draws ``<out>/ppo_comparison.png`` (per setting: the mean return of each learner over the
-seeds, a band from the lowest to the highest seed, a 5-episode moving average; a random
-policy's mean return for reference) and prints, per learner and setting, the episodes to the
+seeds, a band from the lowest to the highest seed, a 5-episode moving average; the median
+episodes to the criterion; a random policy's mean return for reference) and prints, per learner and setting, the episodes to the
 strategy's criterion per seed and the mean return of the first and last 20 episodes.
 ``--plot-only`` redraws from the JSON.
 """
@@ -71,9 +71,38 @@ def summarize(results: dict) -> list:
                     f'(seeds {first.min():.1f}..{first.max():.1f}), last {SUMMARY_WINDOW} '
                     f'{last.mean():.1f} ({last.min():.1f}..{last.max():.1f}); '
                     f'wall {sum(results["seconds"][setting][learner].values()):.0f} s')
+            lines.append('  ' + compare_learners(results, setting, env))
         finally:
             env.close()
     return lines
+
+
+def compare_learners(results: dict, setting: str, env) -> str:
+    """Return one line: logrank (episodes to criterion, censored) and Mann-Whitney (final).
+
+    Both two-sided in effect: each one-sided p-value is given in both directions.
+    """
+    from hrc_gym.compare import episodes_to_criterion
+    from hrc_study.statistics import logrank_faster, mann_whitney_less
+
+    runs = results['runs'][setting]
+    if not all(runs.get(learner) for learner in LEARNERS):
+        return 'comparison: needs runs of both learners'
+    limit = results['episodes']
+    times, events, finals = {}, {}, {}
+    for learner in LEARNERS:
+        reached = [episodes_to_criterion(env, records) for records in runs[learner].values()]
+        times[learner] = [limit if value is None else value for value in reached]
+        events[learner] = [value is not None for value in reached]
+        finals[learner] = [np.mean([r['return'] for r in records[-SUMMARY_WINDOW:]])
+                           for records in runs[learner].values()]
+    race = logrank_faster(times['ours'], events['ours'], times['sb3'], events['sb3'])
+    final = mann_whitney_less(finals['sb3'], finals['ours'])
+    return (f'ours vs sb3: episodes to criterion {race.detail}, logrank p(ours faster) '
+            f'{race.p_value:.2f}, p(sb3 faster) {race.p_reverse:.2f}, restricted-mean '
+            f'difference {race.effect:+.1f} episodes (+ = ours faster); final return '
+            f'{final.detail} (sb3 vs ours), Mann-Whitney p(ours higher) {final.p_value:.2f}, '
+            f'p(sb3 higher) {final.p_reverse:.2f}')
 
 
 def plot(results: dict, path: str) -> None:
@@ -82,11 +111,15 @@ def plot(results: dict, path: str) -> None:
     matplotlib.use('Agg')
     from matplotlib import pyplot
 
+    from hrc_gym.compare import episodes_to_criterion, make_env
+
     settings = list(results['runs'])
     figure, axes = pyplot.subplots(1, len(settings), figsize=(6.2 * len(settings), 4.2),
                                    squeeze=False)
     colors = {'ours': 'tab:blue', 'sb3': 'tab:orange'}
     for axis, setting in zip(axes[0], settings):
+        env = make_env(setting)
+        env.close()  # only its task description is needed
         for learner in LEARNERS:
             runs = results['runs'][setting].get(learner, {})
             if not runs:
@@ -98,6 +131,12 @@ def plot(results: dict, path: str) -> None:
                       label=f'{LABELS[learner]} (mean of {len(runs)} seeds)')
             axis.fill_between(episodes, curves.min(axis=0), curves.max(axis=0),
                               color=colors[learner], alpha=0.2)
+            reached = [count for count in (episodes_to_criterion(env, records)
+                                           for records in runs.values()) if count is not None]
+            if reached:
+                axis.axvline(float(np.median(reached)), color=colors[learner], ls=':',
+                             label=f'median episodes to criterion ({len(reached)}/{len(runs)} '
+                                   f'seeds reached it)')
         axis.axhline(float(np.mean(results['random'][setting])), color='grey', ls='--',
                      label='random policy')
         axis.set_title(TITLES[setting], fontsize=10)
