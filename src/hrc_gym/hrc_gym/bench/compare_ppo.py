@@ -8,8 +8,10 @@ training episodes, one run after the other in this process (one core), appending
 ``<out>/ppo_comparison.json`` as it finishes (a run already there is not repeated). Then
 draws ``<out>/ppo_comparison.png`` (per setting: the mean return of each learner over the
 seeds, a band from the lowest to the highest seed, a 5-episode moving average; the median
-episodes to the criterion; a random policy's mean return for reference) and prints, per learner and setting, the episodes to the
-strategy's criterion per seed and the mean return of the first and last 20 episodes.
+episodes to the criterion; a random policy's mean return for reference) and prints, per
+learner and setting, the episodes to the strategy's criterion per seed and the mean return of
+the first and last 20 episodes, with a logrank test on the episodes to the criterion and a
+Mann-Whitney test on the final returns.
 ``--plot-only`` redraws from the JSON.
 """
 
