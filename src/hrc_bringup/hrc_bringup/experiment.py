@@ -34,6 +34,7 @@ import os
 import pathlib
 import shlex
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -167,15 +168,19 @@ def unpack_folder(data: bytes, target: pathlib.Path, expected: str) -> None:
         archive.extractall(target, members=members, filter='data')
 
 
+def _ignore_interrupt():
+    """Pool worker initializer: Ctrl-C is the driver's to handle (it terminates the pool)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 class LocalPool:
     """The embedded executor: a process pool on this machine."""
 
     def __init__(self, workers: int):
-        from concurrent.futures import ProcessPoolExecutor
         import multiprocessing
         self.workers = workers
         # spawn: a fresh interpreter per worker (no forked torch or PyBullet state)
-        self.pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context('spawn'))
+        self.pool = multiprocessing.get_context('spawn').Pool(workers, _ignore_interrupt)
 
     def describe(self) -> str:
         """Return what runs the tasks."""
@@ -183,14 +188,16 @@ class LocalPool:
 
     def run(self, tasks, on_done):
         """Run every task; call ``on_done(outcome)`` as each finishes."""
-        from concurrent.futures import as_completed
-        futures = [self.pool.submit(run_task, task) for task in tasks]
-        for future in as_completed(futures):
-            on_done(future.result())
+        for outcome in self.pool.imap_unordered(run_task, tasks, chunksize=1):
+            on_done(outcome)
 
-    def close(self):
-        """Stop the workers."""
-        self.pool.shutdown(cancel_futures=True)
+    def close(self, abort: bool = False):
+        """Stop the workers (``abort``: at once, sessions in progress are lost)."""
+        if abort:
+            self.pool.terminate()
+        else:
+            self.pool.close()
+        self.pool.join()
 
 
 class RayExecutor:
@@ -218,8 +225,8 @@ class RayExecutor:
             done, pending = self.ray.wait(pending, num_returns=1)
             on_done(self.ray.get(done[0]))
 
-    def close(self):
-        """Disconnect (a local instance started here stops with it)."""
+    def close(self, abort: bool = False):
+        """Disconnect (a local instance started here stops with it, and its tasks)."""
         self.ray.shutdown()
 
 
@@ -377,11 +384,16 @@ def main(argv=None) -> int:
               f'{outcome["seconds"]:.0f} s ({len(outcomes)}/{len(tasks)}): {status}',
               flush=True)
 
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, interrupt)    # also when started with SIGINT ignored (nohup &)
+    signal.signal(signal.SIGTERM, interrupt)
     try:
         executor.run(tasks, on_done)
     except KeyboardInterrupt:
-        print('[experiment] interrupted', flush=True)
-        executor.close()
+        print('[experiment] interrupted: sessions in progress stopped', flush=True)
+        executor.close(abort=True)
         return 130
     description = executor.describe()
     executor.close()

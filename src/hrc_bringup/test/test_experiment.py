@@ -51,35 +51,51 @@ def _stop(process: subprocess.Popen) -> None:
     process.wait(timeout=10)
 
 
+class LocalCluster:
+    """A Ray cluster of two nodes (one CPU each) on this machine, started in the background."""
+
+    def __init__(self):
+        port = _free_port()
+        self.temp_dir = tempfile.mkdtemp(prefix='hrcray', dir='/tmp')  # short: socket paths
+        self.env = dict(os.environ, RAY_USAGE_STATS_ENABLED='0')
+        self.log = open(os.path.join(self.temp_dir, 'ray.log'), 'w')
+        self.address = f'127.0.0.1:{port}'
+        self.processes = [_ray('--head', f'--port={port}', '--include-dashboard=false',
+                               f'--temp-dir={self.temp_dir}', log=self.log, env=self.env)]
+
+    def _status(self):
+        return subprocess.run(['ray', 'status', f'--address={self.address}'], env=self.env,
+                              capture_output=True, text=True)
+
+    def wait_ready(self, timeout: float = 120.0) -> str:
+        """Start the second node once the head answers; return when both are up."""
+        deadline = time.monotonic() + timeout
+        while self._status().returncode != 0:
+            assert time.monotonic() < deadline, open(self.log.name).read()[-2000:]
+            time.sleep(0.5)
+        if len(self.processes) == 1:
+            self.processes.append(_ray(f'--address={self.address}', log=self.log,
+                                       env=self.env))
+        while '2.0 CPU' not in self._status().stdout:
+            assert time.monotonic() < deadline, self._status().stdout
+            time.sleep(0.5)
+        return self.address
+
+    def stop(self) -> None:
+        """Stop both nodes (their process groups only)."""
+        for process in reversed(self.processes):
+            _stop(process)
+        self.log.close()
+
+
 @pytest.fixture
 def ray_cluster():
-    """Yield the address of a local Ray cluster of two nodes (one CPU each)."""
-    port = _free_port()
-    temp_dir = tempfile.mkdtemp(prefix='hrcray', dir='/tmp')   # short: Ray's socket paths
-    env = dict(os.environ, RAY_USAGE_STATS_ENABLED='0')
-    log = open(os.path.join(temp_dir, 'ray.log'), 'w')
-    address = f'127.0.0.1:{port}'
-    processes = [_ray('--head', f'--port={port}', '--include-dashboard=false',
-                      f'--temp-dir={temp_dir}', log=log, env=env)]
+    """Yield a LocalCluster being started (call wait_ready before using it)."""
+    cluster = LocalCluster()
     try:
-        deadline = time.monotonic() + 40
-        while subprocess.run(['ray', 'status', f'--address={address}'], env=env,
-                             capture_output=True).returncode != 0:
-            assert time.monotonic() < deadline, open(log.name).read()[-2000:]
-            time.sleep(0.5)
-        processes.append(_ray(f'--address={address}', log=log, env=env))
-        while True:
-            status = subprocess.run(['ray', 'status', f'--address={address}'], env=env,
-                                    capture_output=True, text=True).stdout
-            if status.count('node_') >= 2 or '2.0 CPU' in status:
-                break
-            assert time.monotonic() < deadline, status
-            time.sleep(0.5)
-        yield address
+        yield cluster
     finally:
-        for process in reversed(processes):
-            _stop(process)
-        log.close()
+        cluster.stop()
 
 
 def _run_experiment(tmp_path, name, *extra) -> dict:
@@ -98,8 +114,8 @@ def _episodes(folder) -> dict:
 
 @pytest.mark.slow
 def test_sweep_on_a_two_node_ray_cluster_equals_the_local_pool(tmp_path, ray_cluster):
-    local = _run_experiment(tmp_path, 'local', '--parallel', '2')
-    on_ray = _run_experiment(tmp_path, 'ray', '--ray-address', ray_cluster)
+    local = _run_experiment(tmp_path, 'local', '--parallel', '2')   # while Ray starts
+    on_ray = _run_experiment(tmp_path, 'ray', '--ray-address', ray_cluster.wait_ready())
     assert 'Ray cluster (2 nodes, 2 CPUs' in on_ray['executor']
     assert 'local process pool' in local['executor']
     # one session per node: each node declares one CPU and each session asks for one
