@@ -21,6 +21,7 @@ from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
 from hrc_common.testing import executable_path, wait_for
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_INIT, pack_event
+from hrc_live.study import assign_orders, load_index, register, save_registry
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
@@ -246,14 +247,19 @@ def case2_command(tmp_path, domain_id, *extra):
 
 
 class StateClock:
-    """Wall time of each state's arrival, to tell lockstep (fast) from realtime episodes."""
+    """Wall time of each state's arrival, to tell lockstep (fast) from realtime episodes.
+
+    States of a practice (announced with strategy ``practice``) are not the condition's.
+    """
 
     def __init__(self, watcher):
         import time
         self.arrivals = collections.defaultdict(list)
-        watcher.node.create_subscription(
-            TaskState, topics.STATE,
-            lambda state: self.arrivals[state.episode].append(time.monotonic()), qos.STATE_QOS)
+
+        def arrived(state):
+            if not (watcher.statuses and watcher.statuses[-1].strategy == 'practice'):
+                self.arrivals[state.episode].append(time.monotonic())
+        watcher.node.create_subscription(TaskState, topics.STATE, arrived, qos.STATE_QOS)
 
     def duration(self, episode) -> float:
         times = self.arrivals[episode]
@@ -276,9 +282,28 @@ def check_clock_switch(watcher, clock, summaries):
 def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
         tmp_path, ros_domain_id, watcher, read_rosbag):
     clock = StateClock(watcher)
-    code, text = run_to_the_end(watcher, case2_command(tmp_path, ros_domain_id, '--episodes',
-                                                       '8'), tmp_path / 'runner.log')
+    study = tmp_path / 'study'
+    subjects = []
+    register(subjects, 'P07', 'yes', '2026-11-30')
+    assign_orders(subjects, [5, 2])
+    save_registry(study, subjects)
+    code, text = run_to_the_end(watcher, case2_command(
+        tmp_path, ros_domain_id, '--episodes', '8', '--practice', '1', '--subject-id', 'P07',
+        '--study-dir', str(study)), tmp_path / 'runner.log')
     assert code == 0, text
+    # Practice first: one episode of the person alone (realtime, no robot), recorded apart.
+    assert 'practice done: 1 of 1 episodes' in text, text
+    assert '[session] the human side is driven by: simulated (paper)' in text
+    practice = read_rosbag(tmp_path / 'bags' / 'case2-practice')
+    assert {s.episode for s in practice['/hrc/state']} == {0}
+    # Case 2: the person drives the slider (force), the robot (idle here) the pendulum.
+    assert all(w.wrench.torque.x == 0.0 for w in practice['/hrc/human/cmd_wrench'])
+    assert any(w.wrench.force.z != 0.0 for w in practice['/hrc/human/cmd_wrench'])
+    assert not practice.get('/hrc/robot/cmd_wrench')
+    index = load_index(study)
+    assert [(e.subject_id, e.session_id, e.kind, e.position, e.exit_code) for e in index] == [
+        ('P07', 'case2-practice', 'practice', 2, 0), ('P07', 'case2', 'condition', 2, 0)]
+    watcher.summaries[:] = [s for s in watcher.summaries if s.session_id == 'case2']
     alone, together = check_clock_switch(watcher, clock, watcher.summaries)
     match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
                       r'practised alone: (\d+) episodes in (\d+) s', text)

@@ -239,7 +239,7 @@ class Progress:
         import rclpy
 
         from hrc_common import qos, topics
-        from hrc_msgs.msg import EpisodeSummary, SessionStatus
+        from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
 
         self.node = rclpy.create_node('session_runner', context=context)
         self.interactive = interactive
@@ -252,6 +252,9 @@ class Progress:
                                       qos.SESSION_QOS)
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self._on_episode,
                                       qos.EPISODE_QOS)
+        self.input_source = None   # (source, detail) of the person's side, as last announced
+        self.node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
+                                      qos.HUMAN_ACTION_QOS)
 
     def _on_status(self, status):
         # Announce what changes the task for the team; the training <-> updating toggles between
@@ -271,6 +274,20 @@ class Progress:
                         f'{"involved" if status.human_involved else "not involved"}, robot '
                         f'subtasks {list(status.robot_subtasks)}, human subtasks '
                         f'{list(status.human_subtasks)}', permanent=True)
+
+    def _on_action(self, action):
+        """Say which input drives the person's side whenever it changes (never silently)."""
+        from hrc_common.contract import source_label
+
+        if action.source_detail.startswith('not involved'):
+            return  # zero on purpose: the person has no part in this training step
+        source = source_label(action.source)
+        detail = action.source_detail.split(' (', 1)[0] if source != 'none' \
+            else action.source_detail
+        if (source, detail) != self.input_source:
+            self.input_source = (source, detail)
+            self._print(f'[session] the human side is driven by: {source} ({detail})',
+                        permanent=True)
 
     def restart(self) -> None:
         """Forget the practice: the condition's clock and person time start now."""
