@@ -22,11 +22,12 @@ robot practised alone and when the person joined.
 
 Never a silent stand-in: in realtime with ``--human device`` or ``joy`` the runner does not
 start until the input is there (it lists the joystick devices it sees and says how to fix it);
-the human node holds zero when its input is lost (``on_input_lost: zero``) and the runner then
-pauses the session at once (the agent is stopped mid-episode: zero commands, the sim holds;
-the page, the console and ``operator status`` say "joystick disconnected"); after the input is
-back the operator resumes (``operator resume`` or the console) and the agent continues from
-the last finished episode. ``--stand-in sim`` asks for the simulated human instead.
+the human node holds zero and asks to pause when its input is lost (``on_input_lost: pause``,
+its ``/hrc/human/input`` status) and the runner then pauses the session at once (the agent is
+stopped mid-episode: zero commands, the sim holds; the page, the console and ``operator
+status`` say "joystick disconnected"); after the human node reports the input back the
+operator resumes (``operator resume`` or the console) and the agent continues from the last
+finished episode. ``--stand-in sim`` asks for the simulated human instead.
 
 Exit codes: 0 done, 1 a node failed, 2 bad arguments, 3 aborted by the operator, 124 timeout,
 130/143 SIGINT/SIGTERM.
@@ -383,9 +384,23 @@ class InputGuard:
                                  qos.HUMAN_ACTION_QOS)
         node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                  qos.SESSION_QOS)
+        # The human node's input status (src/hrc_joystick_node/README.md): pause_requested
+        # when its joystick is missing or lost, state 'ok' when it is back.
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from hrc_joystick_node.human_node import HUMAN_INPUT
+        self.input_status = {}          # the newest status's key-values, plus 'message'
+        node.create_subscription(DiagnosticStatus, HUMAN_INPUT, self._on_input_status,
+                                 qos.SESSION_QOS)
 
     def present(self) -> tuple:
-        """Return (present, why) of the person's input now."""
+        """Return (present, why) of the person's input now.
+
+        The human node's word when it has spoken (its input status), else the runner's own
+        look at the device or at /joy's publishers (before the human node runs).
+        """
+        if self.input_status:
+            ok = self.input_status.get('state') == 'ok'
+            return ok, self.input_status.get('message', '')
         if self.kind == 'joy':
             publishers = self.node.count_publishers(self._topics.JOY)
             return publishers > 0, joy_missing_message(publishers)
@@ -398,11 +413,21 @@ class InputGuard:
             self.last_status = status
             self.involved = bool(status.human_involved)
 
+    def _on_input_status(self, status):
+        values = {item.key: item.value for item in status.values}
+        values['message'] = status.message
+        self.input_status = values
+        if values.get('pause_requested') == 'true' and self.involved:
+            self._lose(status.message or 'the human node asks to pause')
+
     def _on_action(self, action):
-        if self.lost:
-            return
         reason = lost_reason(action.source, action.source_detail, self.involved)
-        if not reason:
+        if reason:
+            self._lose(reason)
+
+    def _lose(self, reason: str) -> None:
+        """Pause the session at once: the person's input is lost while they act."""
+        if self.lost:
             return
         if not reason.startswith('joystick disconnected'):
             reason = f'joystick disconnected: {reason}'
@@ -525,7 +550,7 @@ def run_session(settings: SessionSettings, options) -> int:
     live_input = person_input(settings, options)
     if live_input:
         # Never a silent stand-in: the simulated human only when the operator asked for it.
-        parameters['human']['on_input_lost'] = 'sim' if options.stand_in == 'sim' else 'zero'
+        parameters['human']['on_input_lost'] = 'sim' if options.stand_in == 'sim' else 'pause'
     params_path, _ = write_session_files(settings, parameters, run_dir)
 
     env = dict(os.environ)
@@ -724,7 +749,7 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
                              max_episodes=options.practice, expected_actors=['human'])
     if person_input(settings, options):
         parameters['human']['on_input_lost'] = ('sim' if options.stand_in == 'sim'
-                                                else 'zero')
+                                                else 'pause')
     run_dir = pathlib.Path(settings.runs_dir) / practice.session_id
     if settings.record:
         parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
