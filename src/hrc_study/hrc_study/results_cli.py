@@ -30,6 +30,8 @@ def parse_arguments(argv):
                         'a preset: balanced, "performance first", "least human time", '
                         '"fastest training"')
     parser.add_argument('--seed', type=int, default=0, help='bootstrap seed (default 0)')
+    parser.add_argument('--note', default='',
+                        help='a paragraph put under the run description (e.g. the commit)')
     arguments = parser.parse_args(argv)
     if arguments.priorities:
         try:
@@ -64,7 +66,7 @@ def main(argv=None) -> int:
     try:
         result = write_results(sessions, arguments.out, command,
                                read_experiment(arguments.paths), arguments.weights,
-                               arguments.seed)
+                               arguments.seed, arguments.note)
     except ValueError as error:
         log(str(error))
         return 1

@@ -188,7 +188,7 @@ def read_experiment(paths) -> dict:
 
 
 def write_results(sessions, out_dir, command: str, experiment: dict = None,
-                  priorities: dict = None, seed: int = 0) -> dict:
+                  priorities: dict = None, seed: int = 0, note: str = '') -> dict:
     """Write ``out_dir/results.md`` and ``out_dir/results/*``; return {name: path} and more."""
     experiment = experiment or {}
     out_dir = pathlib.Path(out_dir)
@@ -218,7 +218,7 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
     for name in names:
         files[name] = assets / name
     text = document(sessions, profiles, rows, findings, choices, command, experiment,
-                    chooser_problem)
+                    chooser_problem, note)
     (out_dir / 'results.md').write_text(text)
     files['results.md'] = out_dir / 'results.md'
     return {'files': files, 'findings': findings, 'choices': choices, 'rows': rows,
@@ -234,7 +234,7 @@ def _persons(sessions) -> str:
 
 
 def document(sessions, profiles, rows, findings, choices, command, experiment,
-             chooser_problem: str = '') -> str:
+             chooser_problem: str = '', note: str = '') -> str:
     """Return the Markdown of docs/results.md."""
     primary = profiles[0]
     seeds = sorted({session.seed for session in sessions})
@@ -249,6 +249,8 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
                   f'sessions in {experiment.get("wall_seconds", math.nan) / 60:.1f} min wall '
                   f'on {experiment.get("host_cpus", "?")} CPUs '
                   f'({experiment.get("started", "?")}, {experiment.get("version", "?")}).', '']
+    if note:
+        parts += [note, '']
     parts += [f'{len(sessions)} sessions: simulated-human profiles '
               f'{", ".join(f"`{profile}`" for profile in profiles)}; seeds '
               f'{seeds[0]}..{seeds[-1]}; {_persons(sessions)}; episode '
