@@ -20,8 +20,9 @@ without the person in lockstep (as fast as the graph goes) and switches the sim 
 for the episodes with the person (``ResetEpisode.clock_mode``); the runner prints how long the
 robot practised alone and when the person joined.
 
-Never a silent stand-in: in realtime with ``--human device`` or ``joy`` the runner does not
-start until the input is there (it lists the joystick devices it sees and says how to fix it);
+Never a silent stand-in: in realtime with ``--human device``, ``joy`` or ``auto`` the runner
+does not start until the input is there (it lists the joystick devices it sees and how to fix
+it);
 the human node holds zero and asks to pause when its input is lost (``on_input_lost: pause``,
 its ``/hrc/human/input`` status) and the runner then pauses the session at once (the agent is
 stopped mid-episode: zero commands, the sim holds; the page, the console and ``operator
@@ -116,7 +117,7 @@ def parse_args(argv=None):
                         help='with --tlx: keep the page up this long for the answer after the '
                         'session (default 600 s)')
     parser.add_argument('--stand-in', choices=('none', 'sim'), default='none',
-                        help='realtime with --human device|joy: what drives the human side '
+                        help='realtime with --human device|joy|auto: what drives the human side '
                         'when the input is lost: none (default) = the session pauses until '
                         'the operator resumes; sim = the simulated human (its episodes are '
                         'marked simulated in the bags)')
@@ -129,7 +130,7 @@ def parse_args(argv=None):
                         'registered there with consent yes; the session is added to its '
                         'per-subject index')
     parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
-                        help='realtime with --human device|joy: wait this long for the input '
+                        help='realtime with --human device|joy|auto: wait this long for the input '
                         'before refusing to start (default 120 s)')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
@@ -196,8 +197,11 @@ def parse_args(argv=None):
 
 
 def person_input(settings: SessionSettings, options) -> str:
-    """Return 'device' or 'joy' when a person's input must be there, else ''."""
-    if settings.mode == 'realtime' and settings.human_input in ('device', 'joy'):
+    """Return 'device', 'joy' or 'auto' when a person's input must be there, else ''.
+
+    ``auto`` takes the device, else /joy, and never the simulated human (the human node).
+    """
+    if settings.mode == 'realtime' and settings.human_input in ('device', 'joy', 'auto'):
         return settings.human_input
     return ''
 
@@ -401,12 +405,15 @@ class InputGuard:
         if self.input_status:
             ok = self.input_status.get('state') == 'ok'
             return ok, self.input_status.get('message', '')
-        if self.kind == 'joy':
-            publishers = self.node.count_publishers(self._topics.JOY)
-            return publishers > 0, joy_missing_message(publishers)
         present, why = device_presence(self.device)
-        return present, why if present else device_missing_message(self.device, why,
-                                                                     joystick_devices())
+        if self.kind == 'device' or present:
+            return present, why if present else device_missing_message(
+                self.device, why, joystick_devices())
+        publishers = self.node.count_publishers(self._topics.JOY)
+        if self.kind == 'joy' or publishers:
+            return publishers > 0, joy_missing_message(publishers)
+        return False, (device_missing_message(self.device, why, joystick_devices()) + ' Or: '
+                       + joy_missing_message(publishers))
 
     def _on_status(self, status):
         if self._status_pub is None:   # the agent's, not our own stand-in status
