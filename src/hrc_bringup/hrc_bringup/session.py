@@ -325,7 +325,8 @@ class Progress:
         if any(seen.episode == summary.episode for seen in self.episodes):
             return
         self.episodes.append(summary)
-        human_episodes = sum(s.human_involved for s in self.episodes if not s.evaluation)
+        # Training and test episodes with the person, as the page counts them.
+        human_episodes = sum(s.human_involved for s in self.episodes)
         steps = max(self.status.training_step_count, 1) if self.status else 1
         case = self.status.case_id if self.status else summary.case_id
         self._print(f'[case {case} | step {summary.training_step + 1}/{steps} | episode '
