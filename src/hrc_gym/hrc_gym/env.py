@@ -35,12 +35,11 @@ from gymnasium import spaces
 import numpy as np
 
 from hrc_common.contract import NS_PER_S
-from hrc_common.params import from_dict, ParameterError
-from hrc_gym.task import GymParams, HUMAN, make_human, NO_HUMAN, POPULATION_PREFIX, ROBOT, \
-    TaskRun
+from hrc_common.params import from_dict
+from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, NO_HUMAN,
+                          POPULATION_PREFIX, RENDER_MODES, ROBOT, SEED_LIMIT, TaskRun)
 from hrc_sim_node.physics import PhysicsParams
 
-SEED_LIMIT = 2 ** 31 - 1
 
 
 def derived_seed(seed: int, stream: int) -> int:
@@ -61,13 +60,11 @@ def check_human_spec(spec: str) -> None:
 class SliderPendulumBallEnv(gymnasium.Env):
     """The robot's side of the task; the human is part of the environment (module docstring)."""
 
-    metadata = {'render_modes': ['rgb_array'], 'render_fps': 5}
+    metadata = {'render_modes': RENDER_MODES, 'render_fps': 5}
 
     def __init__(self, render_mode=None, human_model=None, physics_params: PhysicsParams = None,
                  **params):
-        if render_mode is not None and render_mode not in self.metadata['render_modes']:
-            raise ParameterError(f'render_mode {render_mode!r}: supported are None and '
-                                 f"{self.metadata['render_modes']}")
+        check_render_mode(render_mode)
         self.config = from_dict(GymParams, params)
         check_human_spec(self.config.human)
         self.render_mode = render_mode
@@ -155,9 +152,7 @@ class SliderPendulumBallEnv(gymnasium.Env):
 
     def render(self):
         """Return an RGB image of the system (``render_mode='rgb_array'``), else None."""
-        if self.render_mode != 'rgb_array':
-            return None
-        return self.task.physics.render()
+        return self.task.render(self.render_mode)
 
     def close(self):
         """Release the physics client."""

@@ -23,21 +23,19 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from hrc_common.params import from_dict, ParameterError
-from hrc_gym.task import HUMAN, ROBOT, TaskParams, TaskRun
+from hrc_gym.task import (check_render_mode, HUMAN, RENDER_MODES, ROBOT, SEED_LIMIT,
+                          TaskParams, TaskRun)
 
-SEED_LIMIT = 2 ** 31 - 1
 
 
 class SliderPendulumBallParallelEnv(ParallelEnv):
     """Both actors of the task as PettingZoo agents (see the module docstring)."""
 
-    metadata = {'name': 'hrc_slider_pendulum_ball_v0', 'render_modes': ['rgb_array'],
+    metadata = {'name': 'hrc_slider_pendulum_ball_v0', 'render_modes': RENDER_MODES,
                 'render_fps': 5, 'is_parallelizable': True}
 
     def __init__(self, render_mode=None, physics_params=None, **params):
-        if render_mode is not None and render_mode not in self.metadata['render_modes']:
-            raise ParameterError(f'render_mode {render_mode!r}: supported are None and '
-                                 f"{self.metadata['render_modes']}")
+        check_render_mode(render_mode)
         params.setdefault('training_step', -1)
         self.config = from_dict(TaskParams, params)
         self.task = TaskRun(self.config, physics_params)
@@ -99,9 +97,7 @@ class SliderPendulumBallParallelEnv(ParallelEnv):
 
     def render(self):
         """Return an RGB image of the system (``render_mode='rgb_array'``), else None."""
-        if self.render_mode != 'rgb_array':
-            return None
-        return self.task.physics.render()
+        return self.task.render(self.render_mode)
 
     def close(self):
         """Release the physics client."""

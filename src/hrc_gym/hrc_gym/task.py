@@ -32,6 +32,15 @@ from hrc_sim_node.protocol import HUMAN, per_dof, roles, ROBOT
 
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
+RENDER_MODES = ['rgb_array']
+SEED_LIMIT = 2 ** 31 - 1  # episode seeds are drawn from [0, this)
+
+
+def check_render_mode(render_mode) -> None:
+    """Raise ParameterError unless ``render_mode`` is None or one of RENDER_MODES."""
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ParameterError(f'render_mode {render_mode!r}: supported are None and '
+                             f'{RENDER_MODES}')
 
 
 @dataclass
@@ -180,6 +189,10 @@ class TaskRun:
     def finished(self) -> bool:
         """Return True when the state reached ends the episode."""
         return bool(self.state.truncated or self.state.terminated)
+
+    def render(self, render_mode):
+        """Return an RGB image of the system when ``render_mode`` is 'rgb_array', else None."""
+        return self.physics.render() if render_mode == 'rgb_array' else None
 
     def close(self):
         """Release the physics client."""

@@ -154,6 +154,8 @@ def test_bad_parameters_are_refused_with_every_reason():
         SliderPendulumBallEnv(human='martian')
     with pytest.raises(ParameterError, match='does not involve the human'):
         hrc_gym.parallel_env(case=2, training_step=0)
+    with pytest.raises(ParameterError, match='render_mode'):
+        SliderPendulumBallEnv(render_mode='human')
 
 
 def test_a_population_member_is_drawn_by_the_reset_seed():
