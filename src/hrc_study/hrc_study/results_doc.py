@@ -188,7 +188,8 @@ def read_experiment(paths) -> dict:
 
 
 def write_results(sessions, out_dir, command: str, experiment: dict = None,
-                  priorities: dict = None, seed: int = 0, note: str = '') -> dict:
+                  priorities: dict = None, seed: int = 0, note: str = '',
+                  resamples: int = 2000) -> dict:
     """Write ``out_dir/results.md`` and ``out_dir/results/*``; return {name: path} and more."""
     experiment = experiment or {}
     out_dir = pathlib.Path(out_dir)
@@ -207,7 +208,8 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
     weights_by_name = dict(PRESETS, **({'your priorities': priorities} if priorities else {}))
     try:
         for name, weights in weights_by_name.items():
-            choices[name] = choose(sessions, weights, profile=primary, seed=seed)
+            choices[name] = choose(sessions, weights, profile=primary, seed=seed,
+                                   resamples=resamples)
     except ValueError as error:   # fewer than two strategies in the data
         chooser_problem = str(error)
     names = ['fig5_training.png', 'fig6_actions.png', 'convergence.png', 'sessions.csv']

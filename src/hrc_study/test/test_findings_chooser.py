@@ -90,3 +90,28 @@ def test_priorities_are_checked_with_every_reason():
     with pytest.raises(ValueError, match='> 0'):
         parse_priorities('human=0')
     assert math.isclose(sum(parse_priorities('least human time').values()), 5)
+
+
+def test_results_document_carries_the_computed_numbers(tmp_path):
+    from hrc_study.results_doc import cell, write_results
+    from hrc_study.statistics import kaplan_meier, mean_interval
+
+    sessions = paper_like(seeds=4) + paper_like(seeds=3, profile='paper_symmetric', seed=2)
+    experiment = {'command': 'experiment --seeds 4', 'engine': 'inprocess', 'sessions': 60,
+                  'wall_seconds': 420.0, 'executor': 'local process pool (2 workers)'}
+    result = write_results(sessions, tmp_path, 'hrc_results x', experiment,
+                           parse_priorities('human=1'), note='A note.', resamples=100)
+    text = (tmp_path / 'results.md').read_text()
+    case2 = [measures(s) for s in sessions if s.case_id == 2 and s.profile == 'paper']
+    assert cell(mean_interval(v['total_error'] for v in case2), 3) in text
+    case4 = [measures(s) for s in sessions if s.case_id == 4 and s.profile == 'paper']
+    km = kaplan_meier([v['total_episodes'] for v in case4], [v['converged'] for v in case4])
+    assert f'| 4 | 4/4 | {km.describe()} |' in text
+    assert "| (e') |" in text and 'paper_symmetric' in text and 'A note.' in text
+    assert '7.0 min wall' in text and '**your priorities**' in text
+    assert '| 5 | 0/4 | > 300 (not reached) |' in text
+    for name in ('fig5_training.png', 'fig6_actions.png', 'fig7_three_factor.png',
+                 'convergence.png', 'sessions.csv'):
+        assert (tmp_path / 'results' / name).stat().st_size > 0
+    assert [target for target, _, met in result['targets'] if met is False] == [
+        'every case converges in >= 8/10 seeds']
