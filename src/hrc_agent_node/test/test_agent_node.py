@@ -249,7 +249,10 @@ def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
         'lockstep_timeout': 10.0, 'marker_rate': 0.0})
     agent = start_node('hrc_agent_node', 'agent_node', parameters={
         'case': 2, 'seed': 1, 'max_training_episodes': 2, 'evaluation_episodes': 1,
-        'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': ''})
+        'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': '',
+        # The first episode waits until the observer's subscription is discovered (under load
+        # discovery can take longer than the sim's first states).
+        'wait_for_subscribers': ['observer']})
     deadline = time.monotonic() + 90
     while agent.process.poll() is None and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.05)
