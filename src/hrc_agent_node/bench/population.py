@@ -8,8 +8,9 @@ For each seed, trains two agents against hrc_joystick_node's simulated human (``
 around the profile every ``--population-every`` episodes). Each trained policy is then
 evaluated (deterministic, frozen, the last training step's setting) with the profile itself,
 with the population (a new person per episode) and with ``--held-out`` people drawn with seeds
-no training used (100000 + k). Prints one row per agent and partner: the mean total error of the
-evaluation episodes, and the ratio to the agent's error with its training partner(s).
+no training used (100000 + k) and with other named profiles (``--profiles``, e.g. novice:
+people of another kind). Prints one row per agent: the mean total error of the evaluation
+episodes with each partner, and its ratio to the agent's error with its training partner(s).
 """
 
 import argparse
@@ -68,6 +69,8 @@ def main(argv=None) -> int:
     parser.add_argument('--population-every', type=int, default=1)
     parser.add_argument('--held-out', type=int, default=3)
     parser.add_argument('--evaluation-episodes', type=int, default=3)
+    parser.add_argument('--profiles', nargs='*', default=[],
+                        help='other named profiles to evaluate with (held out by kind)')
     args = parser.parse_args(argv)
 
     from hrc_joystick_node.population import sample_person
@@ -76,6 +79,7 @@ def main(argv=None) -> int:
     profile = load_profile(args.profile)
     held_out = [(f'held-out {k}', sample_person(profile, 100000 + k))
                 for k in range(args.held_out)]
+    held_out += [(name, load_profile(name)) for name in args.profiles]
     rows = []
     for seed in args.seeds:
         for label, every in (('one person', 0), ('population', args.population_every)):
