@@ -20,7 +20,7 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.format import SESSION_RECORD
+from hrc_bag.format import EPISODE_RECORD, SESSION_RECORD
 from hrc_bag.session_writer import contract_descriptions
 from hrc_bag.synthetic import kill_trial, SyntheticSession
 
@@ -150,6 +150,12 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, is
             assert yaml.safe_load(record['session_config']) == config
             assert record['case_id'] == '3' and record['strategy'] == 'level_guided'
             assert yaml.safe_load(record['recorder_parameters'])['flush_period'] == 0.2
+            # which input drove the human (the synthetic human: simulated, 7 answered steps)
+            episode_record = {metadata.name: metadata.metadata
+                              for metadata in reader.iter_metadata()}[EPISODE_RECORD]
+            if name != 'rt_end.mcap':
+                assert episode_record['human_source'] == 'simulated'
+                assert yaml.safe_load(episode_record['human_engaged_steps']) == {'simulated': 7}
     assert [(summary.episode, summary.evaluation, summary.total_error) for summary in summaries] \
         == [(summary.episode, summary.evaluation, summary.total_error)
             for summary in published[isolation.name('/hrc/episode')]]
