@@ -118,7 +118,8 @@ class RecorderNode(Node):
             self.core.record(message, event)
 
         self._subscriptions_by_topic[topic] = self.create_subscription(
-            message_type, topic, on_message, qos, raw=True)
+            message_type, topic, on_message, qos, raw=True,
+            event_callbacks=hrc_qos.NO_SUBSCRIPTION_EVENTS)  # fewer wait-set entities
         self.get_logger().info(
             f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
             f'{qos.durability.name.lower()})')

@@ -57,6 +57,7 @@ from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_probl
                                  SESSION_STATUS_TYPE, TASK_STATE_TYPE)
 
 from hrc_bag import cdr_peek, msgdefs
+from hrc_bag.bag_reader import recording_order
 from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem, file_mode,
                             plain_values, RawMessage, RecordingError, session_custom_data,
                             SESSION_RECORD, session_record, SessionIndex, TopicDescription,
@@ -218,7 +219,7 @@ class EpisodeRecorder:
         self._info(f'recording session {self.session_id!r} into {self.folder}')
 
     def _recover_unfinished(self) -> None:
-        for path in sorted(self.folder.glob('*.mcap')):
+        for path in sorted(self.folder.glob('*.mcap'), key=recording_order):
             if self.index.listed(path.name):
                 continue
             try:

@@ -400,3 +400,31 @@ def test_bags_naming_a_subject_or_notes_are_owner_only(tmp_path, personal):
     episode.write_bytes(data[:len(data) - 300])
     recover_file(episode)                                # recovery keeps the mode
     assert episode.stat().st_mode & 0o777 == expected
+
+
+def test_a_recorder_on_a_folder_with_an_unusable_metadata_yaml_lists_the_files_again(
+        recorded, tmp_path):
+    folder, _ = recorded
+    copy = tmp_path / 'core'
+    shutil.copytree(folder, copy)
+    (copy / 'metadata.yaml').write_text('- a list\n- not rosbag2 metadata\n')
+    warnings = []
+
+    class Log:
+        def info(self, text):
+            pass
+
+        warning = error = warnings.append
+
+    recorder = EpisodeRecorder(
+        RecorderParams(output_dir=str(tmp_path), session_id='core'),
+        lambda topic, type_name: TopicDescription(type_name, (PROFILE,), ''),
+        logger=Log(), clock=FakeClock())
+    recorder.close()
+    assert any('metadata.yaml cannot be used' in text for text in warnings), warnings
+    listed = bag_reader.read_bag_metadata_yaml(copy)['relative_file_paths']
+    assert listed == ['core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap',
+                      'core_ep0003.mcap', 'core_end.mcap']
+    with Reader(copy) as reader:
+        assert reader.message_count == sum(
+            len(bag_reader.scan_file(path).messages) for path in copy.glob('*.mcap'))
