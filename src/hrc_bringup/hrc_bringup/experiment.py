@@ -63,6 +63,8 @@ class SessionTask:
     overrides: tuple                # ('node.param=value', ...) as given on the command line
     params_dir: str                 # the parameter files, resolved on the driver
     pull_bags: bool                 # return the session folder packed (no shared filesystem)
+    checkpoints: bool = False       # in-process: write the agent's checkpoints (resumable)
+    not_after: float = 0.0          # epoch s: a task not started by then is skipped (0: none)
 
 
 def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
@@ -77,6 +79,9 @@ def run_task(task: SessionTask) -> dict:
     outcome = {'session_id': task.session_id, 'case': task.case, 'seed': task.seed,
                'profile': task.profile, 'engine': task.engine, 'host': socket.gethostname(),
                'worker_pid': os.getpid(), 'exit_code': 1, 'error': ''}
+    if task.not_after and time.time() > task.not_after:
+        outcome.update(exit_code=None, error='skipped: --stop-after passed', seconds=0.0)
+        return outcome
     try:
         node = _ray_node_id()
         if node:
@@ -120,7 +125,8 @@ def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
         case=task.case, seed=task.seed, training_episodes=task.training_episodes,
         evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
         bags_dir=str(bags_dir), runs_dir=str(pathlib.Path(task.runs_dir) / task.session_id),
-        human_profile=task.profile, overrides=overrides, params_dir=task.params_dir))
+        human_profile=task.profile, overrides=overrides, params_dir=task.params_dir,
+        checkpoints=task.checkpoints))
     return 0, ''
 
 
@@ -266,6 +272,12 @@ def parse_args(argv=None):
                         help="run the tasks on an existing Ray cluster: 'auto' or host:port")
     parser.add_argument('--cpus-per-session', type=float, default=1.0,
                         help='Ray: CPUs each session task declares (default 1)')
+    parser.add_argument('--checkpoints', action='store_true',
+                        help='in-process engine: write the agent checkpoints of every session '
+                        '(default off: a sweep does not resume, and they cost time)')
+    parser.add_argument('--stop-after', type=float, default=0.0, metavar='MINUTES',
+                        help='start no session after this many minutes (the sessions running '
+                        'then finish; the others are listed as skipped); 0 = none')
     parser.add_argument('--pull-bags', action='store_true',
                         help='workers send their session folders back to this machine (no '
                         'shared filesystem); default: they write to --bags-dir directly')
@@ -286,6 +298,8 @@ def parse_args(argv=None):
         reasons.append(f'--seeds must be >= 1, got {options.seeds}')
     if options.parallel < 0:
         reasons.append(f'--parallel must be >= 0, got {options.parallel}')
+    if options.stop_after < 0:
+        reasons.append(f'--stop-after must be >= 0, got {options.stop_after}')
     if options.cpus_per_session <= 0:
         reasons.append(f'--cpus-per-session must be > 0, got {options.cpus_per_session}')
     if options.ray and options.ray_address:
@@ -312,24 +326,34 @@ def parse_args(argv=None):
 
 
 def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
-    """Return the sweep's tasks: profiles x seeds x cases."""
+    """Return the sweep's tasks: profiles x seeds x cases, in the order they should run.
+
+    Profiles advance in proportion to their seed counts (seed s of a profile with n seeds at
+    s / n), so a sweep cut short by --stop-after holds whole seeds (all cases) of every
+    profile, the first profile first.
+    """
     from hrc_bringup.session import default_params_dir
     # resolved here, so that every worker reads the same files (a checkout's params/ when the
     # driver runs in one; on a cluster the same path, or the installed share/, on every node)
     params_dir = str((pathlib.Path(options.params_dir) if options.params_dir
                       else default_params_dir()).resolve())
-    return [SessionTask(case=case, seed=seed, profile=profile,
-                        session_id=session_id_of(case, seed, profile,
-                                                 list(options.profile_seeds)),
+    not_after = time.time() + 60 * options.stop_after if options.stop_after else 0.0
+    order = list(options.profile_seeds)
+    planned = sorted(((seed_index / seeds, order.index(profile), seed_index, profile)
+                      for profile, seeds in options.profile_seeds.items()
+                      for seed_index in range(seeds)))
+    return [SessionTask(case=case, seed=options.first_seed + seed_index, profile=profile,
+                        session_id=session_id_of(case, options.first_seed + seed_index,
+                                                 profile, order),
                         engine=options.engine, bags_dir=str(bags_dir.resolve()),
                         runs_dir=str(runs_dir.resolve()),
                         training_episodes=options.episodes,
                         evaluation_episodes=options.eval_episodes,
-                        overrides=person_override(options, seed) + tuple(options.overrides),
-                        params_dir=params_dir,
-                        pull_bags=options.pull_bags)
-            for profile, seeds in options.profile_seeds.items()
-            for seed in range(options.first_seed, options.first_seed + seeds)
+                        overrides=person_override(options, options.first_seed + seed_index)
+                        + tuple(options.overrides), params_dir=params_dir,
+                        pull_bags=options.pull_bags, checkpoints=options.checkpoints,
+                        not_after=not_after)
+            for _, _, seed_index, profile in planned
             for case in options.cases]
 
 
@@ -379,6 +403,8 @@ def main(argv=None) -> int:
             unpack_folder(archive, bags_dir, outcome['session_id'])
         outcome['finished_after'] = time.monotonic() - start   # s since the sweep started
         outcomes.append(outcome)
+        if outcome['exit_code'] is None:
+            return   # skipped (--stop-after): listed at the end
         status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
         print(f'[experiment] {outcome["session_id"]} on {outcome["host"]} in '
               f'{outcome["seconds"]:.0f} s ({len(outcomes)}/{len(tasks)}): {status}',
@@ -398,18 +424,22 @@ def main(argv=None) -> int:
     description = executor.describe()
     executor.close()
     wall = time.monotonic() - start
-    failed = sorted(outcome['session_id'] for outcome in outcomes if outcome['exit_code'])
+    failed = sorted(outcome['session_id'] for outcome in outcomes
+                    if outcome['exit_code'] not in (0, None))
+    skipped = sorted(outcome['session_id'] for outcome in outcomes
+                     if outcome['exit_code'] is None)
     record = {'command': 'ros2 run hrc_bringup experiment '
                          + ' '.join(shlex.quote(arg) for arg in options.argv),
               'engine': options.engine, 'executor': description, 'sessions': len(tasks),
-              'failed': failed, 'wall_seconds': wall, 'started': started_at,
+              'failed': failed, 'skipped': skipped, 'wall_seconds': wall, 'started': started_at,
               'host_cpus': os.cpu_count(), 'version': _version(),
               'uncommitted': uncommitted,
               'tasks': [asdict(task) for task in tasks],
               'outcomes': sorted(outcomes, key=lambda outcome: outcome['session_id'])}
     (bags_dir / 'experiment.json').write_text(json.dumps(record, indent=1))
-    print(f'[experiment] {len(outcomes)} sessions in {wall:.0f} s wall ({wall / 60:.1f} min)'
-          + (f'; failed: {failed}' if failed else ''), flush=True)
+    print(f'[experiment] {len(outcomes) - len(skipped)} sessions in {wall:.0f} s wall '
+          f'({wall / 60:.1f} min)' + (f'; failed: {failed}' if failed else '')
+          + (f'; skipped after --stop-after: {len(skipped)}' if skipped else ''), flush=True)
     if not options.report:
         return 1 if failed else 0
     out = options.report_out or str(runs_dir / 'report')
