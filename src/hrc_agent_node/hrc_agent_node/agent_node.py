@@ -95,15 +95,19 @@ class AgentNode(Node):
                 f'({"policy for evaluation" if self.params.evaluation_only else "session"}): '
                 f'{self.core.total_episodes} training episodes done, next episode '
                 f'{self.core.episode}')
-        self.session_pub = self.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
+        quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
+        self.session_pub = self.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS,
+                                                 event_callbacks=quiet_pub)
         self.episode_pub = self.create_publisher(EpisodeSummary, topics.EPISODE,
-                                                 qos.EPISODE_QOS)
-        self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP, qos.AGENT_STEP_QOS)
+                                                 qos.EPISODE_QOS, event_callbacks=quiet_pub)
+        self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP, qos.AGENT_STEP_QOS,
+                                              event_callbacks=quiet_pub)
         self.wrench_pub = self.create_publisher(WrenchStamped, topics.ROBOT_CMD_WRENCH,
-                                                qos.COMMAND_QOS)
-        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS)
+                                                qos.COMMAND_QOS, event_callbacks=quiet_pub)
+        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
+                                 event_callbacks=quiet_sub)
         self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
-                                 qos.HUMAN_ACTION_QOS)
+                                 qos.HUMAN_ACTION_QOS, event_callbacks=quiet_sub)
         self.reset_client = self.create_client(ResetEpisode, topics.RESET_SERVICE)
         self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)

@@ -6,6 +6,7 @@ the requested one makes the pair incompatible), hence the shared constants.
 
 from hrc_common import topics
 from rclpy.duration import Duration
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
@@ -44,3 +45,9 @@ OF_TOPIC = {
     topics.EPISODE: EPISODE_QOS,
     topics.AGENT_STEP: AGENT_STEP_QOS,
 }
+# Publishers and subscriptions of the control loop without QoS event handlers (rclpy's defaults
+# log incompatible QoS): each handler is an entity of the wait set rclpy's executor rebuilds at
+# every turn, about 20 us per handler per turn (bench/wait_set_cost.py); the profiles above are
+# the one contract, so incompatible QoS cannot arise between the hrc nodes.
+NO_PUBLISHER_EVENTS = PublisherEventCallbacks(use_default_callbacks=False)
+NO_SUBSCRIPTION_EVENTS = SubscriptionEventCallbacks(use_default_callbacks=False)

@@ -98,15 +98,18 @@ class HumanNode(Node):
         self._last_status = None
         self._last_status_time = 0.0
 
+        quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.action_publisher = self.create_publisher(HumanAction, topics.HUMAN_ACTION,
-                                                      qos.HUMAN_ACTION_QOS)
+                                                      qos.HUMAN_ACTION_QOS,
+                                                      event_callbacks=quiet_pub)
         self.wrench_publisher = self.create_publisher(WrenchStamped, topics.HUMAN_CMD_WRENCH,
-                                                      qos.COMMAND_QOS)
+                                                      qos.COMMAND_QOS, event_callbacks=quiet_pub)
         self.status_publisher = self.create_publisher(DiagnosticStatus, HUMAN_INPUT,
                                                       qos.SESSION_QOS)
-        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS)
+        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
+                                 event_callbacks=quiet_sub)
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
-                                 qos.SESSION_QOS)
+                                 qos.SESSION_QOS, event_callbacks=quiet_sub)
         self.joy_subscription = None
         if self.joy is not None:
             self.joy_subscription = self.create_subscription(Joy, topics.JOY, self.on_joy,

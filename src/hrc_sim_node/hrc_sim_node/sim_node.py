@@ -43,7 +43,6 @@ from hrc_sim_node.physics import (body_poses, physics_params_of, PhysicsParams,
 from hrc_sim_node.protocol import (ProtocolSettings, stamp_fields, stamp_ns,
                                    StepProtocol, summary_line, WarningThrottle)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
-from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -69,6 +68,10 @@ COMMAND_SUBSCRIPTION_QOS = QoSProfile(
     history=qos.COMMAND_QOS.history, depth=COMMAND_SUBSCRIPTION_DEPTH,
     reliability=qos.COMMAND_QOS.reliability, durability=qos.COMMAND_QOS.durability,
     deadline=qos.COMMAND_QOS.deadline)
+# No QoS event handlers (hrc_common.qos.NO_*_EVENTS: each costs every turn of the executor);
+# a silent actor is reported by the lockstep timeout or the realtime command_timeout.
+NO_PUBLISHER_EVENTS = qos.NO_PUBLISHER_EVENTS
+NO_SUBSCRIPTION_EVENTS = qos.NO_SUBSCRIPTION_EVENTS
 # Commands read from a subscription's queue in one turn of the executor at most (fairness).
 COMMAND_DRAIN_LIMIT = 10000
 # Period (s) of the free-run timer: as short as possible, the timer is re-armed every step.
@@ -97,25 +100,27 @@ class SimNode(Node):
         self._exiting = False
         self._throttle = WarningThrottle(WARN_THROTTLE_S)
 
-        self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
+        self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS,
+                                                event_callbacks=NO_PUBLISHER_EVENTS)
         # /clock is published in lockstep only; the publisher exists in both modes because a
         # reset may switch the mode.
-        self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS)
-        self._marker_pub = self.create_publisher(MarkerArray, topics.MARKERS, qos.VISUAL_QOS)
-        self._image_pub = (self.create_publisher(Image, topics.CAMERA_IMAGE, qos.VISUAL_QOS)
+        self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS,
+                                                event_callbacks=NO_PUBLISHER_EVENTS)
+        self._marker_pub = self.create_publisher(MarkerArray, topics.MARKERS, qos.VISUAL_QOS,
+                                                 event_callbacks=NO_PUBLISHER_EVENTS)
+        self._image_pub = (self.create_publisher(Image, topics.CAMERA_IMAGE, qos.VISUAL_QOS,
+                                                 event_callbacks=NO_PUBLISHER_EVENTS)
                            if params.camera_rate > 0 else None)
         self._command_topics = {}
         self._command_subscriptions = {}
         for actor, topic in ((ROBOT, topics.ROBOT_CMD_WRENCH), (HUMAN, topics.HUMAN_CMD_WRENCH)):
-            events = SubscriptionEventCallbacks(
-                deadline=lambda event, actor=actor: self._on_deadline_missed(actor, event))
             subscription = self.create_subscription(
                 WrenchStamped, topic, lambda data, actor=actor: self._on_raw_command(actor, data),
-                COMMAND_SUBSCRIPTION_QOS, event_callbacks=events, raw=True)
+                COMMAND_SUBSCRIPTION_QOS, event_callbacks=NO_SUBSCRIPTION_EVENTS, raw=True)
             self._command_subscriptions[actor] = subscription
             self._command_topics[actor] = subscription.topic_name
         self.create_subscription(SessionStatus, topics.SESSION, self._on_session,
-                                 qos.SESSION_QOS)
+                                 qos.SESSION_QOS, event_callbacks=NO_SUBSCRIPTION_EVENTS)
         self.create_service(ResetEpisode, topics.RESET_SERVICE, self._on_reset)
 
         # Timers of both clock modes, cancelled while not in use (a reset may switch the mode).
@@ -366,11 +371,6 @@ class SimNode(Node):
             f'{actor} command stamped {stamp} answers no state of the running episode '
             f'(awaited {expected}): ignored as stale; {len(publishers)} publisher(s) on '
             f'{topic}: {names}' + suffix)
-
-    def _on_deadline_missed(self, actor: str, event):
-        if self.protocol.active and self.protocol.mode == REALTIME:
-            self._warn(actor + '_deadline', f'{actor} commands stopped for over '
-                       f'{qos.COMMAND_DEADLINE_S} s ({event.total_count} deadline misses)')
 
     def _on_session(self, message: SessionStatus):
         if message.phase == SessionStatus.PHASE_ABORTED and self.protocol.active:

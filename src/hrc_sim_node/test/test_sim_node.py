@@ -330,8 +330,8 @@ FLOOD = pathlib.Path(__file__).with_name('flood.py')
 
 
 @pytest.mark.parametrize('topic, actor, frame_id_bytes, at_least', [
-    ('/hrc/human/cmd_wrench', 'human', 8, 1000),             # a flood of small commands
-    ('/hrc/robot/cmd_wrench', 'robot', 1024 * 1024, 10),    # giant commands (1 MiB)
+    ('/hrc/human/cmd_wrench', 'human', 8, 100),              # a flood of small commands
+    ('/hrc/robot/cmd_wrench', 'robot', 1024 * 1024, 1),     # giant commands (1 MiB)
 ])
 def test_a_second_publisher_cannot_push_out_the_actors_matching_command(
         start_node, sim_client, ros_env, topic, actor, frame_id_bytes, at_least):
