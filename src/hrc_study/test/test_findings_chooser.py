@@ -97,8 +97,13 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
     from hrc_study.statistics import kaplan_meier, mean_interval
 
     sessions = paper_like(seeds=4) + paper_like(seeds=3, profile='paper_symmetric', seed=2)
-    experiment = {'command': 'experiment --seeds 4', 'engine': 'inprocess', 'sessions': 60,
-                  'wall_seconds': 420.0, 'executor': 'local process pool (2 workers)'}
+    outcomes = [{'profile': 'paper', 'case': case, 'seed': seed, 'exit_code': 0,
+                 'finished_after': 100.0 + seed * 30 + case} for case in range(1, 7)
+                for seed in range(10)]
+    experiment = {'command': 'experiment --seeds 4', 'engine': 'inprocess', 'sessions': 61,
+                  'wall_seconds': 420.0, 'executor': 'local process pool (2 workers)',
+                  'outcomes': outcomes + [{'profile': 'paper', 'case': 1, 'seed': 10,
+                                           'exit_code': None}], 'skipped': ['case1-seed10']}
     result = write_results(sessions, tmp_path, 'hrc_results x', experiment,
                            parse_priorities('human=1'), note='A note.', resamples=100)
     text = (tmp_path / 'results.md').read_text()
@@ -108,7 +113,9 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
     km = kaplan_meier([v['total_episodes'] for v in case4], [v['converged'] for v in case4])
     assert f'| 4 | 4/4 | {km.describe()} |' in text
     assert "| (e') |" in text and 'paper_symmetric' in text and 'A note.' in text
-    assert '7.0 min wall' in text and '**your priorities**' in text
+    assert '60 of 61 planned sessions finished in 7.0 min wall' in text
+    assert '1 not started (--stop-after)' in text and '**your priorities**' in text
+    assert '| 6.3 min wall for the 60 sessions of profile paper' in text   # 376 s
     assert '| 5 | 0/4 | > 300 (not reached) |' in text
     for name in ('fig5_training.png', 'fig6_actions.png', 'fig7_three_factor.png',
                  'convergence.png', 'sessions.csv'):
