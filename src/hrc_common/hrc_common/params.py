@@ -406,6 +406,21 @@ def process_arguments() -> RosArguments:
                                else sys.argv)
 
 
+def _integer_override_as_float(node, name: str, default) -> None:
+    """Let ``-p max_force:=3`` or ``max_force: 3`` in a file set a float parameter to 3.0.
+
+    rcl types a number without a decimal point as an integer, which rclpy refuses for a float
+    parameter; the override is converted before the parameter is declared.
+    """
+    from rclpy.parameter import Parameter
+
+    overrides = getattr(node, '_parameter_overrides', None)
+    given = overrides.get(name) if isinstance(overrides, dict) else None
+    if (isinstance(default, float) and given is not None
+            and given.type_ == Parameter.Type.INTEGER):
+        overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(given.value))
+
+
 def declare_parameters(node, params_cls):
     """Declare every field of ``params_cls`` on ``node`` and return the validated values.
 
@@ -436,6 +451,7 @@ def declare_parameters(node, params_cls):
               and spec.low is not None and spec.high is not None):
             descriptor.integer_range = [IntegerRange(
                 from_value=int(spec.low), to_value=int(spec.high), step=0)]
+        _integer_override_as_float(node, dataclass_field.name, default)
         try:
             value = node.declare_parameter(dataclass_field.name, default, descriptor).value
             # An empty YAML list ([]) arrives untyped (NOT_SET): it means an empty list.

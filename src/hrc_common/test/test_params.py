@@ -108,6 +108,20 @@ def test_declare_parameters_rejects_bad_overrides(rclpy_context):
         node.destroy_node()
 
 
+def test_an_integer_sets_a_float_parameter(rclpy_context):
+    import rclpy
+
+    # rcl reads `period:=1` as an integer, which rclpy alone refuses for a float parameter.
+    node = rclpy.create_node('example', context=rclpy_context,
+                             cli_args=['--ros-args', '-p', 'period:=1', '-p', 'episodes:=2'])
+    try:
+        values = declare_parameters(node, ExampleParams)
+        assert values.period == 1.0 and isinstance(values.period, float)
+        assert node.get_parameter('period').value == 1.0 and values.episodes == 2
+    finally:
+        node.destroy_node()
+
+
 def test_empty_list_override_means_empty_list(rclpy_context):
     import rclpy
 
