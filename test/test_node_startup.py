@@ -70,3 +70,12 @@ def test_misspelt_section_and_unknown_names_all_reported(tmp_path, ros_env, pack
         f"unknown.yaml: section '{node}': unknown parameter '{typo}' (did you mean '{name}'?)",
         f"unknown.yaml: section '{node}': unknown parameter 'zzz_qqq'",
         f"-p {typo}: unknown parameter (did you mean '{name}'?)"])
+
+
+def test_help_into_a_closed_pipe_is_quiet():
+    """`sim_node --help | head -1`: the reader leaves early; no traceback, exit code 0."""
+    process = subprocess.Popen([str(executable_path('hrc_sim_node', 'sim_node')), '--help'],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()   # before the node has printed anything (it imports for ~1 s)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 0 and b'Traceback' not in stderr, stderr.decode()

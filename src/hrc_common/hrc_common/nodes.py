@@ -1,5 +1,6 @@
 """Small helpers every hrc node's main() uses: --help, spin with a clean shutdown, exit codes."""
 
+import os
 import sys
 
 from hrc_common.params import (describe, node_parameter_problems, ParameterError,
@@ -45,7 +46,10 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
     """
     argv = list(sys.argv if args is None else args)
     if wants_help(argv):
-        print(help_text(executable, summary, params_cls))
+        try:
+            print(help_text(executable, summary, params_cls), flush=True)
+        except BrokenPipeError:   # `... --help | head`: the reader left, nothing to report
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
 
     set_process_arguments(argv)
