@@ -13,7 +13,7 @@ A task runs the session with the chosen engine:
 * ``inprocess``: ``hrc_engine.run_session`` in the worker process (sim, agent, simulated human
   in one process, same cores as the graph, same bags);
 * ``graph``: the ``session`` runner (sim, agent, human, recorder as processes over DDS) on a ROS
-  domain reserved on the worker's machine (lock files of hrc_common.testing.DomainReservation,
+  domain reserved on the worker's machine (lock files of hrc_common.domains.DomainReservation,
   shared with the tests), so concurrent sessions on one node never see each other.
 
 Bags land in ``<bags-dir>/<name>/<session_id>`` as seen from the worker: on a cluster that is a
@@ -133,7 +133,7 @@ def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
 def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
     from hrc_common.executables import executable_path
-    from hrc_common.testing import DomainReservation
+    from hrc_common.domains import DomainReservation
 
     reservation = DomainReservation()
     try:
