@@ -17,6 +17,8 @@ import functools
 import struct
 import typing
 
+from hrc_common.contract import HUMAN_ACTION_TYPE
+
 from hrc_bag import msgdefs
 
 ENCAPSULATION = 4
@@ -53,7 +55,6 @@ def peek(type_name: str, data: bytes) -> tuple:
     return stamp, episode
 
 
-HUMAN_ACTION_TYPE = 'hrc_msgs/msg/HumanAction'
 # the fields human_action() reads, in the order of the .msg (checked against it at run time)
 _HUMAN_ACTION_LAYOUT = [('std_msgs/Header', 'header'), ('uint32', 'episode'),
                         ('uint32', 'step'), ('float64', 'command'), ('uint8', 'dof'),
