@@ -10,7 +10,10 @@ import os
 import pathlib
 import re
 import shlex
+import shutil
+import signal
 import subprocess
+import time
 
 import pytest
 
@@ -84,3 +87,49 @@ def test_the_resume_command_the_runner_prints_runs(tmp_path):
     result = fresh_shell(command + ' --help')
     assert result.returncode == 0, result.stderr
     assert 'usage: session' in result.stdout
+
+
+def readme_node_lines() -> list:
+    """Return the README's `ros2 run ... --ros-args ...` lines that name no placeholder."""
+    lines = []
+    for line in (REPOSITORY / 'README.md').read_text().splitlines():
+        line = line.strip().removeprefix('$ ')
+        if line.startswith('ros2 run ') and '--ros-args' in line and '<' not in line:
+            lines.append(re.split(r'\s+#', line)[0])
+    return lines
+
+
+def test_the_readme_node_commands_start(ros_env, tmp_path):
+    """Each node command of the README, run as written in a folder with the params/, starts.
+
+    It must keep running: a bad parameter file or name would exit with code 2 at once. (A copy
+    of params/ in a temporary folder, so the bags and checkpoints land there.)
+    """
+    shutil.copytree(REPOSITORY / 'params', tmp_path / 'params')
+    lines = readme_node_lines()
+    assert len(lines) >= 4, lines
+    env = dict(ros_env)
+    processes = []
+    try:
+        for line in lines:
+            script = f'source {shlex.quote(str(ENV_SH))} && exec {line}'
+            log = open(tmp_path / f'{len(processes)}.log', 'w+')
+            processes.append((line, log, subprocess.Popen(
+                ['bash', '-c', script], stdout=log, stderr=subprocess.STDOUT, env=env,
+                cwd=tmp_path, start_new_session=True)))
+        deadline = time.monotonic() + 8
+        while time.monotonic() < deadline and all(p.poll() is None for _, _, p in processes):
+            time.sleep(0.2)
+        for line, log, process in processes:
+            log.seek(0)
+            assert process.poll() is None, f'{line}\nexited {process.returncode}:\n{log.read()}'
+    finally:
+        for _, log, process in processes:
+            if process.poll() is None:
+                os.killpg(process.pid, signal.SIGINT)
+                try:
+                    process.wait(timeout=10)
+                except subprocess.TimeoutExpired:
+                    os.killpg(process.pid, signal.SIGKILL)
+                    process.wait()
+            log.close()
