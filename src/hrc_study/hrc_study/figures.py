@@ -3,6 +3,7 @@
 import dataclasses
 import math
 
+from hrc_common.contract import other_dof
 import numpy
 
 from hrc_study.sessions import final_block_start, measures, STRATEGY_SHORT
@@ -132,7 +133,7 @@ def figure_actions(sessions, profile: str, path, seconds: float = 4.0) -> None:
         axis.set_visible(True)
         chosen = median_session(members)
         trace = final_trace(chosen, seconds) if chosen is not None else {}
-        human_dof = 'rotation' if members[0].robot_dof == 'translation' else 'translation'
+        human_dof = other_dof(members[0].robot_dof)
         for key, label in (('robot', f'robot ({members[0].robot_dof})'),
                            ('human', f'human ({human_dof})')):
             points = trace.get(key, [])
