@@ -19,6 +19,7 @@ to the partner.
 from dataclasses import dataclass
 import math
 
+from hrc_common.contract import check_dof
 import numpy as np
 
 
@@ -41,9 +42,7 @@ class ScriptedPartner:
     def __init__(self, dof: str, gains: PDGains = None, max_torque: float = 0.5,
                  ball_mass: float = 0.05, gravity: float = 9.81, noise: float = 0.0,
                  seed: int = 0):
-        if dof not in ('translation', 'rotation'):
-            raise ValueError(f'unknown degree of freedom {dof!r}')
-        self.dof = dof
+        self.dof = check_dof(dof)
         self.gains = gains or PDGains()
         self.max_torque = max_torque
         self.ball_weight = ball_mass * gravity   # N: the ball's pull on the beam
