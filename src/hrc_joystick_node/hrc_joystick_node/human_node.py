@@ -150,11 +150,11 @@ class HumanNode(Node):
                     logger.warning(f'joystick device {self.device.status}',
                                    throttle_duration_sec=10.0)
             garbage = self.device.parser.garbage_bytes
-            if garbage > self._reported_garbage:
+            if garbage > self._reported_garbage and not self.device.rejected:
                 logger.warning(f'joystick stream from {self.params.device}: skipped '
                                f'{garbage - self._reported_garbage} byte(s) that are no '
                                f'js_event (resynchronized; {garbage} in total)')
-                self._reported_garbage = garbage
+            self._reported_garbage = max(self._reported_garbage, garbage)
             device_present, device_status = self.device.present, self.device.status
         joy_alive, joy_status = False, '/joy not used'
         if self.joy is not None:
