@@ -68,7 +68,8 @@ def summarize(results: dict) -> list:
                 lines.append(
                     f'  {learner:5s} episodes to criterion per seed {criterion} '
                     f'(reached {len(reached)}/{len(criterion)}'
-                    + (f', median {np.median(reached):.0f}' if reached else '') + '); '
+                    + (f', median of those {np.median(reached):.0f}' if reached else '')
+                    + '); '
                     f'mean return first {SUMMARY_WINDOW} {first.mean():.1f} '
                     f'(seeds {first.min():.1f}..{first.max():.1f}), last {SUMMARY_WINDOW} '
                     f'{last.mean():.1f} ({last.min():.1f}..{last.max():.1f}); '
@@ -137,8 +138,8 @@ def plot(results: dict, path: str) -> None:
                                            for records in runs.values()) if count is not None]
             if reached:
                 axis.axvline(float(np.median(reached)), color=colors[learner], ls=':',
-                             label=f'median episodes to criterion ({len(reached)}/{len(runs)} '
-                                   f'seeds reached it)')
+                             label=f'median episodes to criterion of the {len(reached)}/'
+                                   f'{len(runs)} seeds that reached it')
         axis.axhline(float(np.mean(results['random'][setting])), color='grey', ls='--',
                      label='random policy')
         axis.set_title(TITLES[setting], fontsize=10)
