@@ -1,11 +1,12 @@
 """The Gymnasium and PettingZoo environments: API checks, seeding, reward identity, bad input."""
 
+import functools
 import warnings
 
 import gymnasium
 from gymnasium.utils.env_checker import check_env
 import numpy as np
-from pettingzoo.test import parallel_api_test
+from pettingzoo.test import parallel_api_test, parallel_seed_test
 import pytest
 
 import hrc_gym
@@ -24,8 +25,11 @@ def _checked(env):
 def test_make_finds_the_registered_id_and_check_env_passes():
     env = gymnasium.make(hrc_gym.ENV_ID, case=2, training_step=0, preset='tuned',
                          render_mode='rgb_array')
+    by_module = gymnasium.make('hrc_gym:' + hrc_gym.ENV_ID, case=4)
+    by_module.close()
     try:
         assert isinstance(env.unwrapped, SliderPendulumBallEnv)
+        assert by_module.spec.id == hrc_gym.ENV_ID
         _checked(env.unwrapped)
         env.reset(seed=0)
         image = env.render()
@@ -124,7 +128,9 @@ def test_our_ppo_earns_exactly_the_environment_reward():
     assert len(records) == 2 and all(record['return'] > 0 for record in records)
 
 
-def test_parallel_api_test_passes():
+def test_parallel_api_test_and_seed_test_pass():
+    parallel_seed_test(functools.partial(hrc_gym.parallel_env, case=6, preset='tuned'),
+                       num_cycles=50)
     env = hrc_gym.parallel_env(case=6, preset='tuned', render_mode='rgb_array')
     try:
         parallel_api_test(env, num_cycles=210)
