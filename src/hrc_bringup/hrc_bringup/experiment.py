@@ -32,6 +32,7 @@ import io
 import json
 import os
 import pathlib
+import resource
 import shlex
 import shutil
 import signal
@@ -75,7 +76,7 @@ def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
 
 def run_task(task: SessionTask) -> dict:
     """Run one session on this worker; return its outcome (never raises)."""
-    started = time.monotonic()
+    started, cpu_started = time.monotonic(), _cpu_seconds()
     outcome = {'session_id': task.session_id, 'case': task.case, 'seed': task.seed,
                'profile': task.profile, 'engine': task.engine, 'host': socket.gethostname(),
                'worker_pid': os.getpid(), 'exit_code': 1, 'error': ''}
@@ -99,7 +100,16 @@ def run_task(task: SessionTask) -> dict:
     except Exception as error:   # a worker reports every failure back to the driver
         outcome['error'] = f'{type(error).__name__}: {error}'
     outcome['seconds'] = time.monotonic() - started
+    # CPU time of this worker and its children (the graph's nodes) during the session: what
+    # the session costs whatever else the machine runs
+    outcome['cpu_seconds'] = _cpu_seconds() - cpu_started
     return outcome
+
+
+def _cpu_seconds() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def _ray_node_id() -> str:
@@ -436,9 +446,12 @@ def main(argv=None) -> int:
               'uncommitted': uncommitted,
               'tasks': [asdict(task) for task in tasks],
               'outcomes': sorted(outcomes, key=lambda outcome: outcome['session_id'])}
+    cpu = sum(outcome.get('cpu_seconds', 0.0) for outcome in outcomes)
+    record['cpu_seconds'] = cpu
     (bags_dir / 'experiment.json').write_text(json.dumps(record, indent=1))
     print(f'[experiment] {len(outcomes) - len(skipped)} sessions in {wall:.0f} s wall '
-          f'({wall / 60:.1f} min)' + (f'; failed: {failed}' if failed else '')
+          f'({wall / 60:.1f} min; {cpu:.0f} CPU s in the sessions)'
+          + (f'; failed: {failed}' if failed else '')
           + (f'; skipped after --stop-after: {len(skipped)}' if skipped else ''), flush=True)
     if not options.report:
         return 1 if failed else 0

@@ -153,16 +153,23 @@ def wall_target(experiment: dict) -> tuple:
     full = {profile: members for profile, members in by_profile.items()
             if len({(m['case'], m['seed']) for m in members}) >= 60}
     engine = experiment.get('engine', '?')
+    cpu = [outcome['cpu_seconds'] for outcome in completed(experiment)
+           if 'cpu_seconds' in outcome]
+    cores = experiment.get('host_cpus') or 1
+    cpu_text = (f'; the finished sessions used {sum(cpu):.0f} CPU s, {sum(cpu) / len(cpu):.0f} '
+                f'per session: 60 sessions need {60 * sum(cpu) / len(cpu) / cores / 60:.1f} '
+                f'min on {cores} free cores' if cpu else '')
     if not full:
         done = len(completed(experiment))
         return (target, f'not measured: no profile has 60 finished sessions ({done} of '
                 f'{experiment.get("sessions", "?")} planned finished in '
                 f'{experiment["wall_seconds"] / 60:.1f} min wall, engine {engine}, '
-                f'{experiment.get("executor", "?")})', None)
+                f'{experiment.get("executor", "?")}){cpu_text}', None)
     profile, members = next(iter(full.items()))
     wall = max(member.get('finished_after', math.nan) for member in members)
     return (target, f'{wall / 60:.1f} min wall for the 60 sessions of profile '
-            f'{profile or "default"} (engine {engine}, {experiment.get("executor", "?")})',
+            f'{profile or "default"} (engine {engine}, {experiment.get("executor", "?")})'
+            + cpu_text,
             wall < 600 and engine == 'inprocess')
 
 
