@@ -34,7 +34,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--episodes', type=int, default=300, help='episodes on task')
     args = parser.parse_args()
-    print(f'after {args.episodes} episodes of 40 s on task, each followed by the profile\'s '
+    print(f"after {args.episodes} episodes of 40 s on task, each followed by the profile's "
           'break (simulation time)')
     print('| profile | break (s) | delay (s) | x delay | x motor noise | x lapses | '
           'old model: delay (s) | old: x noise |')
