@@ -420,6 +420,9 @@ class InputGuard:
         if self._status_pub is None:   # the agent's, not our own stand-in status
             self.last_status = status
             self.involved = bool(status.human_involved)
+            # The person's step begins while their input is already gone: pause now.
+            if self.involved and self.input_status.get('pause_requested') == 'true':
+                self._lose(self.input_status.get('message') or 'the human node asks to pause')
 
     def _on_input_status(self, status):
         values = {item.key: item.value for item in status.values}
