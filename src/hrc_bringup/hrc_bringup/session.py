@@ -438,8 +438,11 @@ class InputGuard:
 
     def _lose(self, reason: str) -> None:
         """Pause the session at once: the person's input is lost while they act."""
-        if self.lost:
-            return
+        from hrc_common.contract import ACTIVE_PHASES
+
+        if self.lost or (self.last_status is not None
+                         and self.last_status.phase not in ACTIVE_PHASES):
+            return  # already paused, or nothing runs (done, aborted, paused by the operator)
         if not reason.startswith('joystick disconnected'):
             reason = f'joystick disconnected: {reason}'
         self.lost = reason
