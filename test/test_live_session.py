@@ -11,11 +11,13 @@ in no file name), and a checkpoint from which the resumed session continues the 
 """
 
 import collections
+import json
 import os
 import pathlib
 import re
 import shlex
 import subprocess
+import urllib.request
 
 from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
@@ -81,12 +83,21 @@ def session_records(folder):
     return records
 
 
-def run_to_the_end(watcher, command, log_path, timeout=300):
-    """Run a session runner to its end while the watcher listens; return (exit code, output)."""
+def run_to_the_end(watcher, command, log_path, timeout=300, during=None):
+    """Run a session runner to its end while the watcher listens; return (exit code, output).
+
+    ``during(output so far)`` is called while it runs (an operator's or a person's action).
+    """
     with open(log_path, 'w+') as log:
         runner = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, text=True)
+
+        def ended():
+            if during is not None:
+                log.seek(0)
+                during(log.read())
+            return runner.poll() is not None
         try:
-            assert watcher.wait(lambda: runner.poll() is not None, timeout=timeout)
+            assert watcher.wait(ended, timeout=timeout)
         finally:
             if runner.poll() is None:
                 runner.kill()
@@ -287,22 +298,48 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     register(subjects, 'P07', 'yes', '2026-11-30')
     assign_orders(subjects, [5, 2])
     save_registry(study, subjects)
+    answered = []
+
+    def person_answers_the_tlx(output):
+        # After the condition the page asks the NASA-TLX; the runner waits for the answer.
+        if answered or 'for the NASA-TLX on the page' not in output:
+            return
+        log = (tmp_path / 'runs' / 'case2' / 'logs' / 'display.log').read_text()
+        port = re.search(r'serving the display on http://127\.0\.0\.1:(\d+)/', log).group(1)
+        request = urllib.request.Request(
+            f'http://127.0.0.1:{port}/tlx', method='POST', data=json.dumps(
+                {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20,
+                 'effort': 50, 'frustration': 15}).encode())
+        with urllib.request.urlopen(request, timeout=10) as reply:
+            answered.append(reply.read().decode())
+
     code, text = run_to_the_end(watcher, case2_command(
         tmp_path, ros_domain_id, '--episodes', '8', '--practice', '1', '--subject-id', 'P07',
-        '--study-dir', str(study)), tmp_path / 'runner.log')
+        '--study-dir', str(study), '--display', '--display-port', '0', '--tlx'),
+        tmp_path / 'runner.log', during=person_answers_the_tlx)
     assert code == 0, text
+    assert answered == ['Thank you. Stored (raw TLX 27.5).'], text
+    assert 'NASA-TLX stored in' in text
+    tlx_file = tmp_path / 'runs' / 'case2' / 'tlx.yaml'
+    assert tlx_file.stat().st_mode & 0o777 == 0o600
+    assert yaml.safe_load(tlx_file.read_text())[0]['session_id'] == 'case2'
     # Practice first: one episode of the person alone (realtime, no robot), recorded apart.
     assert 'practice done: 1 of 1 episodes' in text, text
     assert '[session] the human side is driven by: simulated (paper)' in text
     practice = read_rosbag(tmp_path / 'bags' / 'case2-practice')
-    assert {s.episode for s in practice['/hrc/state']} == {0}
-    # Case 2: the person drives the slider (force), the robot (idle here) the pendulum.
+    assert [(s.episode, s.step) for s in practice['/hrc/state']] == [
+        (0, step) for step in range(SHORT_STEPS + 1)]
+    # Case 2: the person drives the slider (force), engaged; the robot (idle here) nothing.
     assert all(w.wrench.torque.x == 0.0 for w in practice['/hrc/human/cmd_wrench'])
-    assert any(w.wrench.force.z != 0.0 for w in practice['/hrc/human/cmd_wrench'])
+    actions = practice['/hrc/human/action']
+    assert len(actions) == SHORT_STEPS and all(
+        (a.dof, a.source, a.engaged) == (HumanAction.DOF_TRANSLATION,
+                                         HumanAction.SOURCE_SIMULATED, True) for a in actions)
     assert not practice.get('/hrc/robot/cmd_wrench')
     index = load_index(study)
     assert [(e.subject_id, e.session_id, e.kind, e.position, e.exit_code) for e in index] == [
         ('P07', 'case2-practice', 'practice', 2, 0), ('P07', 'case2', 'condition', 2, 0)]
+    assert index[1].tlx_file == str(tlx_file.resolve())
     watcher.summaries[:] = [s for s in watcher.summaries if s.session_id == 'case2']
     alone, together = check_clock_switch(watcher, clock, watcher.summaries)
     match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '

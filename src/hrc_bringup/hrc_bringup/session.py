@@ -54,6 +54,8 @@ from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, Se
                               write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
+# Seconds given to DDS discovery after every practice node is seen, before the sim starts.
+DISCOVERY_SETTLE_S = 1.0
 # Seconds the runner keeps serving the operator services after a resume it answered.
 SERVICE_RETIRE_S = 1.0
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
@@ -739,14 +741,32 @@ def practice_subtask(human_dof: str) -> str:
     return 'slider' if human_dof == 'translation' else 'pendulum'
 
 
+def wait_for_closed_episode(recorder, episode: int, executor, stop_reason: list,
+                            timeout: float = 30.0) -> bool:
+    """Wait until the recorder closed the file of ``episode`` (its log says so).
+
+    Without an agent no EpisodeSummary closes it: the recorder closes it ``summary_timeout``
+    after its final state, later when it lags behind; stopping it earlier would lose the
+    messages still queued.
+    """
+    deadline = time.monotonic() + timeout
+    mark = f'episode {episode}: closed'
+    while time.monotonic() < deadline and not stop_reason:
+        if mark in recorder.tail(lines=50) or recorder.returncode is not None:
+            return True
+        executor.spin_once(timeout_sec=0.2)
+    return False
+
+
 def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, env: dict,
                  progress: 'Progress', executor, stop_reason: list) -> int:
     """Run the practice: the person alone on their degree of freedom, realtime, no robot.
 
-    The sim runs ``options.practice`` episodes by itself (start on launch, auto reset,
-    waiting for no robot); the human node and the recorder run as in the condition; the runner
-    announces the practice on /hrc/session (strategy ``practice``) so the human node, the page
-    and the recorder know the roles. Recorded as the session ``<session-id>-practice``.
+    The sim (waiting for no robot), the human node and the recorder run as in the condition;
+    the runner starts each of the ``options.practice`` episodes itself (``/hrc/sim/reset``,
+    realtime clock) once everything listens, with the agent's ``episode_break`` between them,
+    and announces the practice on /hrc/session (strategy ``practice``) so the human node, the
+    page and the recorder know the roles. Recorded as the session ``<session-id>-practice``.
     Returns the exit code (0 = every practice episode ran).
     """
     from dataclasses import replace
@@ -755,12 +775,13 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
     from hrc_common.contract import DOF_INDEX
     from hrc_common.executables import executable_path
     from hrc_msgs.msg import SessionStatus, TaskState
+    from hrc_msgs.srv import ResetEpisode
 
     practice = replace(settings, session_id=f'{settings.session_id}-practice', resume_from='')
     parameters = compose(practice, params_dir)
-    parameters.pop('agent')
-    parameters['sim'].update(start_on_launch=True, auto_reset=True,
-                             max_episodes=options.practice, expected_actors=['human'])
+    episode_break = float(parameters.pop('agent').get('episode_break', 3.0))
+    parameters['sim'].update(start_on_launch=False, auto_reset=False, max_episodes=0,
+                             expected_actors=['human'])
     if person_input(settings, options):
         parameters['human']['on_input_lost'] = ('sim' if options.stand_in == 'sim'
                                                 else 'pause')
@@ -773,6 +794,7 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
     robot_dof = parameters['sim']['robot_dof']
     node = progress.node
     publisher = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
+    reset = node.create_client(ResetEpisode, topics.RESET_SERVICE)
     finished = []
 
     def announce(done: int) -> None:
@@ -790,6 +812,14 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
             finished.append(state.episode)
             announce(len(finished))
 
+    def spin_until(condition, seconds: float) -> bool:
+        deadline = time.monotonic() + seconds
+        while not condition():
+            if stop_reason or supervisor.exited() or time.monotonic() > deadline:
+                return False
+            executor.spin_once(timeout_sec=0.1)
+        return True
+
     subscription = node.create_subscription(TaskState, topics.STATE, on_state, qos.STATE_QOS)
     announce(0)
     print(f'[session] practice: {options.practice} episodes of the person alone on the '
@@ -797,37 +827,48 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
           flush=True)
     code = 0
     try:
-        for name in ('recorder', 'human'):
+        for name in ('recorder', 'human', 'sim'):
             if name in parameters:
                 package, executable, _ = NODES[name]
                 supervisor.start(name, [str(executable_path(package, executable)),
                                         '--ros-args', '--params-file', str(params_path)])
-        # The sim starts its first episode at launch: only once the others listen.
-        listeners = 1 + len(supervisor.processes) + (1 if options.display else 0)
-        deadline = time.monotonic() + 60.0
-        while (node.count_subscribers(topics.STATE) < listeners
-               and time.monotonic() < deadline and not stop_reason):
-            executor.spin_once(timeout_sec=0.1)
-        package, executable, _ = NODES['sim']
-        supervisor.start('sim', [str(executable_path(package, executable)), '--ros-args',
-                                 '--params-file', str(params_path)])
-        while not stop_reason:
-            executor.spin_once(timeout_sec=0.1)
-            exited = supervisor.exited()
-            if exited:
-                first = exited[0]
-                if first.name != 'sim' or first.returncode != 0:
-                    print(f'[session] practice: node {first.name} stopped unexpectedly '
-                          f'({describe_exit(first.returncode)}):\n{first.tail()}',
-                          file=sys.stderr, flush=True)
-                    code = 1
+        # The first episode starts once everything listens (the runner, the recorder, the
+        # human node, the page on the states; the runner, the recorder, the page on the human's
+        # answers) and discovery had a moment to match them all.
+        pages = 1 if options.display else 0
+        ready = spin_until(lambda: (
+            reset.service_is_ready() and node.count_publishers(topics.STATE) >= 1
+            and node.count_subscribers(topics.STATE) >= 3 + pages
+            and node.count_publishers(topics.HUMAN_ACTION) >= 1
+            and node.count_subscribers(topics.HUMAN_ACTION) >= 2 + pages), 60.0)
+        spin_until(lambda: False, DISCOVERY_SETTLE_S)
+        for episode in range(options.practice if ready else 0):
+            if episode:
+                spin_until(lambda: False, episode_break)  # the person rests
+            reset.call_async(ResetEpisode.Request(seed=-1, episode=episode,
+                                                  clock_mode='realtime'))
+            if not spin_until(lambda: len(finished) > episode,
+                              parameters['sim']['episode_duration'] * 3 + 30.0):
                 break
+        if len(finished) == options.practice and 'recorder' in supervisor.processes:
+            wait_for_closed_episode(supervisor.processes['recorder'], options.practice - 1,
+                                    executor, stop_reason)
         if stop_reason:
             code = 130 if stop_reason[0] == 'SIGINT' else 143
+        elif len(finished) < options.practice:
+            exited = supervisor.exited()
+            culprit = exited[0] if exited else None
+            print('[session] practice: ' + (
+                f'node {culprit.name} stopped unexpectedly ({describe_exit(culprit.returncode)})'
+                f':\n{culprit.tail()}' if culprit else
+                'the practice episodes did not run (see the logs in ' + str(run_dir) + ')'),
+                file=sys.stderr, flush=True)
+            code = 1
     finally:
         supervisor.stop_all(('human', 'sim', 'recorder'))
         node.destroy_subscription(subscription)
         node.destroy_publisher(publisher)
+        node.destroy_client(reset)
     print(f'[session] practice done: {len(finished)} of {options.practice} episodes'
           if code == 0 else f'[session] practice stopped ({describe_exit(code)})', flush=True)
     return code
