@@ -378,6 +378,7 @@ class InputGuard:
         self.abort_requested = False
         self.last_status = None
         self._services = []
+        self._practice_told = False
         self._retire_at = 0.0
         self._status_pub = None
         self._string = String
@@ -445,6 +446,12 @@ class InputGuard:
         if self.lost or (self.last_status is not None
                          and self.last_status.phase not in ACTIVE_PHASES):
             return  # already paused, or nothing runs (done, aborted, paused by the operator)
+        if self.last_status is not None and self.last_status.strategy == 'practice':
+            if not self._practice_told:  # no agent to stop: say it, the human node holds 0
+                self._practice_told = True
+                print(f'[session] practice: {reason}; the human node holds zero, the practice '
+                      f'goes on', flush=True)
+            return
         if not reason.startswith('joystick disconnected'):
             reason = f'joystick disconnected: {reason}'
         self.lost = reason
