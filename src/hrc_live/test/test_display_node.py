@@ -250,7 +250,7 @@ def test_the_page_draws_the_state_at_full_hd_and_phone_size(graph, tmp_path):
     assert wait_for(lambda: not notice.is_displayed(), 20, 0.2)
 
 
-def test_console_shows_input_health_and_its_buttons_call_the_agent(graph):
+def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, tmp_path):
     agent, port, browser, display = graph
     browser.get(f'http://127.0.0.1:{port}/console')
     action = HumanAction(source=HumanAction.SOURCE_SIMULATED, source_detail='profile default',
@@ -276,10 +276,9 @@ def test_console_shows_input_health_and_its_buttons_call_the_agent(graph):
     assert wait_for(lambda: 'joystick disconnected' in browser.find_element(
         'id', 'input').text, 20, 0.2)
     assert status(port)['banner'].startswith('Joystick disconnected')
+    lost.publish(String(data=''))
 
-
-def test_the_tlx_form_after_a_condition_is_stored_0600(graph, tmp_path):
-    agent, port, browser, display = graph
+    # After the condition the person's page asks the raw NASA-TLX; it is stored 0600.
     browser.get(f'http://127.0.0.1:{port}/')
     agent.session.publish(session_status(phase=SessionStatus.PHASE_DONE))
     form = browser.find_element('id', 'tlx')
