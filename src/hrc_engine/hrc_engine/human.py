@@ -28,9 +28,10 @@ class SimulatedHumanSide:
     """The human node's core (``input: sim``), driven by calls instead of messages."""
 
     def __init__(self, parameters: dict):
-        if parameters.get('input', 'sim') != 'sim':
-            raise ValueError(f"the in-process engine runs the simulated human only (human.input "
-                             f"'sim'), got {parameters.get('input')!r}")
+        if parameters.get('input', 'sim') not in ('sim', 'model'):
+            raise ValueError(f"the in-process engine runs the simulated human or a cloned model "
+                             f"only (human.input 'sim' or 'model'), got "
+                             f"{parameters.get('input')!r}")
         self.core = core_from_parameters(parameters)
 
     def on_session(self, dof: str, involved: bool, subtasks) -> None:
