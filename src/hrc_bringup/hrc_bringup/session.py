@@ -58,6 +58,11 @@ from hrc_bringup.supervisor import describe_exit, Supervisor
 DISCOVERY_SETTLE_S = 1.0
 # Seconds the runner keeps serving the operator services after a resume it answered.
 SERVICE_RETIRE_S = 1.0
+# Link watchdog: a gap between states longer than this (s) is a break or a pause, not a loss;
+# the human node's input status comes at least every second, so this long without it (s) means
+# its station is unreachable.
+STATE_GAP_S = 0.5
+STATUS_SILENCE_S = 2.5
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
 
@@ -131,6 +136,11 @@ def parse_args(argv=None):
                         help='the study folder (ros2 run hrc_live study): the subject must be '
                         'registered there with consent yes; the session is added to its '
                         'per-subject index')
+    parser.add_argument('--link-timeout', type=float, default=1.0, metavar='S',
+                        help='realtime with a person: states run but no answer from the '
+                        "person's side for this long (a network link to the station down, the "
+                        'human node stalled) pauses the session as a lost joystick does '
+                        '(default 1.0 s = 5 control periods)')
     parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
                         help='realtime with --human device|joy|auto: wait this long for the input '
                         'before refusing to start (default 120 s)')
@@ -176,6 +186,8 @@ def parse_args(argv=None):
         reasons.append('--tlx needs --display (the questionnaire is on the page)')
     if options.input_wait < 0:
         reasons.append('--input-wait must be >= 0')
+    if not options.link_timeout > 0:
+        reasons.append('--link-timeout must be > 0')
     if options.practice < 0:
         reasons.append('--practice must be >= 0')
     if options.practice and settings.mode != 'realtime':
@@ -364,14 +376,19 @@ class InputGuard:
     from the last finished episode.
     """
 
-    def __init__(self, node, kind: str, device: str):
+    def __init__(self, node, kind: str, device: str, link_timeout: float = 1.0):
         from hrc_common import qos, topics
-        from hrc_msgs.msg import HumanAction, SessionStatus
+        from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
         from std_msgs.msg import String
         from std_srvs.srv import Trigger
 
         self.node, self.kind, self.device = node, kind, device
         self.lost = ''                  # why the input is lost ('' = it is not)
+        # The link watchdog (two hosts, docs/two_hosts.md): monotonic s of the newest state,
+        # of the newest answer from the person's side and of the human node's newest status.
+        self.link_timeout = link_timeout
+        self.last_state_at = self.last_action_at = self.input_status_at = None
+        self.states_flow_since = None   # states run again after a gap (break, pause) since
         self.involved = False           # the person acts in the current training step
         self.agent_down = False         # the agent was stopped for the loss and has exited
         self.resume_requested = False
@@ -390,6 +407,7 @@ class InputGuard:
         self.abort_client = node.create_client(Trigger, ABORT_SERVICE)
         node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
                                  qos.HUMAN_ACTION_QOS)
+        node.create_subscription(TaskState, topics.STATE, self._on_state, qos.STATE_QOS)
         node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                  qos.SESSION_QOS)
         # The human node's input status (src/hrc_joystick_node/README.md): pause_requested
@@ -407,6 +425,10 @@ class InputGuard:
         look at the device or at /joy's publishers (before the human node runs).
         """
         if self.input_status:
+            silent = time.monotonic() - self.input_status_at
+            if silent > STATUS_SILENCE_S:   # it speaks at least every second when reachable
+                return False, (f'no word from the human node for {silent:.1f} s: the network '
+                               f"link to the person's station or the human node is down")
             ok = self.input_status.get('state') == 'ok'
             return ok, self.input_status.get('message', '')
         present, why = device_presence(self.device)
@@ -431,10 +453,18 @@ class InputGuard:
         values = {item.key: item.value for item in status.values}
         values['message'] = status.message
         self.input_status = values
+        self.input_status_at = time.monotonic()
         if values.get('pause_requested') == 'true' and self.involved:
             self._lose(status.message or 'the human node asks to pause')
 
+    def _on_state(self, state):
+        now = time.monotonic()
+        if self.last_state_at is None or now - self.last_state_at > STATE_GAP_S:
+            self.states_flow_since = now
+        self.last_state_at = now
+
     def _on_action(self, action):
+        self.last_action_at = time.monotonic()
         reason = lost_reason(action.source, action.source_detail, self.involved)
         if reason:
             self._lose(reason)
@@ -518,8 +548,26 @@ class InputGuard:
         self.lost, self.agent_down, self.resume_requested = '', False, False
         self.lost_pub.publish(self._string(data=''))
 
+    def watch_link(self) -> None:
+        """Pause when states run but the person's side has not answered for link_timeout s.
+
+        Over two hosts a dropped network link silences the human node without any word from
+        it; the sim then counts the person's commands missing. That is a lost input like an
+        unplugged joystick: pause the same way, and resume only on the operator's word.
+        """
+        now = time.monotonic()
+        if (not self.involved or self.lost or self.last_status is None
+                or self.last_status.phase not in (Phase.TRAINING, Phase.EVALUATION)
+                or self.last_state_at is None or now - self.last_state_at > STATE_GAP_S):
+            return      # nothing runs now, or the person does not act, or already paused
+        since = now - max(self.last_action_at or 0.0, self.states_flow_since)
+        if since > self.link_timeout:
+            self._lose(f"no answer from the person's side for {since:.1f} s while the "
+                       f'episode runs (network link to the station or human node down)')
+
     def tick(self) -> None:
         """Retire the stand-in operator services once their last answer is out."""
+        self.watch_link()
         if self._services and not self.agent_down and time.monotonic() > self._retire_at:
             for service in self._services:
                 self.node.destroy_service(service)
@@ -600,7 +648,8 @@ def run_session(settings: SessionSettings, options) -> int:
     progress = Progress(context, sys.stdout.isatty())
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(progress.node)
-    guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''))
+    guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''),
+                        options.link_timeout)
              if live_input and options.stand_in == 'none' else None)
     code = 0
     start = time.monotonic()
