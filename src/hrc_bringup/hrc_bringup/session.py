@@ -136,6 +136,10 @@ def parse_args(argv=None):
                         help='the study folder (ros2 run hrc_live study): the subject must be '
                         'registered there with consent yes; the session is added to its '
                         'per-subject index')
+    parser.add_argument('--remote', dest='remote_nodes', action='append', default=[],
+                        choices=('human',), help='a node that runs on another host and is not '
+                        "started here: 'human' = the person's station runs the human node with "
+                        'this session\'s parameters.yaml (docs/two_hosts.md)')
     parser.add_argument('--link-timeout', type=float, default=1.0, metavar='S',
                         help='realtime with a person: states run but no answer from the '
                         "person's side for this long (a network link to the station down, the "
@@ -679,7 +683,7 @@ def run_session(settings: SessionSettings, options) -> int:
                 guard.resumed()  # nothing to resume: an input lost in practice is only told
         # The recorder first, so it sees the first state; the sim before the agent resets it.
         for node in ('recorder', 'sim', 'human', 'agent'):
-            if node not in parameters:
+            if node not in parameters or node in options.remote_nodes:
                 continue
             package, executable, _ = NODES[node]
             supervisor.start(node, [str(executable_path(package, executable)), '--ros-args',
