@@ -139,7 +139,7 @@ def parse_args(argv=None):
     parser.add_argument('--remote', dest='remote_nodes', action='append', default=[],
                         choices=('human',), help='a node that runs on another host and is not '
                         "started here: 'human' = the person's station runs the human node with "
-                        'this session\'s parameters.yaml (docs/two_hosts.md)')
+                        "this session's parameters.yaml (docs/two_hosts.md)")
     parser.add_argument('--link-timeout', type=float, default=1.0, metavar='S',
                         help='realtime with a person: states run but no answer from the '
                         "person's side for this long (a network link to the station down, the "
