@@ -190,3 +190,99 @@ def test_two_hosts_on_three_links(tmp_path, ros_domain_id, read_timed_rosbag):
               f"{result['jitter_p99_ms']:.1f} ms; link {run['counts']}")
     # The link really is in the path: the Wi-Fi's 30 ms each way shows in the command age.
     assert results['wifi']['age_p50_ms'] > results['local']['age_p50_ms'] + 40.0, results
+
+
+def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_domain_id,
+                                                                 read_timed_rosbag):
+    """The runner on the trainer, the human node on the station; the link drops for 2 s."""
+    reasons = netlab.check_possible()
+    assert not reasons, 'the two-host test needs: ' + '; '.join(reasons)
+    fifo = str(tmp_path / 'js0')
+    os.mkfifo(fifo)
+    feeder = StickFeeder(fifo)
+    feeder.start()
+    session_id = 'twohost-drop'
+    runner_args = [str(executable_path('hrc_bringup', 'session')), '--case', '5', '--mode',
+                   'realtime', '--human', 'device', '--remote', 'human', '--episodes', '3',
+                   '--eval-episodes', '0', '--session-id', session_id, '--bags-dir',
+                   str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
+                   '--set', f'sim.episode_duration={STEPS * 0.2}', '--set',
+                   'agent.episode_break=0.5', '--set', 'agent.horizon=64', '--set',
+                   f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--no-report',
+                   '--input-wait', '60']
+    log = open(tmp_path / 'runner.log', 'w+')
+    human_log = open(tmp_path / 'human.log', 'w+')
+
+    def output():
+        log.seek(0)
+        return log.read()
+
+    with netlab.TwoHostLab(name=f'd{os.getpid() % 10000}', profile=netlab.WIRED_LAB) as lab:
+        def env(host):
+            values = dict(os.environ)
+            values.update(lab.ros_environment(host, ros_domain_id))
+            return values
+
+        runner = subprocess.Popen(lab.command('trainer', runner_args), env=env('trainer'),
+                                  stdout=log, stderr=subprocess.STDOUT, text=True)
+        human = None
+        try:
+            params = tmp_path / 'runs' / session_id / 'parameters.yaml'
+            deadline = time.monotonic() + 30
+            while not params.is_file() and time.monotonic() < deadline:
+                time.sleep(0.2)
+            assert params.is_file(), output()
+            human = subprocess.Popen(lab.command('station', [
+                str(executable_path('hrc_joystick_node', 'human_node')), '--ros-args',
+                '--params-file', str(params)]), env=env('station'), stdout=human_log,
+                stderr=subprocess.STDOUT)
+
+            def wait_output(text, timeout):
+                end = time.monotonic() + timeout
+                while time.monotonic() < end:
+                    if text in output() or runner.poll() is not None:
+                        break
+                    time.sleep(0.2)
+                return text in output()
+
+            assert wait_output('episode 1', 90), output()
+            lab.link.outage(2.0)      # the cable is pulled for 2 s during the episode
+            assert wait_output("no answer from the person's side", 30), output()
+            time.sleep(2.5)           # the link is back; the operator resumes
+            resumed = ''
+            for _ in range(20):
+                result = subprocess.run(lab.command('trainer', [
+                    str(executable_path('hrc_live', 'operator')), 'resume', '--domain-id',
+                    str(ros_domain_id), '--timeout', '20']), env=env('trainer'),
+                    capture_output=True, text=True, timeout=60)
+                resumed = result.stdout + result.stderr
+                if result.returncode == 0:
+                    break
+                time.sleep(1.0)
+            assert 'resum' in resumed, resumed
+            assert runner.wait(timeout=120) == 0, output()
+        finally:
+            for process in (runner, human):
+                if process is not None and process.poll() is None:
+                    process.send_signal(signal.SIGINT)
+                    try:
+                        process.wait(timeout=15)
+                    except subprocess.TimeoutExpired:
+                        process.kill()
+                        process.wait()
+            feeder.close()
+        dropped = lab.link.counts['dropped_down']
+    assert dropped > 0
+    bag = read_timed_rosbag(tmp_path / 'bags' / session_id)
+    summaries = [summary.episode for _, summary in bag['timed']['/hrc/episode']]
+    assert summaries == [0, 1, 2], (summaries, output())
+    truncated = sorted({state.episode for _, state in bag['timed']['/hrc/state']
+                        if state.truncated})
+    assert truncated == [0, 1, 2]
+    # Every finished episode is whole in the bag: its last run holds all STEPS + 1 states.
+    for episode in range(3):
+        steps = [state.step for _, state in bag['timed']['/hrc/state']
+                 if state.episode == episode]
+        assert set(range(STEPS + 1)) <= set(steps), (episode, steps)
+    print(f'[two hosts] link dropped 2 s: {dropped} packets dropped; the session paused, '
+          f"resumed on the operator's word and finished 3 episodes")
