@@ -1,0 +1,1 @@
+"""hrc_partners: cloned human models, cross-play, role allocation (pure cores + CLIs)."""

@@ -1,0 +1,70 @@
+"""crossplay: evaluate trained agents with partners they may never have met; write the matrix.
+
+    ros2 run hrc_partners crossplay \
+        --agent one=runs/partners/c2-one-s0.pt pop=runs/partners/c2-population-s0.pt \
+        --partner profile:novice profile:skilled person:paper:100000 model:models/alice.pt \
+        --seeds 0 1 2 --episodes 3 --out runs/crossplay
+
+Agents: ``NAME=CHECKPOINT[@TRAINING_PARTNER]`` (the training partner also comes from the
+``.json`` that ``train_partners_agents`` writes beside the checkpoint; it is added as a column
+and each agent's drop is measured from it). Partners: ``profile:NAME``, ``person:NAME:K``,
+``population:NAME``, ``model:PATH`` (hrc_partners.partners). Writes ``matrix.json`` (every
+seed's error), ``matrix.md`` (mean [95 % interval] and drops) and ``heatmap.png`` to --out and
+prints the Markdown. Exit 2 with every reason for bad input.
+"""
+
+import argparse
+import pathlib
+import sys
+
+from hrc_common.params import ParameterError
+
+
+def main(argv=None) -> int:
+    """Console entry point."""
+    parser = argparse.ArgumentParser(prog='crossplay', description=__doc__.split('\n\n')[0])
+    parser.add_argument('--agent', nargs='+', required=True, metavar='NAME=CHECKPOINT')
+    parser.add_argument('--partner', nargs='+', required=True, metavar='SPEC')
+    parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2])
+    parser.add_argument('--episodes', type=int, default=3, help='evaluation episodes per seed')
+    parser.add_argument('--profiles-file', default=None,
+                        help='simulated-human profiles (default: the installed sim_human.yaml)')
+    parser.add_argument('--out', default='runs/crossplay')
+    parser.add_argument('--quiet', action='store_true', help='no line per cell on stderr')
+    args = parser.parse_args(argv)
+
+    from hrc_partners import crossplay
+    from hrc_partners.partners import spec_problem
+
+    problems = []
+    if args.episodes < 1:
+        problems.append(f'--episodes: expected >= 1, got {args.episodes}')
+    if any(seed < 0 for seed in args.seeds):
+        problems.append(f'--seeds: expected seeds >= 0, got {args.seeds}')
+    if args.profiles_file and not pathlib.Path(args.profiles_file).is_file():
+        problems.append(f'--profiles-file: no such file {args.profiles_file}')
+    problems += [problem for problem in map(spec_problem, args.partner) if problem]
+    try:
+        agents = crossplay.parse_agents(args.agent)
+    except ParameterError as error:
+        problems += error.reasons
+    if problems:
+        for problem in problems:
+            print(f'crossplay: {problem}', file=sys.stderr)
+        return 2
+    log = None if args.quiet else (lambda line: print(f'crossplay: {line}', file=sys.stderr,
+                                                       flush=True))
+    try:
+        matrix = crossplay.run_matrix(agents, args.partner, args.seeds, args.episodes,
+                                      args.profiles_file, log=log)
+    except (ParameterError, ValueError) as error:
+        print(f'crossplay: {error}', file=sys.stderr)
+        return 2
+    paths = crossplay.write_outputs(matrix, args.out)
+    print(crossplay.markdown(matrix))
+    print('written: ' + ', '.join(paths))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

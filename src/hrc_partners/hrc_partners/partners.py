@@ -1,0 +1,145 @@
+"""Partner specifications and the offline evaluation of a frozen agent with a partner (no ROS).
+
+A partner is named by a short string (the command lines take them as they are):
+
+* ``profile:NAME`` -- the simulated-human profile NAME itself (one person, whose practice,
+  fatigue and adaptation carry over between the episodes of an evaluation);
+* ``person:NAME:K`` -- person K of the population around NAME
+  (``hrc_joystick_node.population.sample_person(profile, K)``);
+* ``population:NAME`` -- a new person of NAME's population at every episode (the training
+  distribution of an agent trained with ``--population-every 1``; drawn with evaluation seeds
+  no training uses);
+* ``model:PATH`` -- a human model cloned from recordings (``hrc_joystick_node.human_model``).
+
+Profiles come from the installed ``params/sim_human.yaml`` unless a profiles file is given.
+Partners are callables for :func:`hrc_agent_node.offline.run_session` (``partner(state,
+subtasks) -> command`` with ``start_episode(episode)``).
+"""
+
+from dataclasses import dataclass
+import pathlib
+import typing
+
+from hrc_common.params import ParameterError
+
+KINDS = ('profile', 'person', 'population', 'model')
+EVALUATION_SEED_OFFSET = 5000   # evaluation person draws: seeds no training session uses
+
+
+@dataclass(frozen=True)
+class PartnerSpec:
+    """A parsed partner specification."""
+
+    text: str                       # as given, e.g. 'person:paper:100000'
+    kind: str                       # one of KINDS
+    name: str = ''                  # profile name (profile, person, population)
+    person: int = -1                # person index (person)
+    path: str = ''                  # model file (model)
+
+
+def spec_problem(text: str) -> typing.Optional[str]:
+    """Return why ``text`` is not a partner specification, or None."""
+    kind, _, rest = str(text).partition(':')
+    if kind not in KINDS or not rest:
+        return (f'partner {text!r}: expected profile:NAME, person:NAME:K, population:NAME or '
+                f'model:PATH')
+    if kind == 'person':
+        name, _, index = rest.rpartition(':')
+        if not name or not index.isdigit():
+            return f'partner {text!r}: expected person:NAME:K with K an integer >= 0'
+    if kind == 'model' and not pathlib.Path(rest).is_file():
+        return f'partner {text!r}: no such model file {rest}'
+    return None
+
+
+def parse_spec(text: str) -> PartnerSpec:
+    """Return the PartnerSpec of ``text``; ParameterError if it is not one."""
+    problem = spec_problem(text)
+    if problem:
+        raise ParameterError(problem)
+    kind, _, rest = text.partition(':')
+    if kind == 'person':
+        name, _, index = rest.rpartition(':')
+        return PartnerSpec(text, kind, name=name, person=int(index))
+    if kind == 'model':
+        return PartnerSpec(text, kind, path=rest)
+    return PartnerSpec(text, kind, name=rest)
+
+
+def parse_specs(texts) -> typing.List[PartnerSpec]:
+    """Return the specs of ``texts``; ParameterError listing every bad one at once."""
+    problems = [problem for problem in map(spec_problem, texts) if problem]
+    if problems:
+        raise ParameterError('; '.join(problems), problems)
+    return [parse_spec(text) for text in texts]
+
+
+class ClonedPartner:
+    """A cloned human model as an offline partner (``start_episode`` resets its history)."""
+
+    def __init__(self, path, dof: str, control_period: float = 0.2):
+        from hrc_joystick_node.human_model import ClonedHuman
+
+        self.human = ClonedHuman(path, dof, control_period=control_period)
+
+    def start_episode(self, episode: int) -> None:
+        """Clear the model's state history."""
+        self.human.reset(int(episode))
+
+    def __call__(self, state, subtasks) -> float:
+        """Return the model's stick command in [-1, 1]."""
+        return float(self.human.act(state, list(subtasks)))
+
+
+def make_partner(spec: PartnerSpec, dof: str, seed: int, control_period: float = 0.2,
+                 profiles_file=None):
+    """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed)."""
+    from hrc_agent_node.partners import SimulatedHumanPartner
+    from hrc_joystick_node.population import sample_person
+    from hrc_joystick_node.sim_human import load_profile
+
+    if spec.kind == 'model':
+        return ClonedPartner(spec.path, dof, control_period)
+    profile = load_profile(spec.name, profiles_file)
+    if spec.kind == 'person':
+        return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed,
+                                     control_period)
+    if spec.kind == 'population':
+        return SimulatedHumanPartner(profile, dof, seed + EVALUATION_SEED_OFFSET,
+                                     control_period, population_every=1)
+    return SimulatedHumanPartner(profile, dof, seed, control_period)
+
+
+def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None):
+    """Return an AgentCore that evaluates ``checkpoint``'s frozen policy (``episodes``, seed)."""
+    from hrc_agent_node.agent_core import AgentCore
+    from hrc_agent_node.checkpoint import load_into, read_checkpoint
+    from hrc_agent_node.config import AgentParams
+    from hrc_common.params import from_dict, with_overrides
+    from hrc_sim_node.physics import PhysicsParams
+
+    config = read_checkpoint(checkpoint)['config']
+    physics = PhysicsParams()
+    settings = dict(seed=int(seed), evaluation_only=True, resume_from=str(checkpoint),
+                    evaluation_episodes=int(episodes), checkpoint_dir='',
+                    max_force=physics.max_force, max_torque=physics.max_torque,
+                    torch_threads=1)
+    settings.update(overrides or {})
+    trained = from_dict(AgentParams, dict(config['params']))
+    core = AgentCore(with_overrides(trained, **settings))
+    load_into(core, checkpoint, resume=False)
+    return core
+
+
+def evaluate(checkpoint, spec: PartnerSpec, seed: int, episodes: int,
+             physics_overrides: dict = None, profiles_file=None) -> float:
+    """Return the mean total error of ``checkpoint``'s frozen policy with ``spec`` (one seed)."""
+    from hrc_agent_node.offline import run_session
+    from hrc_common.params import with_overrides
+    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+    physics = with_overrides(PhysicsParams(), **(physics_overrides or {}))
+    core = evaluation_core(checkpoint, seed, episodes)
+    partner = make_partner(spec, core.human_dof, seed, physics.control_period, profiles_file)
+    with SliderPendulumBall(physics) as sim:
+        return float(run_session(core, sim, partner)['evaluation']['total_error'])

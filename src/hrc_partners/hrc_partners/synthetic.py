@@ -1,0 +1,69 @@
+"""Recordings of simulated people with known parameters, made with the in-process engine.
+
+For tests and demonstrations of cloning: each person is a simulated-human profile (a
+``HumanProfile`` with some fields changed) written to a profiles file, and one short session
+per (person, seed) is run by :func:`hrc_engine.engine.run_session` with the human node's
+``profiles_file``/``profile`` parameters, so the bags are the engine's real bags (the same
+files the recorder writes), driven by ``SOURCE_SIMULATED``.
+"""
+
+import dataclasses
+import pathlib
+import typing
+
+import yaml
+
+FAST_SLOW_DELAYS = {'fast': 0.1, 'slow': 0.6}   # s: reaction delays of the demonstration pair
+
+
+def write_profiles(path, people: typing.Dict[str, dict], base: str = 'skilled') -> str:
+    """Write a profiles file: each person = profile ``base`` with the fields given changed."""
+    from hrc_joystick_node.sim_human import load_profile
+
+    template = load_profile(base)
+    profiles = {}
+    for name, changes in people.items():
+        person = dataclasses.replace(template, **changes)
+        values = dataclasses.asdict(person)
+        values['description'] = f'{base} with {changes}'
+        profiles[name] = values
+    path = pathlib.Path(path)
+    path.write_text(yaml.safe_dump({'profiles': profiles}, sort_keys=False))
+    return str(path)
+
+
+def fast_and_slow(path) -> str:
+    """Write the demonstration pair: a fast and a slow person, otherwise alike and steady.
+
+    ``skilled`` with only the reaction delay changed, no delay compensation (``prediction`` 0),
+    no lapses, no learning curve and no fatigue, so the delay is the one difference.
+    """
+    steady = dict(prediction=0.0, lapse_probability=0.0, untrained_factor=1.0,
+                  fatigue_delay_ceiling=0.0, fatigue_noise_ceiling=0.0,
+                  fatigue_lapse_ceiling=0.0)
+    return write_profiles(path, {name: dict(steady, reaction_delay=delay)
+                                 for name, delay in FAST_SLOW_DELAYS.items()})
+
+
+def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int = 3,
+                    episodes: int = 4, seconds: float = 16.0) -> typing.List[str]:
+    """Run one short in-process session per (person, seed); return the session folders.
+
+    Case 3 (level-guided, robot on translation) puts the person on the rotation from the first
+    episode. ``episodes`` training episodes of ``seconds`` s of simulation, no evaluation, no
+    checkpoints.
+    """
+    from hrc_engine.engine import EngineConfig, run_session
+
+    folders = []
+    for person in people:
+        for seed in seeds:
+            result = run_session(EngineConfig(
+                case=case, seed=int(seed), training_episodes=int(episodes),
+                evaluation_episodes=0, session_id=f'{person}-seed{seed}',
+                bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
+                human_profile=person,
+                overrides={'sim.episode_duration': float(seconds),
+                           'human.profiles_file': str(profiles_file)}))
+            folders.append(result.bag_dir)
+    return folders

@@ -1,0 +1,81 @@
+"""Train the agents that cross-play compares: one simulated person vs a population (offline).
+
+    ros2 run hrc_partners train_partners_agents --out runs/partners --case 2 --seeds 0 1 \
+        --episodes 250 --profile paper
+
+For each seed, trains a case agent with the simulated human ``--profile`` itself (``one``) and
+with a new person of its population every episode (``population``), in one process
+(hrc_agent_node.offline: physics + partner + AgentCore, no ROS, one torch thread). Each agent is
+saved as ``<out>/<kind>-s<seed>.pt`` (the agent node's checkpoint format) with
+``<kind>-s<seed>.json``: its training partner as a cross-play partner specification
+(``profile:paper`` or ``population:paper``), episodes, convergence, wall seconds.
+"""
+
+import argparse
+import json
+import pathlib
+import sys
+
+
+def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
+                preset: str, checkpoint, profiles_file=None) -> dict:
+    """Train one agent offline, save its checkpoint; return its summary (JSON-able)."""
+    from hrc_agent_node.agent_core import AgentCore
+    from hrc_agent_node.checkpoint import save_checkpoint
+    from hrc_agent_node.config import AgentParams
+    from hrc_agent_node.offline import run_session
+    from hrc_agent_node.partners import SimulatedHumanPartner
+    from hrc_common.params import with_overrides
+    from hrc_joystick_node.sim_human import load_profile
+    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+    physics = PhysicsParams()
+    core = AgentCore(with_overrides(
+        AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
+        evaluation_episodes=0, checkpoint_dir='', torch_threads=1,
+        max_force=physics.max_force, max_torque=physics.max_torque))
+    partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof, seed,
+                                    physics.control_period, population_every)
+    with SliderPendulumBall(physics) as sim:
+        summary = run_session(core, sim, partner)
+    save_checkpoint(core, checkpoint)
+    trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
+    return {'checkpoint': str(checkpoint), 'case': case, 'seed': seed, 'preset': preset,
+            'training_partner': trained_with, 'population_every': population_every,
+            'training_episodes': summary['training_episodes'],
+            'human_involved_episodes': summary['human_involved_episodes'],
+            'converged': summary['converged'], 'wall_seconds': summary['wall_seconds']}
+
+
+def main(argv=None) -> int:
+    """Train one-person and population agents per seed; print one JSON line per agent."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--out', default='runs/partners', help='folder for the checkpoints')
+    parser.add_argument('--case', type=int, default=2)
+    parser.add_argument('--seeds', nargs='+', type=int, default=[0])
+    parser.add_argument('--episodes', type=int, default=250, help='max training episodes')
+    parser.add_argument('--profile', default='paper')
+    parser.add_argument('--preset', default='tuned')
+    parser.add_argument('--population-every', type=int, default=1)
+    parser.add_argument('--kinds', nargs='+', default=['one', 'population'],
+                        choices=['one', 'population'])
+    args = parser.parse_args(argv)
+    if args.episodes < 1 or args.population_every < 1:
+        print('train_partners_agents: --episodes and --population-every must be >= 1',
+              file=sys.stderr)
+        return 2
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for seed in args.seeds:
+        for kind in args.kinds:
+            every = args.population_every if kind == 'population' else 0
+            stem = out / f'c{args.case}-{kind}-s{seed}'
+            summary = train_agent(args.case, seed, args.episodes, args.profile, every,
+                                  args.preset, stem.with_suffix('.pt'))
+            stem.with_suffix('.json').write_text(json.dumps(summary, indent=2) + '\n')
+            print(json.dumps(summary), flush=True)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
