@@ -8,6 +8,7 @@ recording with it exactly. With a ``node`` it publishes them with the contract Q
 ``sink`` it hands them to ``sink(topic, message)`` (e.g. straight into an EpisodeRecorder).
 """
 
+import copy
 from dataclasses import dataclass, field
 import math
 import os
@@ -66,7 +67,9 @@ class SyntheticSession:
     def __init__(self, node: typing.Optional[Node] = None, session_id: str = 'synthetic',
                  case_id: int = 1, strategy: str = 'responsibility_guided', seed: int = 0,
                  robot_dof: int = 0, sink: typing.Optional[typing.Callable] = None,
-                 prefix: str = ''):
+                 prefix: str = '', history_depth: int = 0):
+        # history_depth > 0: each publisher keeps that many samples instead of the contract's
+        # 1..10, so a subscriber that lags (a loaded machine) cannot miss any
         self.node = node
         self.sink = sink
         self.prefix = prefix            # publish on <prefix>/hrc/... (tests isolate themselves)
@@ -83,6 +86,9 @@ class SyntheticSession:
         self.publish_times = {}       # topic -> [wall clock ns of each publication]
         if node is not None:
             for topic, (message_type, qos) in TOPICS.items():
+                if history_depth:
+                    qos = copy.copy(qos)
+                    qos.depth = max(qos.depth, history_depth)
                 self.publishers[topic] = node.create_publisher(message_type, prefix + topic,
                                                                qos)
 

@@ -231,8 +231,9 @@ def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test
         recorder = start_node('hrc_bag', 'recorder_node',
                               parameters={'output_dir': str(tmp_path), 'session_id': session_id},
                               ros_args=isolation.ros_args)
+        # (deep publisher histories: what DDS fails to deliver under load is not the point)
         session = SyntheticSession(test_node, session_id, case_id=1, seed=trial,
-                                   prefix=isolation.prefix)
+                                   prefix=isolation.prefix, history_depth=1000)
         assert session.wait_for_subscribers(), recorder.output
         result = kill_trial(session, recorder.process.pid, tmp_path / session_id,
                             chance.uniform(1.2, 3.0))
