@@ -22,6 +22,7 @@ import signal
 import statistics
 import struct
 import subprocess
+import sys
 import threading
 import time
 
@@ -34,6 +35,27 @@ STEPS = 20                       # control steps per episode (episode_duration 4
 EPISODES = 3
 REPO = pathlib.Path(__file__).resolve().parents[1]
 JS_EVENT_AXIS = 0x02
+DISPLAY_PORT = 8765   # inside the station namespace: its own port space
+# The person's browser, reduced to what matters here: read the display's state events and
+# print (episode, step, display send time, arrival time) per state, wall ms.
+SSE_CLIENT = f"""
+import json, sys, time, urllib.request
+for attempt in range(100):
+    try:
+        stream = urllib.request.urlopen('http://127.0.0.1:{DISPLAY_PORT}/events', timeout=30)
+        break
+    except OSError:
+        time.sleep(0.3)
+event = ''
+for raw in stream:
+    line = raw.decode().rstrip()
+    if line.startswith('event:'):
+        event = line[6:].strip()
+    elif line.startswith('data:') and event == 'state':
+        state = json.loads(line[5:])
+        print(state['episode'], state['step'], state['sent_ms'], time.time() * 1000.0,
+              flush=True)
+"""
 
 
 def js_event(time_ms: int, value: int, kind: int, number: int) -> bytes:
@@ -101,9 +123,19 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
                         f'__node:={node}', '--params-file', str(params_path)]
                 processes[node] = subprocess.Popen(lab.command(host, argv), env=env,
                                                    stdout=logs[node], stderr=subprocess.STDOUT)
+                if node == 'human':   # the page, on the station beside the joystick
+                    logs['display'] = open(tmp_path / f'{label}-display.log', 'w+')
+                    processes['display'] = subprocess.Popen(lab.command(host, [
+                        str(executable_path('hrc_live', 'display_node')), '--ros-args', '-p',
+                        f'port:={DISPLAY_PORT}']), env=env, stdout=logs['display'],
+                        stderr=subprocess.STDOUT)
+                    page = open(tmp_path / f'{label}-page.txt', 'w+')
+                    processes['page'] = subprocess.Popen(
+                        lab.command(host, [sys.executable, '-c', SSE_CLIENT]), env=env,
+                        stdout=page, stderr=subprocess.STDOUT, text=True)
             code = processes['agent'].wait(timeout=40 + EPISODES * (STEPS * 0.2 + 4))
         finally:
-            for node in ('agent', 'human', 'sim', 'recorder'):
+            for node in ('agent', 'page', 'display', 'human', 'sim', 'recorder'):
                 process = processes.get(node)
                 if process is not None and process.poll() is None:
                     process.send_signal(signal.SIGINT)
@@ -121,11 +153,20 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
 
     assert code == 0, f'agent exit {code}\n' + '\n'.join(
         f'--- {node}\n{log_of(node)}' for node in logs)
-    return {'counts': counts, 'bag': tmp_path / 'bags' / settings.session_id}
+    page.seek(0)
+    shown = {}
+    for line in page.read().splitlines():
+        fields = line.split()
+        if len(fields) == 4 and fields[0].isdigit():
+            shown[(int(fields[0]), int(fields[1]))] = (float(fields[2]), float(fields[3]))
+    return {'counts': counts, 'bag': tmp_path / 'bags' / settings.session_id, 'shown': shown}
 
 
-def figures(bag: dict) -> dict:
-    """Return command age, missing commands and state period jitter from a read bag."""
+def figures(bag: dict, shown: dict) -> dict:
+    """Return command age, missing commands, state period jitter and display latency."""
+    display = sorted(sent - time_ns / 1e6 for time_ns, state in bag['timed']['/hrc/state']
+                     for sent, _ in [shown.get((state.episode, state.step), (None, None))]
+                     if sent is not None)
     state_times = {}
     for time_ns, state in bag['timed']['/hrc/state']:
         stamp = (state.header.stamp.sec, state.header.stamp.nanosec)
@@ -144,7 +185,9 @@ def figures(bag: dict) -> dict:
         min(len(ages) - 1, int(0.99 * len(ages)))], 'answered': len(ages),
         'missing': missing, 'steps': sum(1 for state in states if state.step > 0),
         'jitter_p99_ms': jitter[min(len(jitter) - 1, int(0.99 * len(jitter)))],
-        'states': states}
+        'display_p50_ms': statistics.median(display) if display else float('nan'),
+        'display_p99_ms': display[min(len(display) - 1, int(0.99 * len(display)))]
+        if display else float('nan'), 'displayed': len(display), 'states': states}
 
 
 @pytest.fixture
@@ -170,7 +213,7 @@ def test_two_hosts_on_three_links(tmp_path, ros_domain_id, read_timed_rosbag):
                            ('wifi', netlab.POOR_WIFI)):
         run = run_two_host_session(tmp_path / label, profile, ros_domain_id, label)
         bag = read_timed_rosbag(run['bag'])
-        result = figures(bag)
+        result = figures(bag, run['shown'])
         result['counts'] = run['counts']
         results[label] = result
         states = result.pop('states')
@@ -184,10 +227,14 @@ def test_two_hosts_on_three_links(tmp_path, ros_domain_id, read_timed_rosbag):
         # The human's commands crossed the link and reached the trainer's recorder.
         assert result['answered'] >= result['steps'] // 2, result
         assert run['counts']['carried'] > 0, run['counts']
+        # The page on the station showed the states (display latency measured on them).
+        assert result['displayed'] >= result['steps'] // 2, result
         print(f"[two hosts] {label:5s} ({profile.describe()}): command age p50 "
               f"{result['age_p50_ms']:.1f} ms, p99 {result['age_p99_ms']:.1f} ms; missing "
               f"{result['missing']}/{result['steps']}; state period jitter p99 "
-              f"{result['jitter_p99_ms']:.1f} ms; link {run['counts']}")
+              f"{result['jitter_p99_ms']:.1f} ms; display latency p50 "
+              f"{result['display_p50_ms']:.1f} ms, p99 {result['display_p99_ms']:.1f} ms "
+              f"({result['displayed']} states); link {run['counts']}")
     # The link really is in the path: the Wi-Fi's 30 ms each way shows in the command age.
     assert results['wifi']['age_p50_ms'] > results['local']['age_p50_ms'] + 40.0, results
 
