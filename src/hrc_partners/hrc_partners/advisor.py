@@ -35,9 +35,9 @@ ROBOT_SUBTASKS = ['slider', 'pendulum', 'ball']
 class CalibrationPlan:
     """How long the calibration takes."""
 
-    episodes_per_dof: int = 4       # short episodes with the person on each degree of freedom
-    seconds: float = 12.0           # s of simulation per episode
-    rest_seconds: float = 10.0      # s between episodes (counted in the person's time)
+    episodes_per_dof: int = 6       # short episodes with the person on each degree of freedom
+    seconds: float = 8.0            # s of simulation per episode
+    rest_seconds: float = 6.0       # s between episodes (counted in the person's time)
     seed: int = 0                   # seeds of the episodes' initial states
 
     @property
@@ -144,7 +144,7 @@ class Advice:
     person_seconds: float
 
     def difference(self) -> str:
-        """Return 'translation - rotation team error: d [low, high]' (Welch 95 %)."""
+        """Return 'translation - rotation d [low, high]' (paired t, 95 %)."""
         difference, low, high = difference_interval(
             self.assignments[DOFS[0]].team_errors, self.assignments[DOFS[1]].team_errors)
         return f'translation - rotation {difference:+.4f} [{low:+.4f}, {high:+.4f}]'
@@ -171,11 +171,22 @@ class Advice:
 
 
 def difference_interval(first, second, confidence: float = 0.95) -> tuple:
-    """Return (mean difference first - second, low, high): Welch's t interval."""
+    """Return (mean difference first - second, low, high), a t interval.
+
+    Paired (the t interval of the per-pair differences) when both have the same length: the
+    calibration runs its episodes in pairs with the same initial state, one of each
+    assignment; Welch's interval otherwise.
+    """
     import numpy
     from scipy import stats
 
     a, b = numpy.asarray(first, dtype=float), numpy.asarray(second, dtype=float)
+    if len(a) == len(b) and len(a) >= 2:
+        differences = a - b
+        spread = float(differences.std(ddof=1)) / math.sqrt(len(a))
+        half = float(stats.t.ppf(0.5 + confidence / 2, len(a) - 1)) * spread
+        mean = float(differences.mean())
+        return mean, mean - half, mean + half
     if len(a) < 2 or len(b) < 2:
         return float(a.mean() - b.mean()), math.nan, math.nan
     va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
@@ -191,7 +202,7 @@ def difference_interval(first, second, confidence: float = 0.95) -> tuple:
 def recommend(assignments: typing.Dict[str, Assignment]) -> str:
     """Return the person's dof of the clearly better assignment, or '' (no clear difference).
 
-    Clear: the 95 % Welch interval of the difference of the two team errors excludes 0.
+    Clear: the paired 95 % t interval of the difference of the two team errors excludes 0.
     """
     _, low, high = difference_interval(assignments[DOFS[0]].team_errors,
                                        assignments[DOFS[1]].team_errors)
@@ -223,7 +234,7 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
                 number = 2 * episode + index
                 people[dof].reset(number)
                 team, own = team_episode(sim, robots[dof], people[dof], dof,
-                                         plan.seed * 1000 + number, clock)
+                                         plan.seed * 1000 + episode, clock)
                 results[dof].team_errors.append(team)
                 results[dof].own_errors.append(own)
                 clock += plan.seconds + plan.rest_seconds
@@ -283,13 +294,14 @@ class Draw:
 def validate(draws: int, plan: CalibrationPlan, truth_episodes: int = 16,
              robot_noise: float = 1.0, base_profile: str = 'paper_symmetric',
              factors=(1.0, 6.0), seed: int = 0, clear_margin: float = 0.2,
-             profiles_file=None) -> typing.List[Draw]:
+             truth_seconds: float = 0.0, profiles_file=None) -> typing.List[Draw]:
     """Run the advisor on ``draws`` simulated people with known asymmetric skills.
 
     Person k: ``asymmetric_person(base, 1000 * seed + k, weak dof, factor)`` with the weak
     dof and the factor drawn (numpy, ``seed``). The truth: ``truth_episodes`` episodes of each
-    assignment with other initial states and person noise; the assignments differ clearly when
-    the truth's Welch 95 % interval of the difference excludes 0 and the difference is at least
+    assignment (of ``truth_seconds``, default the calibration's length) with other initial
+    states and person noise; the assignments differ clearly when
+    the truth's 95 % interval of the difference excludes 0 and the difference is at least
     ``clear_margin`` of the larger error (``better`` the better one); they do not differ when
     the interval includes 0 (``better`` ''); a significant difference below the margin is
     ``small`` (either answer counts as right there). The robot on both
@@ -304,8 +316,8 @@ def validate(draws: int, plan: CalibrationPlan, truth_episodes: int = 16,
     base = load_profile(base_profile, profiles_file)
     rng = numpy.random.default_rng([seed, 15])
     robots = {dof: ScriptedRobot(other_dof(dof), noise=robot_noise, seed=seed) for dof in DOFS}
-    truth_plan = CalibrationPlan(truth_episodes, plan.seconds, plan.rest_seconds,
-                                 plan.seed + 7)
+    truth_plan = CalibrationPlan(truth_episodes, truth_seconds or plan.seconds,
+                                 plan.rest_seconds, plan.seed + 7)
     results = []
     for index in range(draws):
         weak = DOFS[int(rng.integers(2))]
@@ -315,8 +327,8 @@ def validate(draws: int, plan: CalibrationPlan, truth_episodes: int = 16,
                            CalibrationPlan(plan.episodes_per_dof, plan.seconds,
                                            plan.rest_seconds, plan.seed + 100 * index))
         truth = calibrate(simulated_person(person, index + 50000), robots,
-                          CalibrationPlan(truth_episodes, plan.seconds, plan.rest_seconds,
-                                          truth_plan.seed + 100 * index))
+                          CalibrationPlan(truth_episodes, truth_plan.seconds,
+                                          plan.rest_seconds, truth_plan.seed + 100 * index))
         difference, low, high = difference_interval(truth.assignments[DOFS[0]].team_errors,
                                                     truth.assignments[DOFS[1]].team_errors)
         larger = max(truth.assignments[dof].team().estimate for dof in DOFS)

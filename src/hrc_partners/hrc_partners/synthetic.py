@@ -67,3 +67,22 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
                            'human.profiles_file': str(profiles_file)}))
             folders.append(result.bag_dir)
     return folders
+
+
+def record_with_model(bags_dir, runs_dir, model_file, seed: int = 0, case: int = 3,
+                      episodes: int = 1, seconds: float = 8.0) -> str:
+    """Run one short in-process session whose human is a cloned model; return its bag folder.
+
+    The engine's human side is the human node's core with ``input: model`` (the session's
+    composed parameters, with the human's input switched to the model).
+    """
+    from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+
+    config = EngineConfig(case=case, seed=int(seed), training_episodes=int(episodes),
+                          evaluation_episodes=0, session_id=f'model-seed{seed}',
+                          bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
+                          overrides={'sim.episode_duration': float(seconds)})
+    _, parameters = compose_parameters(config)
+    parameters['human'].update(input='model', model_file=str(model_file))
+    config.parameters = parameters
+    return run_session(config).bag_dir

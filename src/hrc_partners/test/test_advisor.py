@@ -1,0 +1,49 @@
+"""Role allocation advisor on simulated people with known asymmetric skills.
+
+The robot is the scripted PD controller with command noise, standing in for a trained robot
+(said in the advice): fast and deterministic for a seed.
+"""
+
+from hrc_joystick_node.sim_human import load_profile
+from hrc_partners import advisor
+
+
+def test_right_in_clear_cases_and_quick_for_the_person():
+    plan = advisor.CalibrationPlan()
+    assert plan.person_seconds < 180.0
+    results = advisor.validate(14, plan, seed=0)
+    clear = [draw for draw in results if draw.better in advisor.DOFS]
+    assert len(clear) >= 10, advisor.validation_table(results)
+    assert sum(draw.correct for draw in clear) >= 0.9 * len(clear), \
+        advisor.validation_table(results)
+    # both directions occur: the advice depends on the person, not on the robot alone
+    assert {draw.better for draw in clear} == set(advisor.DOFS)
+    # never the worse assignment where the long run separates them
+    assert not any(draw.advice.recommended and draw.better in advisor.DOFS
+                   and draw.advice.recommended != draw.better for draw in results)
+
+
+def test_no_clear_difference_when_the_intervals_do_not_separate():
+    def assignment(dof, errors):
+        return advisor.Assignment(dof, 'test', errors, errors)
+
+    overlapping = {'translation': assignment('translation', [0.20, 0.25, 0.22, 0.27]),
+                   'rotation': assignment('rotation', [0.24, 0.21, 0.26, 0.23])}
+    assert advisor.recommend(overlapping) == ''
+    separated = {'translation': assignment('translation', [0.20, 0.21, 0.22, 0.20]),
+                 'rotation': assignment('rotation', [0.30, 0.32, 0.31, 0.33])}
+    assert advisor.recommend(separated) == 'translation'
+    text = advisor.Advice(overlapping, '', 100.0).describe()
+    assert 'no clear difference' in text and 'calibration: 100 s' in text
+
+
+def test_advice_text_names_the_stand_in():
+    weak_at_rotation = advisor.asymmetric_person(load_profile('paper_symmetric'), 3,
+                                                 'rotation', 5.0)
+    person = advisor.simulated_person(weak_at_rotation, 3)
+    robots = {dof: advisor.ScriptedRobot(advisor.other_dof(dof), noise=1.0)
+              for dof in advisor.DOFS}
+    advice = advisor.calibrate(person, robots, advisor.CalibrationPlan(episodes_per_dof=2))
+    text = advice.describe()
+    assert 'stand-in for a trained robot' in text
+    assert len(advice.assignments['rotation'].team_errors) == 2

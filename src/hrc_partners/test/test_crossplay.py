@@ -1,0 +1,61 @@
+"""Cross-play of a (briefly) trained agent with partners: matrix, intervals, drops, heatmap."""
+
+import json
+import math
+
+from PIL import Image
+
+from hrc_partners import crossplay, crossplay_cli, training
+from hrc_partners.partners import parse_specs
+
+
+def test_matrix_files_and_drops(tmp_path, capsys):
+    checkpoint = tmp_path / 'c2-one-s0.pt'
+    summary = training.train_agent(2, 0, 2, 'paper', 0, 'tuned', checkpoint)
+    (tmp_path / 'c2-one-s0.json').write_text(json.dumps(summary))
+    assert summary['training_partner'] == 'profile:paper'
+    code = crossplay_cli.main(['--agent', f'one={checkpoint}', '--partner', 'person:paper:7',
+                               'population:paper', '--seeds', '0', '1', '--episodes', '1',
+                               '--out', str(tmp_path / 'out'), '--quiet'])
+    assert code == 0
+    printed = capsys.readouterr().out
+    result = json.loads((tmp_path / 'out' / 'matrix.json').read_text())
+    # the training partner is added as a column; one error per seed in every cell
+    assert result['partners'] == ['person:paper:7', 'population:paper', 'profile:paper']
+    cells = result['cells']['one']
+    for partner, cell in cells.items():
+        assert len(cell['errors']) == 2 and all(value > 0 for value in cell['errors'])
+        assert cell['low'] <= cell['mean'] <= cell['high']
+        assert math.isclose(cell['drop'], cell['mean'] / cells['profile:paper']['mean'])
+    assert cells['profile:paper']['drop'] == 1.0
+    # different seeds give different sessions (the interval is over something)
+    assert cells['person:paper:7']['errors'][0] != cells['person:paper:7']['errors'][1]
+    assert '| one (profile:paper) |' in printed and '1.00x' in printed
+    with Image.open(tmp_path / 'out' / 'heatmap.png') as image:
+        assert image.size[0] > 200 and image.size[1] > 100
+
+
+def test_same_seed_same_error(tmp_path):
+    checkpoint = tmp_path / 'a.pt'
+    training.train_agent(2, 1, 1, 'paper', 0, 'tuned', checkpoint)
+    agents = [crossplay.Agent('a', str(checkpoint), 'profile:paper')]
+    first = crossplay.run_matrix(agents, ['person:paper:2'], [4], 1)
+    second = crossplay.run_matrix(agents, ['person:paper:2'], [4], 1)
+    assert first.errors == second.errors
+
+
+def test_bad_agents_and_partners_every_reason(tmp_path, capsys):
+    code = crossplay_cli.main(['--agent', 'x', f'y={tmp_path}/none.pt', '--partner', 'who:me',
+                               'person:paper:x', f'model:{tmp_path}/none.pt', '--episodes',
+                               '0'])
+    assert code == 2
+    error = capsys.readouterr().err
+    for reason in ("partner 'who:me'", "partner 'person:paper:x'", 'no such model file',
+                   "agent 'x'", 'no such checkpoint', '--episodes'):
+        assert reason in error, reason
+    assert 'Traceback' not in error
+
+
+def test_specs():
+    spec = parse_specs(['person:paper:12'])[0]
+    assert (spec.kind, spec.name, spec.person) == ('person', 'paper', 12)
