@@ -19,7 +19,8 @@
   time limit, so a learner must bootstrap from the final state). The final ``info`` holds
   ``episode_errors`` (mean |x - mu| per subtask) and ``episode_satisfied`` (within tolerance).
 * **The human**: when the step involves it, the simulated human of ``hrc_joystick_node``
-  (``human=<profile>`` or ``population:<profile>``), answered through the human node's own
+  (``human=<profile>`` or ``population:<profile>``) or a cloned model (``model:<path>``),
+  answered through the human node's own
   per-step core (``HumanCore``, with the sim's stamps as its clock), acts on the same state as
   the robot; or any object passed as ``human_model`` with ``act(state, subtasks) -> float``
   (and optionally ``reset(episode)``), e.g. a model cloned from a person's bags.
@@ -36,8 +37,8 @@ import numpy as np
 
 from hrc_common.contract import NS_PER_S
 from hrc_common.params import from_dict
-from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, NO_HUMAN,
-                          POPULATION_PREFIX, RENDER_MODES, ROBOT, SEED_LIMIT, TaskRun)
+from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, MODEL_PREFIX,
+                          NO_HUMAN, POPULATION_PREFIX, RENDER_MODES, ROBOT, SEED_LIMIT, TaskRun)
 from hrc_sim_node.physics import PhysicsParams
 
 
@@ -49,8 +50,13 @@ def derived_seed(seed: int, stream: int) -> int:
 
 
 def check_human_spec(spec: str) -> None:
-    """Raise ParameterError unless ``spec`` names a known profile, a population or 'none'."""
+    """Raise ParameterError unless ``spec`` is 'none', a profile, a population or a model."""
     if spec == NO_HUMAN:
+        return
+    if spec.startswith(MODEL_PREFIX):
+        from hrc_joystick_node.human_model import load_human_model
+
+        load_human_model(spec[len(MODEL_PREFIX):])
         return
     from hrc_joystick_node.sim_human import load_profile
 

@@ -32,6 +32,7 @@ from hrc_sim_node.protocol import HUMAN, per_dof, roles, ROBOT
 
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
+MODEL_PREFIX = 'model:'
 RENDER_MODES = ['rgb_array']
 SEED_LIMIT = 2 ** 31 - 1  # episode seeds are drawn from [0, this)
 
@@ -66,8 +67,10 @@ class GymParams(TaskParams):
     human: str = param('paper', "The human in the environment when the step involves it: a "
                                 "profile of params/sim_human.yaml ('paper', 'skilled', "
                                 "'novice'), 'population:<profile>' for a person drawn from "
-                                "that profile's population (by the reset seed), or 'none' "
-                                '(zero command). A human model object may be passed instead '
+                                "that profile's population (by the reset seed), "
+                                "'model:<path>' for a human model cloned from recordings "
+                                "(hrc_joystick_node.human_model checkpoint), or 'none' (zero "
+                                'command). A human model object may be passed instead '
                                 '(argument human_model).')
 
 
@@ -82,25 +85,33 @@ def resolve_step(case, index: int):
 
 def make_human(spec: str, dof: str, seed: int, control_period: float, involved: bool,
                subtasks, max_force: float, max_torque: float):
-    """Return the human node's per-step core driving the simulated human named by ``spec``.
+    """Return the human node's per-step core driving the human named by ``spec``, or None.
 
-    ``spec``: 'none' (returns None), a profile name, or 'population:<profile>' (person number
-    ``seed`` of the population around that profile, ``hrc_joystick_node.population``). The
-    core (``HumanCore``, input ``sim``) is the one the human node runs: it resets the person at
-    each new episode and runs fatigue and rest on the stamps (simulation time) it is given.
+    ``spec``: 'none' (returns None), a profile name, 'population:<profile>' (person number
+    ``seed`` of the population around that profile, ``hrc_joystick_node.population``) or
+    'model:<path>' (a cloned human model, the node's input ``model``). The core
+    (``HumanCore``) is the one the human node runs: it resets the person at each new episode
+    and runs fatigue and rest on the stamps (simulation time) it is given.
     """
     if spec == NO_HUMAN:
         return None
     from hrc_joystick_node.human_core import HumanCore, HumanParams
     from hrc_joystick_node.sim_human import load_profiles
 
-    population = spec.startswith(POPULATION_PREFIX)
-    params = HumanParams(input='sim', dof=dof, involved=involved, control_period=control_period,
-                         max_force=max_force, max_torque=max_torque,
-                         profile=spec[len(POPULATION_PREFIX):] if population else spec,
-                         person=int(seed) if population else -1, seed=int(seed))
+    common = dict(dof=dof, involved=involved, control_period=control_period,
+                  max_force=max_force, max_torque=max_torque, seed=int(seed))
+    if spec.startswith(MODEL_PREFIX):
+        params = HumanParams(input='model', model_file=spec[len(MODEL_PREFIX):], **common)
+    elif spec.startswith(POPULATION_PREFIX):
+        params = HumanParams(input='sim', profile=spec[len(POPULATION_PREFIX):],
+                             person=int(seed), **common)
+    else:
+        params = HumanParams(input='sim', profile=spec, **common)
     core = HumanCore(checked(params), load_profiles())
     core.on_session(dof, involved, list(subtasks))
+    # The node's input check: with input sim or model the selector takes that input (no
+    # device, no /joy); until this first check the core answers zero.
+    core.on_inputs(False, 'no device (environment)', False, 'no /joy (environment)')
     return core
 
 

@@ -73,10 +73,14 @@ def test_same_seed_same_trajectory_with_the_simulated_human():
         again = _trajectory(other, 7, actions)
         np.testing.assert_array_equal(first, again)
         assert not np.array_equal(first, _trajectory(env, 8, actions))
-        # The human acted (nonzero commands) and the episode ended by truncation at 200 steps.
+        # The human acted (its commands move the stick) and the episode ended by truncation at
+        # step 200.
         env.reset(seed=7)
+        human_commands = []
         for action in actions:
             _, _, terminated, truncated, info = env.step(action)
+            human_commands.append(info['human_action'])
+        assert np.std(human_commands) > 0.01 and np.max(np.abs(human_commands)) > 0.05
         assert truncated and not terminated and info['step'] == 200
         assert set(info['episode_errors']) == {'ball', 'slider', 'pendulum'}
     finally:
@@ -176,3 +180,27 @@ def test_a_population_member_is_drawn_by_the_reset_seed():
         assert first.reaction_delay != second.reaction_delay
     finally:
         env.close()
+
+
+def test_a_cloned_human_model_file_drives_the_human(tmp_path):
+    from hrc_joystick_node.human_model import build_network, save_human_model
+    import torch
+
+    config = {'history_steps': 2, 'hidden': [4], 'dof': 'translation', 'control_period': 0.2,
+              'description': 'test model'}
+    network = build_network(config)
+    with torch.no_grad():
+        for parameter in network.parameters():
+            parameter.zero_()
+        network[-2].bias.fill_(0.5)   # tanh(0.5): a constant push, whatever it sees
+    path = tmp_path / 'clone.pt'
+    save_human_model(path, config, network.state_dict())
+    env = SliderPendulumBallEnv(case=6, human=f'model:{path}')
+    try:
+        env.reset(seed=0)
+        _, _, _, _, info = env.step(np.zeros(1, dtype=np.float32))
+        assert info['human_action'] == pytest.approx(np.tanh(0.5))
+    finally:
+        env.close()
+    with pytest.raises(ParameterError):
+        SliderPendulumBallEnv(case=6, human=f'model:{tmp_path / "missing.pt"}')
