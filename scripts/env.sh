@@ -9,6 +9,13 @@ export AMENT_PREFIX_PATH=$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}
 # shellcheck disable=SC1091
 source "$_hrc_top/install/setup.bash"
 export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
+# LOCALHOST limits discovery to this host, but Fast DDS would still bind its receive ports to
+# 0.0.0.0: the loopback profile binds them to 127.0.0.1 (params/fastdds/loopback.xml says what
+# remains). Only when no other profile is chosen; two hosts: docs/two_hosts.md.
+if [ "$ROS_AUTOMATIC_DISCOVERY_RANGE" = LOCALHOST ] && [ -z "${FASTRTPS_DEFAULT_PROFILES_FILE:-}" ] \
+    && [ -z "${FASTDDS_DEFAULT_PROFILES_FILE:-}" ]; then
+  export FASTRTPS_DEFAULT_PROFILES_FILE=$_hrc_top/params/fastdds/loopback.xml
+fi
 # The pip wheels do not ship the ROS 2 CLI: without a real `ros2`, put hrc's shim on PATH
 # (scripts/bin/ros2: `ros2 run` with the same ament-index lookup; it says it is the shim).
 if ! command -v ros2 >/dev/null 2>&1; then

@@ -118,6 +118,7 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
                 env = dict(os.environ)
                 env.update(lab.ros_environment(host, domain_id))
                 env.pop('ROS_LOCALHOST_ONLY', None)
+                env.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)   # the loopback-only profile
                 logs[node] = open(tmp_path / f'{label}-{node}.log', 'w+')
                 argv = [str(executable_path(package, executable)), '--ros-args', '-r',
                         f'__node:={node}', '--params-file', str(params_path)]
@@ -268,6 +269,7 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
         def env(host):
             values = dict(os.environ)
             values.update(lab.ros_environment(host, ros_domain_id))
+            values.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)   # the loopback-only profile
             return values
 
         runner = subprocess.Popen(lab.command('trainer', runner_args), env=env('trainer'),
