@@ -248,23 +248,29 @@ def simulated_person(profile, seed: int, control_period: float = 0.2):
     return lambda dof: SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
 
 
-def asymmetric_person(base, seed: int, weak_dof: str, factor: float):
-    """Return ``base`` made ``factor`` times worse at judging ``weak_dof``'s quantity.
+def weaken(person, dof: str, factor: float):
+    """Return ``person`` ``factor`` times worse at judging ``dof``'s quantity.
 
     Perception noise, per-episode bias and the error at which the stick is pushed fully are
-    multiplied by ``factor`` for the slider (translation) or the beam angle (rotation): known
-    asymmetric skill, everything else as ``base`` (e.g. a person of ``paper_symmetric``).
+    multiplied by ``factor`` for the slider (translation) or the beam angle (rotation).
     """
     import dataclasses
 
+    name = OWN_SUBTASK[dof]
+    return dataclasses.replace(person, **{
+        f'{name}_{field}': getattr(person, f'{name}_{field}') * float(factor)
+        for field in ('noise', 'bias', 'full_scale')})
+
+
+def asymmetric_person(base, seed: int, weak_dof: str, factor: float):
+    """Return person ``seed`` of ``base``'s population, ``factor`` times worse at ``weak_dof``.
+
+    Known asymmetric skill, everything else as the person of ``base`` (e.g. of
+    ``paper_symmetric``).
+    """
     from hrc_joystick_node.population import sample_person
 
-    person = sample_person(base, seed)
-    name = OWN_SUBTASK[weak_dof]
-    return dataclasses.replace(person, **{
-        f'{name}_noise': getattr(person, f'{name}_noise') * factor,
-        f'{name}_bias': getattr(person, f'{name}_bias') * factor,
-        f'{name}_full_scale': getattr(person, f'{name}_full_scale') * factor})
+    return weaken(sample_person(base, seed), weak_dof, factor)
 
 
 @dataclass
