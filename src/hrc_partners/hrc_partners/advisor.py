@@ -76,7 +76,7 @@ class TrainedRobot:
     def __init__(self, checkpoint, seed: int = 0):
         from hrc_partners.partners import evaluation_core
 
-        self.core = evaluation_core(checkpoint, seed, episodes=100000)
+        self.core = evaluation_core(checkpoint, seed, episodes=10000)
         self.dof = self.core.robot_dof
 
     def start_episode(self) -> None:

@@ -54,7 +54,7 @@ class Demonstration:
 def _seconds(value) -> float:
     """Return ``value`` as seconds (a number or its repr in a metadata record), 0.0 if none."""
     try:
-        return float(value)
+        return round(float(value), 6)      # stamps in ns: a period of 0.19999999999999998 s
     except (TypeError, ValueError):
         return 0.0
 
