@@ -7,6 +7,8 @@ Four layers, each importing only the ones before it:
   the entry point other packages (``hrc_study``) build on.
 * :mod:`hrc_bag.report.metrics`: Table II values per session and per case (mean, sample
   standard deviation over seeds), Fig. 5-7 data, human time by input source.
+* :mod:`hrc_bag.report.study`: a live study's per-subject index (``index.yaml`` of
+  ``--study-dir``) with its bags and NASA-TLX answers -> one row per subject and condition.
 * :mod:`hrc_bag.report.tables`: Markdown and CSV.
 * :mod:`hrc_bag.report.figures`: the PNG figures (matplotlib, Agg).
 
@@ -20,6 +22,8 @@ recorder) are read up to their last complete chunk.
 
 import pathlib
 
+from hrc_common.contract import atomic_write, PERSONAL_FILE_MODE
+
 from hrc_bag.report.figures import (figure_actions, figure_three_factor,
                                     figure_training_curves)
 from hrc_bag.report.loading import (find_sessions, load_session, load_sessions, Session,
@@ -27,13 +31,19 @@ from hrc_bag.report.loading import (find_sessions, load_session, load_sessions, 
 from hrc_bag.report.metrics import (action_trace, CaseRow, factor_score, FACTOR_AXES,
                                     human_time, mean_and_spread, METRICS, session_metrics,
                                     STRATEGY_ORDER, table2, three_factors, training_curve)
-from hrc_bag.report.tables import (human_time_csv, human_time_markdown, sessions_csv,
+from hrc_bag.report.study import (load_study_index, load_tlx_answer, StudyFolderError,
+                                  StudyIndexError, subject_rows)
+from hrc_bag.report.tables import (by_subject_csv, by_subject_markdown, human_time_csv,
+                                   human_time_markdown, sessions_csv,
                                    STRATEGY_TITLES, table2_csv, table2_markdown,
                                    three_factors_csv)
 
-__all__ = ['action_trace', 'CaseRow', 'factor_score', 'FACTOR_AXES', 'figure_actions',
+__all__ = ['action_trace', 'by_subject_csv', 'by_subject_markdown', 'CaseRow', 'factor_score',
+           'FACTOR_AXES', 'figure_actions',
            'figure_three_factor', 'figure_training_curves', 'find_sessions', 'human_time',
            'human_time_csv', 'human_time_markdown', 'load_session', 'load_sessions',
+           'load_study_index', 'load_tlx_answer', 'StudyFolderError', 'StudyIndexError',
+           'subject_rows', 'write_study_report',
            'mean_and_spread', 'METRICS', 'Session', 'session_metrics', 'sessions_csv',
            'STRATEGY_ORDER', 'STRATEGY_TITLES', 'table2', 'table2_csv', 'table2_markdown',
            'three_factors', 'three_factors_csv', 'topics_of_type', 'training_curve',
@@ -67,3 +77,21 @@ def write_report(paths, out_dir, seconds: float = 4.0, start: float = 0.0, log=p
         draw(out_dir / name)
         files[name] = out_dir / name
     return {'sessions': sessions, 'rows': rows, 'files': files}
+
+
+def write_study_report(entries, out_dir, sessions=(), log=print) -> dict:
+    """Write by_subject.md and by_subject.csv (mode 0600: subject ids) into ``out_dir``.
+
+    ``entries``: :func:`load_study_index` of the study folder; ``sessions``: Sessions already
+    loaded (the others are read from each entry's bag folder). Returns {'rows', 'files'}.
+    """
+    from hrc_live.tlx import TLX_SCALES
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rows = subject_rows(entries, sessions, log)
+    files = {}
+    for name, text in (('by_subject.md', by_subject_markdown(rows, TLX_SCALES)),
+                       ('by_subject.csv', by_subject_csv(rows, TLX_SCALES))):
+        atomic_write(out_dir / name, text, mode=PERSONAL_FILE_MODE)
+        files[name] = out_dir / name
+    return {'rows': rows, 'files': files}

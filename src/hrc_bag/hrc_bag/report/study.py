@@ -1,0 +1,274 @@
+"""The report by subject: a live study's per-subject index read with its bags (pure, no rclpy).
+
+A study folder (``session --study-dir DIR``, see docs/live_study.md) holds ``index.yaml``:
+one entry per session a subject took part in, practice or condition, written by
+``hrc_live.study.append_index``. Its format (the fields of ``hrc_live.study.IndexEntry``)::
+
+    - subject_id: P01            # the pseudonym (no names anywhere)
+      session_id: p01-case2      # the bags are <bags>/ = bags/<session_id>
+      case: 2                    # paper case 1..6
+      kind: condition            # practice | condition
+      position: 1                # 1-based position of the case in the subject's order (0 = ?)
+      started: '2026-11-30T21:00:00'
+      ended: '2026-11-30T21:40:00'
+      exit_code: 0
+      bags: /abs/bags/p01-case2
+      run_dir: /abs/runs/p01-case2
+      tlx_file: /abs/runs/p01-case2/tlx.yaml   # '' = no questionnaire asked
+
+The practice of a condition is indexed as the session ``<session_id>-practice`` (kind
+``practice``); the raw NASA-TLX file (written by the display node) is a YAML list of
+``{session_id, case, answered, scales: {mental, physical, temporal, performance, effort,
+frustration}, raw_tlx}``.
+
+:func:`load_study_index` reads the index with ``hrc_live.study.IndexEntry`` (imported when a
+study is read: ``hrc_live.study`` needs no rclpy; hrc_bag does not declare hrc_live as a
+dependency because hrc_live's tests depend on hrc_bag) and checks it by shape first: every
+reason at once in a :class:`StudyIndexError`. :func:`subject_rows` gives one row per condition
+(its practice counted apart, in its own columns) and one per practice without a condition.
+Only pseudonymous ids, numbers and the TLX scores go into the rows: no notes, no names.
+"""
+
+import datetime
+import math
+import pathlib
+
+from hrc_common.contract import id_problem
+import yaml
+
+from hrc_bag import bag_reader
+from hrc_bag.format import source_names
+from hrc_bag.report.loading import load_session
+from hrc_bag.report.metrics import human_time, session_metrics
+
+PRACTICE_SUFFIX = '-practice'
+ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
+
+
+class StudyIndexError(ValueError):
+    """The study index or a TLX file it names is not usable; the message lists every reason."""
+
+
+class StudyFolderError(StudyIndexError):
+    """The study folder or its index does not exist (a bad --study-dir)."""
+
+
+def _live_study():
+    try:
+        from hrc_live import study, tlx
+    except ImportError as error:      # hrc_bag does not depend on hrc_live (see the module doc)
+        raise StudyFolderError(f'reading a study needs the hrc_live package ({error})') from None
+    return study, tlx
+
+
+def _text_problem(value, name: str) -> str:
+    if isinstance(value, (datetime.date, datetime.datetime)):   # an unquoted YAML timestamp
+        return ''
+    return '' if isinstance(value, str) else f'{name} must be text, got {value!r}'
+
+
+def _integer_problem(value, name: str, allowed=None) -> str:
+    if isinstance(value, bool) or not isinstance(value, int):
+        return f'{name} must be an integer, got {value!r}'
+    if allowed is not None and value not in allowed:
+        return f'{name} must be one of {list(allowed)}, got {value}'
+    return ''
+
+
+def entry_problems(record, number: int, fields: tuple, kinds: tuple, cases: tuple) -> list:
+    """Return every reason why ``record`` (entry ``number``, 1-based) is not an index entry."""
+    if not isinstance(record, dict):
+        return [f'entry {number}: not a mapping ({record!r})']
+    reasons = []
+    required = [name for name in fields if name != 'tlx_file']
+    missing = [name for name in required if name not in record]
+    if missing:
+        reasons.append(f'missing fields {missing}')
+    extra = sorted(str(name) for name in set(record) - set(fields))
+    if extra:
+        reasons.append(f'unknown fields {extra}')
+    for name in ('subject_id', 'session_id'):
+        if name in record:
+            problem = id_problem(record[name], name)
+            if problem:
+                reasons.append(problem)
+    if 'case' in record:
+        reasons.append(_integer_problem(record['case'], 'case', cases))
+    if 'kind' in record and record['kind'] not in kinds:
+        reasons.append(f'kind must be one of {list(kinds)}, got {record["kind"]!r}')
+    if 'position' in record:
+        reasons.append(_integer_problem(record['position'], 'position', range(0, 7)))
+    if 'exit_code' in record:
+        reasons.append(_integer_problem(record['exit_code'], 'exit_code'))
+    for name in ('started', 'ended', 'bags', 'run_dir', 'tlx_file'):
+        if name in record:
+            reasons.append(_text_problem(record[name], name))
+    label = record.get('session_id', '?')
+    return [f'entry {number} ({label}): {reason}' for reason in reasons if reason]
+
+
+def load_study_index(folder) -> list:
+    """Return the ``hrc_live.study.IndexEntry`` list of ``folder``/index.yaml, checked by shape.
+
+    Raises :class:`StudyFolderError` when the folder or its index does not exist and
+    :class:`StudyIndexError` (every reason at once) when the index is not a list of entries.
+    """
+    study, _ = _live_study()
+    folder = pathlib.Path(folder)
+    path = folder / study.INDEX_FILE
+    if not folder.is_dir():
+        raise StudyFolderError(f'{folder}: no such study folder')
+    if not path.is_file():
+        raise StudyFolderError(f'{path}: no study index (a session run with --study-dir '
+                               f'{folder} writes it)')
+    try:
+        document = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise StudyIndexError(f'{path}: not YAML ({str(error).splitlines()[0]})') from None
+    if document is None:
+        document = []
+    if not isinstance(document, list):
+        raise StudyIndexError(f'{path}: not a list of session entries '
+                              f'(a {type(document).__name__})')
+    fields = tuple(study.IndexEntry.__dataclass_fields__)
+    reasons = [reason for number, record in enumerate(document, 1)
+               for reason in entry_problems(record, number, fields, study.SESSION_KINDS,
+                                            study.PAPER_CASES)]
+    pairs = [(record.get('session_id'), record.get('kind')) for record in document
+             if isinstance(record, dict)]
+    reasons += [f'session {session_id!r} ({kind}) is indexed twice'
+                for session_id, kind in sorted(set(pairs), key=str) if pairs.count(
+                    (session_id, kind)) > 1]
+    if reasons:
+        raise StudyIndexError(f'{path}: ' + '\n'.join(reasons))
+    entries = []
+    for record in document:
+        values = {name: (str(value) if name in ('started', 'ended') else value)
+                  for name, value in record.items()}
+        entries.append(study.IndexEntry(**values))
+    return entries
+
+
+def load_tlx_answer(entry, log=print) -> dict:
+    """Return the raw TLX of the condition ``entry`` ({scale: score}, {} if none stored).
+
+    Several answers for the session: the last one counts (a notice says so). Raises
+    :class:`StudyIndexError` for a TLX file that is not a list of answers of the raw TLX.
+    """
+    if not entry.tlx_file:
+        return {}
+    _, tlx = _live_study()
+    path = pathlib.Path(entry.tlx_file)
+    if not path.is_file():
+        log(f'{entry.session_id}: no NASA-TLX stored ({path} does not exist)')
+        return {}
+    try:
+        document = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise StudyIndexError(f'{path}: not YAML ({str(error).splitlines()[0]})') from None
+    if not isinstance(document, list) or not all(isinstance(item, dict) for item in document):
+        raise StudyIndexError(f'{path}: not a list of NASA-TLX answers')
+    answers = [item for item in document if item.get('session_id') == entry.session_id]
+    if not answers:
+        log(f'{entry.session_id}: no NASA-TLX answer for this session in {path}')
+        return {}
+    if len(answers) > 1:
+        log(f'{entry.session_id}: {len(answers)} NASA-TLX answers in {path}: the last counts')
+    scores, reasons = tlx.check_tlx(answers[-1].get('scales'))
+    if reasons:
+        raise StudyIndexError(f'{path}: the answer of {entry.session_id}: ' + '; '.join(reasons))
+    return scores
+
+
+def _session_of(entry, known: dict, log):
+    """Return the loaded Session of ``entry`` (from ``known`` or its bag folder), or None."""
+    if entry.session_id in known:
+        return known[entry.session_id]
+    folder = pathlib.Path(entry.bags)
+    if not bag_reader.is_session_folder(folder):
+        log(f'{entry.session_id}: no bags in {folder}: its columns stay empty')
+        return None
+    session = load_session(folder)
+    for notice in session.notices:
+        log(f'{folder}: {notice}')
+    known[entry.session_id] = session
+    return session
+
+
+def _engaged_seconds(times: dict) -> dict:
+    return {source: entry['seconds'] for source, entry in times.items()}
+
+
+def _practice_values(session) -> dict:
+    """Practice episodes: episodes of the practice bag with at least one HumanAction."""
+    if session is None:
+        return {'practice_episodes': math.nan, 'practice_human_seconds': math.nan}
+    episodes = sum(1 for record in session.human_inputs.values()
+                   if record.get('human_source'))
+    seconds = sum(entry['seconds'] for entry in human_time(session).values())
+    return {'practice_episodes': float(episodes), 'practice_human_seconds': seconds}
+
+
+def _empty_row(entry) -> dict:
+    return {'subject_id': entry.subject_id, 'case': entry.case, 'position': entry.position,
+            'kind': entry.kind, 'session_id': '', 'exit_code': None,
+            'practice_session_id': '', 'practice_exit_code': None,
+            'practice_episodes': math.nan, 'practice_human_seconds': math.nan,
+            'human_involved_episodes': math.nan, 'total_episodes': math.nan,
+            'evaluation_episodes': math.nan, 'human_seconds': {},
+            **{key: math.nan for key in ERROR_KEYS}, 'tlx': {}, 'raw_tlx': math.nan,
+            'started': str(entry.started)}
+
+
+def subject_rows(entries: list, sessions=(), log=print) -> list:
+    """Return the by-subject rows of the study ``entries`` (IndexEntry).
+
+    One row per condition (its practice ``<session_id>-practice`` in the practice columns) and
+    one per practice whose condition is not indexed; ordered by subject, position, start.
+    ``sessions``: Sessions already loaded (by session id), else each entry's bag folder is read.
+    Human time is by input source over the condition's episodes (training and evaluation);
+    errors are the means over its evaluation episodes (Table II "Performance").
+    """
+    known = {session.session_id: session for session in sessions}
+    practices = {entry.session_id: entry for entry in entries if entry.kind == 'practice'}
+    used = set()
+    rows = []
+    for entry in entries:
+        if entry.kind != 'condition':
+            continue
+        row = _empty_row(entry)
+        row.update(session_id=entry.session_id, exit_code=entry.exit_code)
+        session = _session_of(entry, known, log)
+        if session is not None:
+            metrics = session_metrics(session)
+            row.update({key: metrics[key] for key in ('human_involved_episodes',
+                                                      'total_episodes', 'evaluation_episodes')
+                        + ERROR_KEYS})
+            row['human_seconds'] = _engaged_seconds(human_time(session))
+        practice = practices.get(entry.session_id + PRACTICE_SUFFIX)
+        if practice is not None and practice.subject_id == entry.subject_id:
+            used.add(practice.session_id)
+            row.update(practice_session_id=practice.session_id,
+                       practice_exit_code=practice.exit_code,
+                       **_practice_values(_session_of(practice, known, log)))
+        row['tlx'] = load_tlx_answer(entry, log)
+        if row['tlx']:
+            row['raw_tlx'] = _live_study()[1].raw_tlx(row['tlx'])
+        rows.append(row)
+    for practice in practices.values():
+        if practice.session_id in used:
+            continue
+        row = _empty_row(practice)
+        row.update(practice_session_id=practice.session_id,
+                   practice_exit_code=practice.exit_code,
+                   **_practice_values(_session_of(practice, known, log)))
+        rows.append(row)
+    rows.sort(key=lambda row: (row['subject_id'], row['position'] or 99, row['started']))
+    return rows
+
+
+def source_columns(rows) -> list:
+    """Return the input sources of the human-time columns: the contract's, then any other."""
+    names = list(source_names().values())
+    seen = {source for row in rows for source in row['human_seconds']}
+    return names + sorted(seen - set(names))
