@@ -35,9 +35,9 @@ ROBOT_SUBTASKS = ['slider', 'pendulum', 'ball']
 class CalibrationPlan:
     """How long the calibration takes."""
 
-    episodes_per_dof: int = 6       # short episodes with the person on each degree of freedom
-    seconds: float = 8.0            # s of simulation per episode
-    rest_seconds: float = 6.0       # s between episodes (counted in the person's time)
+    episodes_per_dof: int = 5       # short episodes with the person on each degree of freedom
+    seconds: float = 12.0           # s of simulation per episode
+    rest_seconds: float = 5.0       # s between episodes (counted in the person's time)
     seed: int = 0                   # seeds of the episodes' initial states
 
     @property

@@ -9,7 +9,10 @@ A partner is named by a short string (the command lines take them as they are):
 * ``population:NAME`` -- a new person of NAME's population at every episode (the training
   distribution of an agent trained with ``--population-every 1``; drawn with evaluation seeds
   no training uses);
-* ``model:PATH`` -- a human model cloned from recordings (``hrc_joystick_node.human_model``).
+* ``model:PATH`` -- a human model cloned from recordings (``hrc_joystick_node.human_model``);
+* ``mixture:SPEC+SPEC+...`` -- a new partner drawn from the specs at every episode
+  (:class:`MixturePartner`; the training distribution of ``train_partners_agents --kinds
+  mixture``).
 
 Profiles come from the installed ``params/sim_human.yaml`` unless a profiles file is given.
 Partners are callables for :func:`hrc_agent_node.offline.run_session` (``partner(state,
@@ -22,7 +25,7 @@ import typing
 
 from hrc_common.params import ParameterError
 
-KINDS = ('profile', 'person', 'population', 'model')
+KINDS = ('profile', 'person', 'population', 'model', 'mixture')
 EVALUATION_SEED_OFFSET = 5000   # evaluation person draws: seeds no training session uses
 
 
@@ -35,14 +38,21 @@ class PartnerSpec:
     name: str = ''                  # profile name (profile, person, population)
     person: int = -1                # person index (person)
     path: str = ''                  # model file (model)
+    parts: tuple = ()               # the specs of a mixture
 
 
 def spec_problem(text: str) -> typing.Optional[str]:
     """Return why ``text`` is not a partner specification, or None."""
     kind, _, rest = str(text).partition(':')
     if kind not in KINDS or not rest:
-        return (f'partner {text!r}: expected profile:NAME, person:NAME:K, population:NAME or '
-                f'model:PATH')
+        return (f'partner {text!r}: expected profile:NAME, person:NAME:K, population:NAME, '
+                f'model:PATH or mixture:SPEC+SPEC')
+    if kind == 'mixture':
+        problems = [spec_problem(part) for part in rest.split('+')]
+        nested = [part for part in rest.split('+') if part.startswith('mixture:')]
+        problems = [problem for problem in problems if problem]
+        problems += [f'partner {text!r}: a mixture of mixtures' for _ in nested[:1]]
+        return '; '.join(problems) or None
     if kind == 'person':
         name, _, index = rest.rpartition(':')
         if not name or not index.isdigit():
@@ -63,6 +73,8 @@ def parse_spec(text: str) -> PartnerSpec:
         return PartnerSpec(text, kind, name=name, person=int(index))
     if kind == 'model':
         return PartnerSpec(text, kind, path=rest)
+    if kind == 'mixture':
+        return PartnerSpec(text, kind, parts=tuple(parse_spec(part) for part in rest.split('+')))
     return PartnerSpec(text, kind, name=rest)
 
 
@@ -100,6 +112,9 @@ def make_partner(spec: PartnerSpec, dof: str, seed: int, control_period: float =
 
     if spec.kind == 'model':
         return ClonedPartner(spec.path, dof, control_period)
+    if spec.kind == 'mixture':
+        return MixturePartner(spec.parts, dof, seed + EVALUATION_SEED_OFFSET, control_period,
+                              1, profiles_file)
     profile = load_profile(spec.name, profiles_file)
     if spec.kind == 'person':
         return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed,
@@ -143,3 +158,60 @@ def evaluate(checkpoint, spec: PartnerSpec, seed: int, episodes: int,
     partner = make_partner(spec, core.human_dof, seed, physics.control_period, profiles_file)
     with SliderPendulumBall(physics) as sim:
         return float(run_session(core, sim, partner)['evaluation']['total_error'])
+
+
+class MixturePartner:
+    """Population training over partner specifications: profiles, populations and clones.
+
+    Every ``every`` episodes a new partner is drawn uniformly from ``specs`` (numpy, seeded by
+    ``seed`` and the draw index): ``population:NAME`` gives a new person of that population
+    at each draw, ``person:``/``profile:`` that person, ``model:`` the cloned model. The
+    offline loop tells it each episode (``start_episode``).
+    """
+
+    def __init__(self, specs, dof: str, seed: int = 0, control_period: float = 0.2,
+                 every: int = 1, profiles_file=None):
+        if every < 1:
+            raise ValueError(f'every must be >= 1, got {every}')
+        self.specs = list(specs)
+        self.dof = dof
+        self.seed = int(seed)
+        self.control_period = float(control_period)
+        self.every = int(every)
+        self.profiles_file = profiles_file
+        self.draw = None
+        self.spec = None             # the PartnerSpec of the current partner
+        self.partner = None
+        self.drawn = []              # (draw, spec text) of every partner met, in order
+
+    def start_episode(self, episode: int) -> None:
+        """Meet the partner of ``episode`` (a new draw every ``every`` episodes)."""
+        import numpy
+
+        from hrc_agent_node.partners import person_seed
+
+        draw = int(episode) // self.every
+        if draw != self.draw:
+            self.draw = draw
+            rng = numpy.random.default_rng([self.seed, draw, 15])
+            self.spec = self.specs[int(rng.integers(len(self.specs)))]
+            seed = person_seed(self.seed, draw)
+            if self.spec.kind == 'population':
+                from hrc_agent_node.partners import SimulatedHumanPartner
+                from hrc_joystick_node.population import sample_person
+                from hrc_joystick_node.sim_human import load_profile
+
+                person = sample_person(load_profile(self.spec.name, self.profiles_file), seed)
+                self.partner = SimulatedHumanPartner(person, self.dof, seed,
+                                                     self.control_period)
+            else:
+                self.partner = make_partner(self.spec, self.dof, seed, self.control_period,
+                                            self.profiles_file)
+            self.drawn.append((draw, self.spec.text))
+        self.partner.start_episode(int(episode))
+
+    def __call__(self, state, subtasks) -> float:
+        """Return the current partner's command."""
+        if self.partner is None:
+            raise RuntimeError('call start_episode() before the first command')
+        return self.partner(state, subtasks)

@@ -18,8 +18,12 @@ import sys
 
 
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
-                preset: str, checkpoint, profiles_file=None) -> dict:
-    """Train one agent offline, save its checkpoint; return its summary (JSON-able)."""
+                preset: str, checkpoint, profiles_file=None, mixture=None) -> dict:
+    """Train one agent offline, save its checkpoint; return its summary (JSON-able).
+
+    ``mixture``: partner specifications to draw from every ``population_every`` episodes
+    (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
+    """
     from hrc_agent_node.agent_core import AgentCore
     from hrc_agent_node.checkpoint import save_checkpoint
     from hrc_agent_node.config import AgentParams
@@ -29,17 +33,25 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     from hrc_joystick_node.sim_human import load_profile
     from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
+    from hrc_partners.partners import MixturePartner, parse_spec
+
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
         evaluation_episodes=0, checkpoint_dir='', torch_threads=1,
         max_force=physics.max_force, max_torque=physics.max_torque))
-    partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof, seed,
-                                    physics.control_period, population_every)
+    if mixture:
+        trained_with = 'mixture:' + '+'.join(mixture)
+        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed,
+                                 physics.control_period, max(1, population_every),
+                                 profiles_file)
+    else:
+        partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
+                                        seed, physics.control_period, population_every)
+        trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     save_checkpoint(core, checkpoint)
-    trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
     return {'checkpoint': str(checkpoint), 'case': case, 'seed': seed, 'preset': preset,
             'training_partner': trained_with, 'population_every': population_every,
             'training_episodes': summary['training_episodes'],
@@ -58,20 +70,32 @@ def main(argv=None) -> int:
     parser.add_argument('--preset', default='tuned')
     parser.add_argument('--population-every', type=int, default=1)
     parser.add_argument('--kinds', nargs='+', default=['one', 'population'],
-                        choices=['one', 'population'])
+                        choices=['one', 'population', 'mixture'])
+    parser.add_argument('--mixture', nargs='*', default=[], metavar='SPEC',
+                        help='kind mixture: partner specs drawn from every --population-every '
+                             'episodes (profile:, person:, population:, model:)')
     args = parser.parse_args(argv)
     if args.episodes < 1 or args.population_every < 1:
         print('train_partners_agents: --episodes and --population-every must be >= 1',
               file=sys.stderr)
         return 2
+    if 'mixture' in args.kinds:
+        from hrc_partners.partners import spec_problem
+
+        problems = [problem for problem in map(spec_problem, args.mixture) if problem]
+        if not args.mixture or problems:
+            for problem in problems or ['--kinds mixture needs --mixture SPEC...']:
+                print(f'train_partners_agents: {problem}', file=sys.stderr)
+            return 2
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for seed in args.seeds:
         for kind in args.kinds:
-            every = args.population_every if kind == 'population' else 0
+            every = args.population_every if kind != 'one' else 0
             stem = out / f'c{args.case}-{kind}-s{seed}'
             summary = train_agent(args.case, seed, args.episodes, args.profile, every,
-                                  args.preset, stem.with_suffix('.pt'))
+                                  args.preset, stem.with_suffix('.pt'),
+                                  mixture=args.mixture if kind == 'mixture' else None)
             stem.with_suffix('.json').write_text(json.dumps(summary, indent=2) + '\n')
             print(json.dumps(summary), flush=True)
     return 0

@@ -59,3 +59,29 @@ def test_bad_agents_and_partners_every_reason(tmp_path, capsys):
 def test_specs():
     spec = parse_specs(['person:paper:12'])[0]
     assert (spec.kind, spec.name, spec.person) == ('person', 'paper', 12)
+
+
+def test_mixture_population_draws_profiles_people_and_clones(tmp_path):
+    from hrc_joystick_node.human_model import build_network, save_human_model
+    from hrc_partners.partners import MixturePartner, parse_spec
+    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+    config = {'history_steps': 2, 'hidden': [4], 'dof': 'translation', 'control_period': 0.2,
+              'description': 'test'}
+    save_human_model(tmp_path / 'm.pt', config, build_network(config).state_dict())
+    spec = parse_spec(f'mixture:population:paper+model:{tmp_path / "m.pt"}')
+    assert [part.kind for part in spec.parts] == ['population', 'model']
+
+    def draws(seed):
+        partner = MixturePartner(spec.parts, 'translation', seed=seed, every=2)
+        with SliderPendulumBall(PhysicsParams()) as sim:
+            state = sim.reset(0)
+            for episode in range(12):
+                partner.start_episode(episode)
+                assert -1.0 <= partner(state, ['slider', 'ball']) <= 1.0
+        return partner.drawn
+
+    first = draws(0)
+    assert [draw for draw, _ in first] == list(range(6))        # a new partner every 2
+    assert {text for _, text in first} == {part.text for part in spec.parts}
+    assert draws(0) == first
