@@ -19,6 +19,9 @@ import pytest
 
 from hrc_study.loading import load_sessions
 
+# A private cluster on loopback: no usage reports, and no token authentication (Ray 2.60
+# enables it on a head that finds ~/.ray/auth_token, while clients default to 'disabled').
+RAY_ENV = dict(os.environ, RAY_USAGE_STATS_ENABLED='0', RAY_AUTH_MODE='disabled')
 TINY = ['--cases', '1', '2', '--seeds', '1', '--episodes', '1', '--eval-episodes', '1',
         '--set', 'sim.episode_duration=4.0', '--no-report']
 
@@ -57,7 +60,7 @@ class LocalCluster:
     def __init__(self):
         port = _free_port()
         self.temp_dir = tempfile.mkdtemp(prefix='hrcray', dir='/tmp')  # short: socket paths
-        self.env = dict(os.environ, RAY_USAGE_STATS_ENABLED='0')
+        self.env = RAY_ENV
         self.log = open(os.path.join(self.temp_dir, 'ray.log'), 'w')
         self.address = f'127.0.0.1:{port}'
         self.processes = [_ray('--head', f'--port={port}', '--include-dashboard=false',
@@ -102,7 +105,7 @@ def _run_experiment(tmp_path, name, *extra) -> dict:
     command = [str(executable_path('hrc_bringup', 'experiment')), *TINY, '--name', name,
                '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
                *extra]
-    result = subprocess.run(command, capture_output=True, text=True, timeout=150)
+    result = subprocess.run(command, capture_output=True, text=True, timeout=150, env=RAY_ENV)
     assert result.returncode == 0, result.stdout + result.stderr
     return json.loads((tmp_path / 'bags' / name / 'experiment.json').read_text())
 
