@@ -43,8 +43,11 @@ def make_env(setting: str, **overrides) -> SliderPendulumBallEnv:
     return SliderPendulumBallEnv(**dict(COMMON, **SETTINGS[setting], **overrides))
 
 
-def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int):
-    """Return the AgentParams of our PPO for ``env``'s task (Table I, no step advance)."""
+def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int, **changes):
+    """Return the AgentParams of our PPO for ``env``'s task (Table I, no step advance).
+
+    ``changes``: other AgentParams values (e.g. ``horizon``), for experiments.
+    """
     from hrc_agent_node.config import AgentParams
     from hrc_common.params import with_overrides
 
@@ -55,7 +58,7 @@ def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int):
                      convergence_window=1000, satisfied_window=1000)
     if hasattr(AgentParams, 'convergence_judged_on'):
         overrides['convergence_judged_on'] = 'training'  # no deterministic judging episodes
-    return with_overrides(env.task.agent_params, **overrides)
+    return with_overrides(env.task.agent_params, **dict(overrides, **changes))
 
 
 def sb3_ppo_kwargs(params) -> dict:
@@ -78,13 +81,16 @@ def _record(info) -> dict:
     return {'return': float(info['episode_return']), 'errors': dict(info['episode_errors'])}
 
 
-def train_ours(setting: str, seed: int, episodes: int) -> list:
-    """Train AgentCore for ``episodes`` episodes on the setting's environment; return records."""
+def train_ours(setting: str, seed: int, episodes: int, **changes) -> list:
+    """Train AgentCore for ``episodes`` episodes on the setting's environment; return records.
+
+    ``changes``: AgentParams values other than Table I's (experiments only).
+    """
     from hrc_agent_node.agent_core import AgentCore
 
     env = make_env(setting)
     try:
-        core = AgentCore(agent_params(env, seed, episodes), tree=env.task.tree,
+        core = AgentCore(agent_params(env, seed, episodes, **changes), tree=env.task.tree,
                          cases={env.task.case.case_id: env.task.case})
         records = []
         env.reset(seed=seed)
