@@ -1,12 +1,13 @@
 """A hostile second publisher for the tests.
 
-It floods a command topic with wrongly stamped commands (or giant ones) as fast as it can,
-until killed.
+It floods a command topic with wrongly stamped commands (or giant ones) at up to
+``rate`` messages per second (the hardening report's flood: about 10k/s), until killed.
 
-    python flood.py <topic> <frame_id_bytes>
+    python flood.py <topic> <frame_id_bytes> <rate>
 """
 
 import sys
+import time
 
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos
@@ -15,7 +16,7 @@ import rclpy
 
 def main() -> None:
     """Publish WrenchStamped on argv[1] with a frame_id of argv[2] bytes, stamped 12345 s."""
-    topic, size = sys.argv[1], int(sys.argv[2])
+    topic, size, rate = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
     rclpy.init()
     node = rclpy.create_node('flooder')
     publisher = node.create_publisher(WrenchStamped, topic, qos.COMMAND_QOS)
@@ -25,12 +26,14 @@ def main() -> None:
     message.wrench.torque.x = 0.4
     message.wrench.force.z = 1.5
     sent = 0
+    started = time.monotonic()
     try:
         while rclpy.ok():
             publisher.publish(message)
             sent += 1
-            if sent % 1000 == 0:
-                print(f'sent {sent}', flush=True)
+            ahead = sent / rate - (time.monotonic() - started)
+            if ahead > 0.001:
+                time.sleep(ahead)
     except KeyboardInterrupt:
         pass
 

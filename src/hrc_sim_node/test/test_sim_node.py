@@ -327,6 +327,10 @@ def test_the_last_uint32_episode_index_holds_instead_of_wrapping(start_node, sim
 
 
 FLOOD = pathlib.Path(__file__).with_name('flood.py')
+# Commands per second of the hostile publisher: the flood of the hardening report (about 10k/s).
+# (A flood faster than the sim drains its queue, about 25k/s on a loaded 2-core machine, still
+# pushes commands out of any bounded queue.)
+FLOOD_RATE = 10000
 
 
 @pytest.mark.parametrize('topic, actor, frame_id_bytes, at_least', [
@@ -340,7 +344,8 @@ def test_a_second_publisher_cannot_push_out_the_actors_matching_command(
     import sys
 
     process = start_sim(start_node, sim_client, episode_duration=6.0, **PATIENT)
-    flooder = subprocess.Popen([sys.executable, str(FLOOD), topic, str(frame_id_bytes)],
+    flooder = subprocess.Popen([sys.executable, str(FLOOD), topic, str(frame_id_bytes),
+                                str(FLOOD_RATE)],
                                env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                text=True)
     try:
