@@ -257,42 +257,39 @@ def case2_command(tmp_path, domain_id, *extra):
             '--eval-episodes', '0', '--no-report', *extra]
 
 
-class StateClock:
-    """Wall time of each state's arrival, to tell lockstep (fast) from realtime episodes.
+def episode_durations(folder, typestore) -> dict:
+    """Return {episode: wall s from its first to its last state}, from the condition's bag.
 
-    States of a practice (announced with strategy ``practice``) are not the condition's.
+    The recorder's reception times (beside the sim) are the states' wall times. The bag holds
+    the condition only (the practice is recorded apart), so nothing has to be told apart, and
+    no state is missed by a busy test process.
     """
+    from rosbags.rosbag2 import Reader
 
-    def __init__(self, watcher):
-        import time
-        self.arrivals = collections.defaultdict(list)
-
-        def arrived(state):
-            if not (watcher.statuses and watcher.statuses[-1].strategy == 'practice'):
-                self.arrivals[state.episode].append(time.monotonic())
-        watcher.node.create_subscription(TaskState, topics.STATE, arrived, qos.STATE_QOS)
-
-    def duration(self, episode) -> float:
-        times = self.arrivals[episode]
-        return times[-1] - times[0]
+    times = collections.defaultdict(list)
+    with Reader(folder) as reader:
+        connections = [c for c in reader.connections if c.topic == topics.STATE]
+        for connection, time_ns, raw in reader.messages(connections=connections):
+            state = typestore.deserialize_cdr(raw, connection.msgtype)
+            times[state.episode].append(time_ns / 1e9)
+    return {episode: max(values) - min(values) for episode, values in times.items()}
 
 
-def check_clock_switch(watcher, clock, summaries):
+def check_clock_switch(durations, summaries):
     """Assert the robot's lonely episodes ran fast, the person's at the control period."""
     alone = [s.episode for s in summaries if not s.human_involved]
     together = [s.episode for s in summaries if s.human_involved]
     assert alone and together and max(alone) < min(together), summaries
     # Realtime: 15 periods of 0.2 s = 3 s of wall time; lockstep: as fast as the graph goes.
-    assert all(clock.duration(episode) < 1.5 for episode in alone), \
-        [clock.duration(episode) for episode in alone]
-    assert all(clock.duration(episode) > 2.5 for episode in together), \
-        [clock.duration(episode) for episode in together]
+    assert all(durations[episode] < 1.5 for episode in alone), \
+        [durations[episode] for episode in alone]
+    assert all(durations[episode] > 2.5 for episode in together), \
+        [durations[episode] for episode in together]
     return alone, together
 
 
 def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
-        tmp_path, ros_domain_id, watcher, read_rosbag):
-    clock = StateClock(watcher)
+        tmp_path, ros_domain_id, watcher, read_rosbag, rosbags_typestore):
     study = tmp_path / 'study'
     subjects = []
     register(subjects, 'P07', 'yes', '2026-11-30')
@@ -341,7 +338,8 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
         ('P07', 'case2-practice', 'practice', 2, 0), ('P07', 'case2', 'condition', 2, 0)]
     assert index[1].tlx_file == str(tlx_file.resolve())
     watcher.summaries[:] = [s for s in watcher.summaries if s.session_id == 'case2']
-    alone, together = check_clock_switch(watcher, clock, watcher.summaries)
+    alone, together = check_clock_switch(
+        episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore), watcher.summaries)
     match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
                       r'practised alone: (\d+) episodes in (\d+) s', text)
     assert match, text
@@ -367,8 +365,8 @@ def plug_in(fifo, stick=-16384):
 
 
 def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_domain_id,
-                                                                  watcher, read_rosbag):
-    clock = StateClock(watcher)
+                                                                  watcher, read_rosbag,
+                                                                  rosbags_typestore):
     fifo = str(tmp_path / 'js0')
     os.mkfifo(fifo)
     log = open(tmp_path / 'runner.log', 'w+')
@@ -422,7 +420,8 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     text = output()
     assert runner.returncode == 0, text
     summaries = watcher.summaries
-    check_clock_switch(watcher, clock, summaries)
+    check_clock_switch(episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore),
+                       summaries)
     # The interrupted episode ran again from its start; the counters continue.
     assert [s.episode for s in summaries] == list(range(len(summaries)))
     assert any(s.episode == first and s.step == 0 for s in watcher.states[states_when_paused:])

@@ -326,16 +326,19 @@ class Progress:
         if not status.human_involved and phase_label(status.phase, '') in ('training',
                                                                             'updating'):
             if self.alone_since is None:
-                self.alone_since = (now, status.total_episodes)
+                self.alone_since = (now, status.total_episodes)   # (when, episodes then)
             return
         if status.human_involved and self.person_joined is None and status.phase in (
                 Phase.TRAINING, Phase.UPDATING):
             self.person_joined = now
             alone = ''
             if self.alone_since is not None:
+                # Counted from this one status, not from the first lonely one this runner saw:
+                # a busy runner may miss statuses (the agent keeps only the newest), and every
+                # episode so far without the person was the robot's own.
                 alone = (f'; the robot practised alone: '
-                         f'{status.total_episodes - self.alone_since[1]} episodes in '
-                         f'{now - self.alone_since[0]:.0f} s')
+                         f'{status.total_episodes - status.human_involved_episodes} episodes '
+                         f'in {now - self.alone_since[0]:.0f} s')
             self._print(f'[session] the person joins at episode {status.total_episodes + 1}, '
                         f'{now - self.started:.0f} s after the start{alone}', permanent=True)
 
