@@ -67,6 +67,7 @@ class Finding:
     verdict: str = 'inconclusive'
     reason: str = ''
     missing: list = field(default_factory=list)
+    any_component: bool = False     # the claim needs one component (a disjunction), not all
 
 
 class CaseData:
@@ -176,6 +177,7 @@ def finding_d(data: CaseData, profile: str) -> Finding:
     _pairs_test(data, profile, [(other, 5) for other in (1, 2, 3, 4, 6)], 'total_error', worst)
     worst_result = TestResult('Mann-Whitney U', worst.p_value, worst.p_reverse, math.nan, '',
                               worst.effect)
+    finding.any_component = True
     finding.components = [Component('case 5 fails', fails),
                           Component('case 5 worst', worst_result)]
     finding.p_value = min(1.0, 2 * min(fails.p_value, worst.p_value))
@@ -257,12 +259,21 @@ def _adjust_and_judge(findings, alpha: float) -> None:
             finding.reason = (f'{reversed_component.label} goes the other way (Holm p = '
                               f'{finding.p_reverse_holm:.3g}; {reversed_component.result.detail})')
         else:
-            weakest = max(finding.components, key=lambda component: component.result.p_value)
-            direction = ('points the claimed way' if weakest.result.p_value
-                         < weakest.result.p_reverse else 'points the other way')
             finding.verdict = 'inconclusive'
-            finding.reason = (f'{weakest.label} {direction} but is not significant (raw p = '
-                              f'{weakest.result.p_value:.3g}; {weakest.result.detail})')
+            finding.reason = _inconclusive_reason(finding, alpha)
+
+
+def _inconclusive_reason(finding: Finding, alpha: float) -> str:
+    """Say which comparison keeps the finding from holding."""
+    if finding.p_value < alpha:
+        return (f'significant alone (raw p = {finding.p_value:.3g}) but not after Holm over '
+                f'the findings (p = {finding.p_holm:.3g})')
+    pick = min if finding.any_component else max
+    deciding = pick(finding.components, key=lambda component: component.result.p_value)
+    direction = ('points the claimed way' if deciding.result.p_value
+                 < deciding.result.p_reverse else 'points the other way')
+    return (f'{deciding.label} {direction} but is not significant (raw p = '
+            f'{deciding.result.p_value:.3g}; {deciding.result.detail})')
 
 
 def significance_note() -> str:

@@ -243,6 +243,11 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
         for name, weights in weights_by_name.items():
             choices[name] = choose(sessions, weights, profile=primary, seed=seed,
                                    resamples=resamples)
+        # the role assignment is a choice too: the balanced ranking within each
+        for robot_dof, cases in (('rotation', '2, 4, 6'), ('translation', '1, 3, 5')):
+            choices[f'balanced, robot on {robot_dof} only (cases {cases})'] = choose(
+                sessions, PRESETS['balanced'], robot_dof=robot_dof, profile=primary,
+                seed=seed, resamples=resamples)
     except ValueError as error:   # fewer than two strategies in the data
         chooser_problem = str(error)
     names = ['fig5_training.png', 'fig6_actions.png', 'convergence.png', 'sessions.csv']
@@ -326,7 +331,8 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
               '(`hrc_results ... --priorities performance=3,human=1,time=1`); each factor is '
               'scored relative to the worst strategy (1 - value / worst) and the score is the '
               'weighted mean; intervals and "first in" come from a stratified bootstrap over '
-              'seeds. Both role assignments pooled, as in Fig. 7.', '']
+              'seeds. Both role assignments pooled, as in Fig. 7; then the balanced ranking '
+              'within each role assignment.', '']
     for name, choice in choices.items():
         parts += [choice_markdown(choice, name), '']
     if chooser_problem:
