@@ -318,13 +318,16 @@ class SimNode(Node):
         bytes before anything is decoded, keeps up with such a flood.
         """
         self._read_command(actor, data)
-        subscription = self._command_subscriptions[actor]
-        with subscription.handle:
-            for _ in range(COMMAND_DRAIN_LIMIT):
-                taken = subscription.handle.take_message(WrenchStamped, True)
-                if taken is None:
-                    return
-                self._read_command(actor, taken[0])
+        # Then the other actor's queue too: in lockstep both answers usually wait by now, and
+        # reading them in this turn saves a whole turn of the executor per step.
+        for each, subscription in sorted(self._command_subscriptions.items(),
+                                         key=lambda item: item[0] != actor):
+            with subscription.handle:
+                for _ in range(COMMAND_DRAIN_LIMIT):
+                    taken = subscription.handle.take_message(WrenchStamped, True)
+                    if taken is None:
+                        break
+                    self._read_command(each, taken[0])
 
     def _read_command(self, actor: str, data: bytes):
         sec, nanosec = command_stamp(data)
