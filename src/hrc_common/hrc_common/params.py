@@ -112,8 +112,14 @@ def validate(instance) -> list:
     for dataclass_field in fields(instance):
         reasons += _check_value(dataclass_field.name, getattr(instance, dataclass_field.name),
                                 default_of(dataclass_field), spec_of(dataclass_field))
-    if not reasons and hasattr(instance, 'check'):
-        reasons += list(instance.check())
+    if hasattr(instance, 'check'):
+        # The conditions across fields too, so that every reason shows at once; a check that
+        # cannot even run on the bad values says nothing more than the reasons above.
+        try:
+            reasons += [reason for reason in instance.check() if reason not in reasons]
+        except Exception:  # noqa: BLE001 (any failure on values already refused above)
+            if not reasons:
+                raise
     return reasons
 
 

@@ -54,6 +54,19 @@ def test_every_reason_is_reported_at_once():
     assert 'period' in str(error.value) and 'episodes' in str(error.value)
 
 
+def test_a_cross_field_reason_shows_beside_the_field_reasons():
+    # Issue 11: a check() reason (e.g. the agent's session id) only showed once every single
+    # field was fixed; now all at once.
+    reasons = validate(ExampleParams(mode='realtime', period=0.02, episodes=-3))
+    assert 'episodes: -3 is below the minimum 0' in reasons
+    assert 'period: realtime mode needs at least 0.05 s' in reasons
+
+
+def test_a_check_that_cannot_run_on_bad_values_adds_nothing():
+    reasons = validate(ExampleParams(mode='realtime', period='fast'))
+    assert reasons and all('period' in reason for reason in reasons), reasons
+
+
 def test_unknown_keys_are_an_error_and_ints_become_floats():
     with pytest.raises(ParameterError, match="unknown parameter 'perod' "
                                              r"\(did you mean 'period'\?\)"):
