@@ -88,6 +88,18 @@ class StickFeeder(threading.Thread):
         os.close(self.fd)
 
 
+def stop(processes):
+    """Stop each running process in turn: SIGINT, then SIGKILL after 15 s."""
+    for process in processes:
+        if process is not None and process.poll() is None:
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+
 def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, domain_id: int,
                          label: str) -> dict:
     """Run one short realtime session across the two namespaces; return bag-derived figures."""
@@ -136,15 +148,8 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
                         stdout=page, stderr=subprocess.STDOUT, text=True)
             code = processes['agent'].wait(timeout=40 + EPISODES * (STEPS * 0.2 + 4))
         finally:
-            for node in ('agent', 'page', 'display', 'human', 'sim', 'recorder'):
-                process = processes.get(node)
-                if process is not None and process.poll() is None:
-                    process.send_signal(signal.SIGINT)
-                    try:
-                        process.wait(timeout=15)
-                    except subprocess.TimeoutExpired:
-                        process.kill()
-                        process.wait()
+            stop([processes.get(node) for node in ('agent', 'page', 'display', 'human', 'sim',
+                                                    'recorder')])
             feeder.close()
         counts = dict(lab.link.counts)
 
@@ -311,14 +316,7 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
             assert 'resum' in resumed, resumed
             assert runner.wait(timeout=120) == 0, output()
         finally:
-            for process in (runner, human):
-                if process is not None and process.poll() is None:
-                    process.send_signal(signal.SIGINT)
-                    try:
-                        process.wait(timeout=15)
-                    except subprocess.TimeoutExpired:
-                        process.kill()
-                        process.wait()
+            stop([runner, human])
             feeder.close()
         dropped = lab.link.counts['dropped_down']
     assert dropped > 0
