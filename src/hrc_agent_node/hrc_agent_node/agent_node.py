@@ -55,11 +55,14 @@ from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATE
                                         PAUSE_SERVICE, RESUME_SERVICE)
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
+from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
 # Wall seconds between the last message and the exit, so reliable subscribers receive it.
 EXIT_LINGER_S = 0.5
+# Wall seconds to wait for every subscriber to acknowledge an episode's announcement.
+ANNOUNCE_ACK_TIMEOUT_S = 0.5
 # Human actions kept for stamp matching (a few steps are enough: they answer the newest state).
 HUMAN_ACTIONS_KEPT = 50
 TICK_S = 0.02
@@ -195,13 +198,18 @@ class AgentNode(Node):
         self.stamps = {}
         self.pending_state = None
         self.human_actions.clear()
+        # Announce the episode (and its roles) before the sim publishes its first state, and
+        # wait until every subscriber has it: a human node that saw the new episode's first
+        # state before the announcement answered it with the old roles (a race of the graph,
+        # seen under load at a role change and at the session's first state).
+        self.publish_session(f'episode {plan.episode} '
+                             f'{"(evaluation)" if plan.evaluation else ""} starting: '
+                             + self.core.status_line())
+        self.session_pub.wait_for_all_acked(Duration(seconds=ANNOUNCE_ACK_TIMEOUT_S))
         request = ResetEpisode.Request(seed=plan.seed, episode=plan.episode,
                                        clock_mode=self.next_clock_mode())
         self.reset_future = self.reset_client.call_async(request)
         self.reset_future.add_done_callback(self.on_reset_done)
-        self.publish_session(f'episode {plan.episode} '
-                             f'{"(evaluation)" if plan.evaluation else ""} starting: '
-                             + self.core.status_line())
 
     def on_reset_done(self, future):
         """Report a refused reset (the states of the new episode arrive on /hrc/state)."""

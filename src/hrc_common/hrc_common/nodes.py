@@ -62,6 +62,7 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
         return report_bad_parameters(executable, reasons)
 
     import rclpy
+    from rclpy._rclpy_pybind11 import RCLError
     from rclpy.executors import ExternalShutdownException
 
     node = None
@@ -85,5 +86,8 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
             node.destroy_node()
         # The SIGINT/SIGTERM handler may shut the context down at any moment (a check-then-act
         # race with rclpy.ok()); try_shutdown tolerates a context already shut down.
-        rclpy.try_shutdown()
+        try:
+            rclpy.try_shutdown()
+        except RCLError:
+            pass  # shut down by the signal handler between try_shutdown's check and its call
     return code

@@ -106,10 +106,12 @@ class HumanNode(Node):
                                                       qos.COMMAND_QOS, event_callbacks=quiet_pub)
         self.status_publisher = self.create_publisher(DiagnosticStatus, HUMAN_INPUT,
                                                       qos.SESSION_QOS)
-        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
-                                 event_callbacks=quiet_sub)
+        # The session first: when an announcement and a state wait together, the executor
+        # serves them in creation order, and the state must be answered with the new roles.
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS, event_callbacks=quiet_sub)
+        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
+                                 event_callbacks=quiet_sub)
         self.joy_subscription = None
         if self.joy is not None:
             self.joy_subscription = self.create_subscription(Joy, topics.JOY, self.on_joy,
