@@ -47,12 +47,12 @@ class Harness:
         self.actions, self.wrenches = {}, {}
         self.action_log = []
         # Deeper than the node's history: a burst of answers must not be dropped here.
-        self.node.create_subscription(HumanAction, self.topic(topics.HUMAN_ACTION),
-                                      self._on_action,
-                                      QoSProfile(depth=1000,
-                                                 reliability=ReliabilityPolicy.RELIABLE))
-        self.node.create_subscription(WrenchStamped, self.topic(topics.HUMAN_CMD_WRENCH),
-                                      self._on_wrench, qos.COMMAND_QOS)
+        self.action_subscription = self.node.create_subscription(
+            HumanAction, self.topic(topics.HUMAN_ACTION), self._on_action,
+            QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+        self.wrench_subscription = self.node.create_subscription(
+            WrenchStamped, self.topic(topics.HUMAN_CMD_WRENCH), self._on_wrench,
+            qos.COMMAND_QOS)
         self.statuses = []
         self.node.create_subscription(DiagnosticStatus, self.topic(HUMAN_INPUT),
                                       self.statuses.append, qos.SESSION_QOS)
@@ -87,10 +87,14 @@ class Harness:
         return condition()
 
     def wait_for_human_node(self, process):
+        # Matched endpoints, both ways, not the graph's node counts: the graph can list the
+        # node's answer writers before they matched this test's readers, and an answer
+        # published in between is lost (volatile), which failed a CI run with "no answer to
+        # step 0".
         connected = self.spin_until(
             lambda: (self.states.get_subscription_count() > 0
-                     and self.node.count_publishers(self.topic(topics.HUMAN_ACTION)) > 0
-                     and self.node.count_publishers(self.topic(topics.HUMAN_CMD_WRENCH)) > 0))
+                     and self.action_subscription.get_publisher_count() > 0
+                     and self.wrench_subscription.get_publisher_count() > 0))
         assert connected, f'the human node did not come up:\n{process.output}'
 
     def step(self, state, process, timeout=WAIT):

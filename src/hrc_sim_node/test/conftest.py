@@ -33,7 +33,8 @@ class SimClient:
             'human': node.create_publisher(WrenchStamped, topics.HUMAN_CMD_WRENCH,
                                            qos.COMMAND_QOS)}
         self.session = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
-        node.create_subscription(TaskState, topics.STATE, self._on_state, qos.STATE_QOS)
+        self.state_subscription = node.create_subscription(TaskState, topics.STATE,
+                                                           self._on_state, qos.STATE_QOS)
         node.create_subscription(Clock, topics.CLOCK, self.clocks.append,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         node.create_subscription(Image, topics.CAMERA_IMAGE, self.images.append,
@@ -65,7 +66,7 @@ class SimClient:
         ready = self.wait(lambda: self.reset_client.service_is_ready()
                           and all(publisher.get_subscription_count() > 0
                                   for publisher in self.publishers.values())
-                          and self.node.count_publishers(topics.STATE) > 0, timeout)
+                          and self.state_subscription.get_publisher_count() > 0, timeout)
         assert ready, 'the sim node did not come up'
         # service_is_ready() means our request writer matched the server; its response writer
         # may match our reader a little later, and a response sent before is lost. Give
