@@ -17,7 +17,7 @@ import functools
 import struct
 import typing
 
-from hrc_common.contract import HUMAN_ACTION_TYPE
+from hrc_common.contract import HUMAN_ACTION_TYPE, NS_PER_S
 
 from hrc_bag import msgdefs
 
@@ -44,7 +44,7 @@ def peek(type_name: str, data: bytes) -> tuple:
     order = '<' if data[1] == 1 else '>'
     try:
         seconds, nanoseconds, length = struct.unpack_from(order + 'iII', data, ENCAPSULATION)
-        stamp = seconds * 1_000_000_000 + nanoseconds
+        stamp = seconds * NS_PER_S + nanoseconds
         episode: typing.Optional[int] = None
         if has_episode:
             position = 12 + length                          # relative to the payload start
@@ -94,4 +94,4 @@ def human_action(data: bytes) -> typing.Optional[tuple]:
         (engaged,) = struct.unpack_from('B', data, ENCAPSULATION + position)
     except struct.error:
         return None
-    return seconds * 1_000_000_000 + nanoseconds, episode, step, source, bool(engaged)
+    return seconds * NS_PER_S + nanoseconds, episode, step, source, bool(engaged)

@@ -49,7 +49,7 @@ import os
 import pathlib
 import typing
 
-from hrc_common.contract import atomic_write, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
+from hrc_common.contract import atomic_write, NS_PER_S, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
 from mcap.writer import CompressionType, IndexType, Writer
 
 from hrc_bag import cdr_peek, msgdefs
@@ -150,7 +150,7 @@ def offered_profile(reliable: bool = True, transient_local: bool = False,
     (DDS does not advertise them), unset durations as RMW_DURATION_INFINITE, liveliness
     'automatic'. ``deadline_ns`` 0 means no deadline.
     """
-    deadline = ({'sec': deadline_ns // 1_000_000_000, 'nsec': deadline_ns % 1_000_000_000}
+    deadline = ({'sec': deadline_ns // NS_PER_S, 'nsec': deadline_ns % NS_PER_S}
                 if deadline_ns else dict(_INFINITE))
     return {'history': 'unknown', 'depth': 0,
             'reliability': 'reliable' if reliable else 'best_effort',
@@ -378,7 +378,7 @@ class HumanInputTally:
         """Return the simulation time between two steps (s), or None."""
         if self._first is None or self._last[0] == self._first[0]:
             return None
-        return (self._last[1] - self._first[1]) / 1e9 / (self._last[0] - self._first[0])
+        return (self._last[1] - self._first[1]) / NS_PER_S / (self._last[0] - self._first[0])
 
     def record(self) -> dict:
         """Return the ``hrc_episode`` record fields (strings)."""

@@ -53,7 +53,7 @@ import pathlib
 import time
 import typing
 
-from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem,
+from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem, NS_PER_S,
                                  SESSION_STATUS_TYPE, TASK_STATE_TYPE)
 
 from hrc_bag import cdr_peek, msgdefs
@@ -92,9 +92,9 @@ class SessionSeen:
 
 # the wait for late messages follows the executor's lag of the last second, times 1.5, up to
 # 5 s (a log time older than that comes from another clock, e.g. a test's synthetic times)
-LAG_MEMORY_NS = 1_000_000_000
+LAG_MEMORY_NS = NS_PER_S            # 1 s
 LAG_FACTOR = 1.5
-LAG_LIMIT_NS = 5_000_000_000
+LAG_LIMIT_NS = 5 * NS_PER_S         # 5 s
 
 # the types whose messages mark episode boundaries (the node deserializes only these)
 BOUNDARY_TYPES = (TASK_STATE_TYPE, EPISODE_SUMMARY_TYPE, SESSION_STATUS_TYPE)
@@ -346,7 +346,7 @@ class EpisodeRecorder:
         while self._lags and self._lags[0][0] < now - LAG_MEMORY_NS:
             self._lags.popleft()
         lag = self._lags[0][1] if self._lags else 0
-        return max(int(self.params.reorder_window * 1e9),
+        return max(int(self.params.reorder_window * NS_PER_S),
                    min(int(LAG_FACTOR * lag), LAG_LIMIT_NS))
 
     def _release(self, everything: bool = False) -> None:

@@ -11,6 +11,7 @@ import sys
 import threading
 import time
 
+from hrc_common.contract import NS_PER_S
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters
 from hrc_common.topics import CLOCK
@@ -151,7 +152,7 @@ class ReplayNode(Node):
         elapsed = time.monotonic() - self._playback_started
         nanoseconds = self._timeline.recording_time(elapsed)
         message = Clock()
-        message.clock.sec, message.clock.nanosec = divmod(nanoseconds, 1_000_000_000)
+        message.clock.sec, message.clock.nanosec = divmod(nanoseconds, NS_PER_S)
         self._clock_publisher.publish(message)
 
     def _check_done(self) -> None:

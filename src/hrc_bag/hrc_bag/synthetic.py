@@ -21,6 +21,7 @@ import typing
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
+from hrc_common.contract import NS_PER_S
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 import numpy
 from rclpy.node import Node
@@ -118,8 +119,7 @@ class SyntheticSession:
         self.published.add(topic, message)
 
     def _stamp(self, message) -> None:
-        message.header.stamp.sec, message.header.stamp.nanosec = divmod(self.sim_time_ns,
-                                                                        1_000_000_000)
+        message.header.stamp.sec, message.header.stamp.nanosec = divmod(self.sim_time_ns, NS_PER_S)
 
     def publish_status(self, episode: int, phase: int = SessionStatus.PHASE_TRAINING,
                        training_step: int = 0, human_involved: bool = False) -> SessionStatus:
@@ -379,7 +379,7 @@ def loss_window(session: SyntheticSession, recorded_counts: dict, kill_ns: int) 
         count = recorded_counts.get(topic, 0)
         if count < len(times) and times[count] < oldest:
             oldest = times[count]
-    return (kill_ns - oldest) / 1e9
+    return (kill_ns - oldest) / NS_PER_S
 
 
 @dataclass
@@ -402,7 +402,7 @@ class KillTrial:
     def finished(self, seconds: float) -> list:
         """Return the episodes whose summary was sent more than ``seconds`` before the kill."""
         return sorted(episode for episode, sent in self.summaries.items()
-                      if self.kill_ns - sent > seconds * 1e9)
+                      if self.kill_ns - sent > seconds * NS_PER_S)
 
 
 def _recorded_by_episode(folder, prefix: str, stamps: dict) -> tuple:
@@ -468,7 +468,7 @@ def kill_trial(session: SyntheticSession, recorder_pid: int, folder, kill_after:
     for path in sorted(folder.glob('*.mcap')):
         if path.name not in closed:     # left open by the killed recorder
             recover_file(path)
-    stamps = {state.header.stamp.sec * 1_000_000_000 + state.header.stamp.nanosec:
+    stamps = {state.header.stamp.sec * NS_PER_S + state.header.stamp.nanosec:
               state.episode for state in session.published.by_topic.get(hrc_topics.STATE, [])}
     by_file, totals = _recorded_by_episode(folder, session.prefix, stamps)
     anywhere = {}
@@ -493,7 +493,7 @@ def kill_trial(session: SyntheticSession, recorder_pid: int, folder, kill_after:
     waiting = [kill_ns - sent for episode, sent in summaries.items()
                if episode not in closed_episodes]
     return KillTrial(folder, kill_ns, summaries, closed, misplaced, undelivered,
-                     loss_window(session, totals, kill_ns), max(waiting, default=0) / 1e9)
+                     loss_window(session, totals, kill_ns), max(waiting, default=0) / NS_PER_S)
 
 
 def _episode_of_file(name: str) -> typing.Optional[int]:
