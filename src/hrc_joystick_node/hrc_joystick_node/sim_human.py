@@ -103,7 +103,7 @@ follows the sources above; every number is a profile parameter chosen to match t
 of magnitude (marked per module), not fitted to data of this task.
 """
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 import math
 import pathlib
 import typing
@@ -540,13 +540,3 @@ class SimulatedHuman:
         if older >= newest:
             return history[newest]
         return _interpolate(history[older], history[older + 1], weight)
-
-
-def profile_names(path=None) -> typing.List[str]:
-    """Return the names of the profiles in ``path`` (default: the installed sim_human.yaml)."""
-    return sorted(load_profiles(path))
-
-
-def profile_fields() -> typing.List[str]:
-    """Return the names of a profile's fields (for documentation and checks)."""
-    return [dataclass_field.name for dataclass_field in fields(HumanProfile)]
