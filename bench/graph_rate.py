@@ -46,6 +46,7 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
     from hrc_agent_node.agent_core import AgentCore
     from hrc_agent_node.config import AgentParams
     from hrc_agent_node.offline import run_episode
+    from hrc_common.contract import SimLimits
     from hrc_common.params import from_dict
     from hrc_engine.human import SimulatedHumanSide
     from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
@@ -53,8 +54,9 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
 
     parameters = session_parameters(case, seed, episodes)
     parameters['agent']['checkpoint_dir'] = ''
-    core = AgentCore(from_dict(AgentParams, parameters['agent']))
-    human = SimulatedHumanSide(parameters['human'])
+    limits = SimLimits.of(from_dict(SimParams, parameters['sim']))
+    core = AgentCore(from_dict(AgentParams, parameters['agent']), limits=limits)
+    human = SimulatedHumanSide(parameters['human'], limits)
     human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
     clock = {'stamp': 0}
 

@@ -16,7 +16,7 @@ from hrc_common.testing import executable_path
 NODES = [
     ('hrc_sim_node', 'sim_node', 'sim', 'control_period', 'contol_period'),
     ('hrc_agent_node', 'agent_node', 'agent', 'learning_rate', 'lerning_rate'),
-    ('hrc_joystick_node', 'human_node', 'human', 'max_force', 'max_forse'),
+    ('hrc_joystick_node', 'human_node', 'human', 'deadzone', 'deadzon'),
     ('hrc_bag', 'recorder_node', 'recorder', 'output_dir', 'output_dri'),
     ('hrc_bag', 'replay_node', 'replay', 'start_offset', 'start_ofset'),
     ('hrc_live', 'display_node', 'display', 'port', 'prot'),

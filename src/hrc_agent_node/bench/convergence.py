@@ -29,8 +29,7 @@ def run_one(job):
     physics = PhysicsParams()
     params = with_overrides(AgentParams(), case=case, seed=seed, preset=preset,
                             max_training_episodes=episodes, evaluation_episodes=evaluation,
-                            checkpoint_dir='', max_force=physics.max_force,
-                            max_torque=physics.max_torque, **overrides)
+                            checkpoint_dir='', **overrides)
     core = AgentCore(params)
     with SliderPendulumBall(physics) as sim:
         return run_session(core, sim, make_partner(core, seed=seed))

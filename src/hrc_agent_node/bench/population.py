@@ -23,17 +23,17 @@ def train(case, seed, episodes, profile, population_every, preset):
     from hrc_agent_node.agent_core import AgentCore
     from hrc_agent_node.config import AgentParams
     from hrc_agent_node.offline import make_partner, run_session
+    from hrc_common.contract import SimLimits
     from hrc_common.params import with_overrides
     from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
-        evaluation_episodes=0, checkpoint_dir='', max_force=physics.max_force,
-        max_torque=physics.max_torque))
+        evaluation_episodes=0, checkpoint_dir=''), limits=SimLimits.of(physics))
     partner = make_partner(core, seed=seed, kind=f'human:{profile}',
                            population_every=population_every,
-                           control_period=physics.control_period)
+                           limits=SimLimits.of(physics))
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     return core, summary

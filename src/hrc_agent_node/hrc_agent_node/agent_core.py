@@ -3,7 +3,8 @@
 The agent node and the offline loop (``offline.py``) call the same methods in the same order,
 so they cannot diverge::
 
-    core = AgentCore(params)                      # or load_into(core, checkpoint) to resume
+    core = AgentCore(params, limits=SimLimits.of(<the sim's reset response or PhysicsParams>))
+                                                 # or load_into(core, checkpoint) to resume
     while core.phase != 'done':
         plan = core.start_episode()              # index, seed, kind (training / judging /
         state = <reset the sim with plan.seed>   #   evaluation), human involved or not
@@ -39,6 +40,11 @@ When a step advances to a step with another reward, the rollout buffer (samples 
 reward) and the reward scaler's statistics are reset, so the first update of the new step
 learns only from the new reward.
 
+The sim owns the control period and the force/torque limits (``hrc_common.contract.SimLimits``):
+the core scales its normalized action to a wrench and reads the human's applied command with
+them, so it takes them from the sim (``limits=`` or :meth:`set_limits`; the agent node passes
+the reset response's) and never from its own parameters.
+
 Reward timing: the reward of the action taken in state s_k is computed from the state reached,
 s_k+1 (eq. 3-5 on S_x, P_z, B_y of s_k+1). So the record of step k (``StepRecord``) is complete
 when s_k+1 arrives: :meth:`act` returns it for the previous step, :meth:`end_episode` for the
@@ -54,6 +60,7 @@ from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
+from hrc_common.contract import SimLimits
 from hrc_common.params import checked
 
 RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
@@ -192,18 +199,21 @@ def observation_of(params: AgentParams, state, partner_action: float) -> np.ndar
     return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
 
 
-def applied_command(state, dof: str, params: AgentParams) -> float:
+def applied_command(state, dof: str, limits: SimLimits) -> float:
     """Return the normalized command the sim applied on ``dof`` in the last control period."""
-    if dof == 'translation':
-        return float(state.applied_force) / params.max_force
-    return float(state.applied_torque) / params.max_torque
+    applied = state.applied_force if dof == 'translation' else state.applied_torque
+    return float(applied) / limits.full_scale(dof)
 
 
 class AgentCore:
     """Task tree, reward, strategy progress, PPO learner and counters of one session."""
 
-    def __init__(self, params: AgentParams = None, tree: TaskTree = None, cases: dict = None):
+    def __init__(self, params: AgentParams = None, tree: TaskTree = None, cases: dict = None,
+                 limits: SimLimits = None):
         self.params = checked(params or AgentParams())
+        self._limits = None
+        if limits is not None:
+            self.set_limits(limits)
         p = self.params
         self.tree = tree or TaskTree.from_file(p.task_tree_file or share_file(TREE_FILE_NAME),
                                                p.preset)
@@ -330,11 +340,34 @@ class AgentCore:
         """Return True when the rollout buffer holds a horizon of samples."""
         return len(self.buffer) >= self.params.horizon
 
+    @property
+    def limits(self) -> SimLimits:
+        """The sim's control period and force/torque limits (raises until they are known)."""
+        if self._limits is None:
+            raise RuntimeError("the sim's limits are not known yet: set_limits() with the sim's "
+                               'reset response (or SimLimits.of(PhysicsParams)) first')
+        return self._limits
+
+    @property
+    def limits_known(self) -> bool:
+        """Return True once :meth:`set_limits` was called."""
+        return self._limits is not None
+
+    def set_limits(self, limits: SimLimits) -> bool:
+        """Take the sim's limits; return True if they differ from those known before.
+
+        Raises ValueError with every reason when a value is not a finite number > 0.
+        """
+        problems = limits.problems()
+        if problems:
+            raise ValueError("the sim's limits are unusable: " + '; '.join(problems))
+        changed = self._limits is not None and limits != self._limits
+        self._limits = limits
+        return changed
+
     def wrench_of(self, action: float) -> float:
         """Return the force (N) or torque (N*m) of a normalized robot action."""
-        limit = self.params.max_force if self.robot_dof == 'translation' \
-            else self.params.max_torque
-        return float(action) * limit
+        return float(action) * self.limits.full_scale(self.robot_dof)
 
     def status_line(self) -> str:
         """Return one line saying where the session is (for logs and SessionStatus)."""
@@ -379,7 +412,7 @@ class AgentCore:
         human's degree of freedom is the human's command, after the sim's clamping and with a
         missing command as 0.
         """
-        return applied_command(state, self.human_dof, self.params)
+        return applied_command(state, self.human_dof, self.limits)
 
     def observed_human_action(self, state, human_action=None) -> float:
         """Return the human action a_h the robot observes in ``state`` (normalized, [-1, 1]).

@@ -5,7 +5,10 @@ robot decides lives in :class:`hrc_agent_node.agent_core.AgentCore` (shared with
 loop). The step protocol (docs/architecture.md):
 
 * at start: publish ``/hrc/session`` (transient local), wait for ``/hrc/sim/reset``, call it
-  for episode 0 with a seed derived from the session seed;
+  for episode 0 with a seed derived from the session seed. The reset response carries what the
+  sim owns (control period, ``max_force``, ``max_torque``): the agent scales its actions and
+  reads the human's applied command with those, never with values of its own; states that
+  arrive before the first response wait for it;
 * every non-final ``/hrc/state`` of the running episode is answered on
   ``/hrc/robot/cmd_wrench`` with the state's stamp, on the robot's degree of freedom only. The
   observed human action is by default (``human_action_source: applied``) the human's command
@@ -47,7 +50,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
-from hrc_common.contract import Phase
+from hrc_common.contract import Phase, SimLimits
 from hrc_common.dof import DOF_INDEX, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
@@ -123,6 +126,7 @@ class AgentNode(Node):
         self.pending_state = None       # a state waiting for its human action (lockstep)
         self.pending_since = 0.0
         self.stamps = {}                # step -> stamp of the running episode's states
+        self.states_before_limits = []  # states that came before the first reset response
         self.reset_requested_at = None
         self.reset_future = None
         self.waiting_since = time.monotonic()
@@ -196,6 +200,7 @@ class AgentNode(Node):
         """Begin the next episode in the core and ask the sim to reset for it."""
         plan = self.core.start_episode()
         self.stamps = {}
+        self.states_before_limits = []
         self.pending_state = None
         self.human_actions.clear()
         # Announce the episode (and its roles) before the sim publishes its first state, and
@@ -221,6 +226,23 @@ class AgentNode(Node):
             return
         if not response.success:
             self.abort(f'the sim refused the reset: {response.message}')
+            return
+        limits = SimLimits.of(response)
+        first = not self.core.limits_known
+        try:
+            changed = self.core.set_limits(limits)
+        except ValueError as error:
+            self.abort(f'{error} (in the reset response of {topics.RESET_SERVICE})')
+            return
+        if first:
+            self.get_logger().info(f'from the sim: {limits.describe()}, clock '
+                                   f'{response.clock_mode}')
+        elif changed:
+            self.get_logger().warning(f'the sim changed its limits mid-session: now '
+                                      f'{limits.describe()}')
+        early, self.states_before_limits = self.states_before_limits, []
+        for state in early:
+            self.on_state(state)
 
     def abort(self, reason: str, exit_code: int = 1):
         """End the session with phase ``aborted`` and ``exit_code`` (1: a failure)."""
@@ -350,6 +372,11 @@ class AgentNode(Node):
             return
         if msg.episode != self.core.episode:
             return  # a state of another episode (a late one, or a sim not reset by us)
+        if not self.core.limits_known:
+            # The sim publishes the episode's first state before its reset response arrives
+            # here: act once the response has told us the limits (on_reset_done).
+            self.states_before_limits.append(msg)
+            return
         if msg.step in self.stamps:
             return  # already seen (duplicate delivery)
         expected = max(self.stamps) + 1 if self.stamps else 0

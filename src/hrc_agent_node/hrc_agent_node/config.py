@@ -47,10 +47,6 @@ class AgentParams:
                                                     '(<dir>/<session_id>/latest.pt, final.pt); '
                                                     'empty = no checkpoints')
     resume_from: str = param('', 'Checkpoint to resume (counters continue); empty = fresh start')
-    max_force: float = param(2.0, 'N for a normalized action of 1 on translation (must match '
-                                   'the sim)', low=0.001, high=1000.0)
-    max_torque: float = param(0.5, 'N*m for a normalized action of 1 on rotation (must match '
-                                   'the sim)', low=0.001, high=1000.0)
     human_action_source: str = param(
         'applied', "What the robot observes as the human action a_h: applied = the human's "
         'command the sim applied in the last control period (read from the state: the two act '

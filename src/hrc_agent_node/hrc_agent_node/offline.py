@@ -27,6 +27,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.partners import ScriptedPartner, SimulatedHumanPartner
+from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_sim_node.protocol import per_dof, roles
 
@@ -59,8 +60,10 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
     """Run ``core`` until phase ``done`` (or ``max_episodes`` more episodes); return a summary.
 
     After every episode: the PPO update when due, a checkpoint when ``checkpoint_path`` is
-    given, then ``on_episode(result, update_stats)``.
+    given, then ``on_episode(result, update_stats)``. The core takes the control period and
+    the limits from ``sim`` (a SliderPendulumBall), as the agent node takes the reset response's.
     """
+    core.set_limits(SimLimits.of(sim.params))
     started = time.perf_counter()
     update_seconds = []
     convergence = {}
@@ -94,22 +97,29 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
 
 
 def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str = 'scripted',
-                 population_every: int = 0, control_period: float = 0.2):
+                 population_every: int = 0, limits: SimLimits = None):
     """Return the partner on the human's degree of freedom of ``core``'s case.
+
+    ``limits``: the sim's control period and limits the partner acts with (default: those of
+    the default physics, ``PhysicsParams()``, which the offline tools run).
 
     ``kind``: ``scripted`` (the PD partner, ``noise`` = std of its command) or
     ``human:<profile>`` (the simulated human of that profile; ``population_every`` N > 0 draws
     a new person from the profile's population every N episodes).
     """
+    if limits is None:
+        from hrc_sim_node.physics import PhysicsParams
+
+        limits = SimLimits.of(PhysicsParams())
     if kind == 'scripted':
-        return ScriptedPartner(core.human_dof, max_torque=core.params.max_torque, noise=noise,
+        return ScriptedPartner(core.human_dof, max_torque=limits.max_torque, noise=noise,
                                seed=seed)
     if not kind.startswith('human:'):
         raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
     from hrc_joystick_node.sim_human import load_profile
 
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
-                                 control_period, population_every)
+                                 limits.control_period, population_every)
 
 
 def main(argv=None) -> int:
@@ -141,19 +151,17 @@ def main(argv=None) -> int:
 
     overrides = {name: yaml.safe_load(value) for name, value in
                  (item.split('=', 1) for item in args.set)}
-    physics = PhysicsParams()
     params = with_overrides(AgentParams(), case=args.case, seed=args.seed, preset=args.preset,
                             max_training_episodes=args.episodes,
                             evaluation_episodes=args.evaluation_episodes,
-                            torch_threads=args.threads, max_force=physics.max_force,
-                            max_torque=physics.max_torque, **overrides)
-    core = AgentCore(params)
+                            torch_threads=args.threads, **overrides)
+    physics_params = PhysicsParams()
+    core = AgentCore(params, limits=SimLimits.of(physics_params))
     if args.resume:
         load_into(core, args.resume)
-    physics_params = PhysicsParams()
     try:
         partner = make_partner(core, args.partner_noise, args.seed, args.partner,
-                               args.population_every, physics_params.control_period)
+                               args.population_every, SimLimits.of(physics_params))
     except (ValueError, KeyError) as error:
         print(f'offline: {error}', file=sys.stderr)
         return 2

@@ -14,9 +14,11 @@ import pytest
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
+from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 
 STEPS = 4          # control steps per hand-made episode
+LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)   # a sim's
 GOOD = dict(slider=0.0, angle=0.0, ball=0.0)       # every subtask satisfied
 BAD = dict(slider=0.09, angle=1.0, ball=0.2)       # none satisfied
 
@@ -35,7 +37,7 @@ def make_core(**overrides):
                   minibatch_size=4, convergence_window=2, satisfied_window=2,
                   max_training_episodes=100, evaluation_episodes=0)
     values.update(overrides)
-    return AgentCore(with_overrides(AgentParams(), **values))
+    return AgentCore(with_overrides(AgentParams(), **values), limits=LIMITS)
 
 
 def run_episode(core, training=BAD, judging=GOOD):
@@ -136,7 +138,7 @@ def test_same_reward_keeps_the_buffer(tmp_path):
 def test_truncated_episode_bootstraps_from_the_final_state_with_its_human_action():
     """The value of the final state is taken with the human command applied at that state."""
     core = make_core(case=5)                  # the human turns the pendulum, observed applied
-    max_torque = core.params.max_torque
+    max_torque = core.limits.max_torque
     seen = []
     value_of = core.ppo.value_of
     core.ppo.value_of = lambda observation: seen.append(observation) or value_of(observation)

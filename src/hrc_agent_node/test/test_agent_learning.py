@@ -23,9 +23,8 @@ def test_ppo_raises_the_return_against_a_scripted_partner():
     physics = PhysicsParams()
     params = with_overrides(AgentParams(), case=6, seed=0, preset='tuned',
                             max_training_episodes=EPISODES, evaluation_episodes=0,
-                            convergence_window=1000, checkpoint_dir='',
-                            max_force=physics.max_force, max_torque=physics.max_torque)
-    core = AgentCore(params)
+                            convergence_window=1000, checkpoint_dir='')
+    core = AgentCore(params)   # run_session gives it the sim's limits
     results = []
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, make_partner(core),

@@ -18,7 +18,9 @@ from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, 
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
-PHYSICS = PhysicsParams(episode_duration=2.0)   # 10 control steps per episode
+# 10 control steps per episode; limits unlike the defaults: the agent must scale its wrench
+# with what the sim's reset response says, having no values of its own.
+PHYSICS = PhysicsParams(episode_duration=2.0, max_force=3.5, max_torque=0.75)
 STEPS = PHYSICS.steps_per_episode
 AGENT_YAML = pathlib.Path(repository_params_dir()) / 'agent.yaml'
 
@@ -67,6 +69,10 @@ class FakeSim:
         response.success = True
         response.message = 'reset'
         response.state = self.current
+        response.clock_mode = 'lockstep'
+        response.control_period = PHYSICS.control_period
+        response.max_force = PHYSICS.max_force
+        response.max_torque = PHYSICS.max_torque
         return response
 
     def on_wrench(self, msg):
@@ -149,7 +155,6 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
         'case': 1, 'seed': 7, 'session_id': 'dds_test', 'task_tree_file': str(easy_tree),
         'convergence_window': 1, 'max_training_episodes': 10, 'evaluation_episodes': 1,
         'horizon': 16, 'minibatch_size': 8, 'checkpoint_dir': str(tmp_path / 'ckpt'),
-        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque,
         'human_action_source': 'same_step'})  # the fake sim checks the same-step protocol
     code = run_until_exit(fake, agent, rclpy_context, timeout=90)
     fake.node.destroy_node()
@@ -184,6 +189,8 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
         assert message.deterministic == (message.episode in judging + (evaluation_episode,))
         assert -1.0 <= message.action <= 1.0
         assert message.wrench == pytest.approx(message.action * PHYSICS.max_force)
+    assert 'from the sim: control period 0.2 s, max_force 3.5 N, max_torque 0.75 N*m' \
+        in agent.output
     assert list(fake.steps[0].subtask_ids) == ['slider', 'pendulum']
     assert list(fake.steps[-1].subtask_ids) == ['ball', 'slider', 'pendulum']
     stamps = {(s.episode, s.step): s.header.stamp for s in fake.published}
@@ -210,8 +217,7 @@ def test_missing_human_action_times_out_and_is_reported(start_node, rclpy_contex
     fake = FakeSim(rclpy_context, human_answers=False)
     agent = start_node('hrc_agent_node', 'agent_node', params_file=AGENT_YAML, parameters={
         'case': 5, 'max_training_episodes': 1, 'evaluation_episodes': 0,
-        'human_action_timeout': 0.05, 'checkpoint_dir': '', 'human_action_source': 'same_step',
-        'max_force': PHYSICS.max_force, 'max_torque': PHYSICS.max_torque})
+        'human_action_timeout': 0.05, 'checkpoint_dir': '', 'human_action_source': 'same_step'})
     code = run_until_exit(fake, agent, rclpy_context, timeout=60)
     fake.node.destroy_node()
     assert code == 0, agent.output

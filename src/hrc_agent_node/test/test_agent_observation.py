@@ -4,6 +4,7 @@ import pytest
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
+from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
@@ -11,7 +12,8 @@ from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 def core_for(case, source):
     """Return an AgentCore of ``case`` (5 and 6 involve the human from the first episode)."""
     return AgentCore(with_overrides(AgentParams(), case=case, seed=3, checkpoint_dir='',
-                                    human_action_source=source))
+                                    human_action_source=source),
+                     limits=SimLimits.of(PhysicsParams()))
 
 
 def test_applied_source_reads_the_human_command_the_sim_applied():

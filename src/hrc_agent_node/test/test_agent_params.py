@@ -9,6 +9,7 @@ import yaml
 
 from hrc_agent_node.agent_core import AgentCore, derive_seed
 from hrc_agent_node.config import AgentParams, repository_params_dir
+from hrc_common.contract import SimLimits
 from hrc_common.params import checked, load_yaml, ParameterError, with_overrides
 
 AGENT_YAML = f'{repository_params_dir()}/agent.yaml'
@@ -58,7 +59,9 @@ def fake_state(step, final=False, slider=0.01, angle=-0.2, ball=0.1):
 
 
 def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
-    core = AgentCore(with_overrides(AgentParams(), case=2, preset='tuned', checkpoint_dir=''))
+    # Limits unlike the defaults: the wrench is scaled with the sim's, not a value of the agent.
+    core = AgentCore(with_overrides(AgentParams(), case=2, preset='tuned', checkpoint_dir=''),
+                     limits=SimLimits(control_period=0.1, max_force=3.0, max_torque=0.7))
     assert core.robot_dof == 'rotation' and not core.human_involved
     core.start_episode()
     with pytest.raises(ValueError, match='the human is not involved'):
@@ -66,7 +69,7 @@ def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
     first = core.act(fake_state(0))
     assert first.previous is None
     assert first.record.observed_human_action == 0.0   # the human is not involved in step 1
-    assert first.wrench == pytest.approx(first.action * core.params.max_torque)
+    assert first.wrench == pytest.approx(first.action * 0.7)
     second = core.act(fake_state(1, angle=0.05))
     record = second.previous
     assert record.step == 0 and record.subtask_ids == ('slider', 'pendulum')
@@ -83,3 +86,21 @@ def test_core_rewards_the_state_reached_and_observes_zero_without_the_human():
     assert result.human_effort == 0.0 and not math.isnan(result.robot_effort)
     assert core.total_episodes == 1 and core.human_involved_episodes == 0
     assert core.episode == 1 and not core.in_episode
+
+
+def test_the_core_acts_only_with_the_sims_limits_and_refuses_unusable_ones():
+    """The limits are the sim's: no AgentParams field, no default; bad values named at once."""
+    names = {field.name for field in fields(AgentParams)}
+    assert not {'max_force', 'max_torque', 'control_period'} & names
+    core = AgentCore(with_overrides(AgentParams(), case=2, checkpoint_dir=''))
+    core.start_episode()
+    with pytest.raises(RuntimeError, match="the sim's limits are not known yet"):
+        core.act(fake_state(0))
+    with pytest.raises(ValueError) as refused:
+        core.set_limits(SimLimits(control_period=0.2, max_force=math.nan, max_torque=0.0))
+    assert 'max_force' in str(refused.value) and 'max_torque' in str(refused.value)
+    assert not core.limits_known
+    assert not core.set_limits(SimLimits(0.2, 2.0, 0.5))          # first: nothing changed
+    decision = core.act(fake_state(0))
+    assert decision.wrench == pytest.approx(decision.action * 0.5)
+    assert core.set_limits(SimLimits(0.2, 2.0, 0.25))             # a different sim: reported

@@ -6,6 +6,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import make_partner, run_session
 from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_joystick_node.sim_human import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
@@ -50,10 +51,9 @@ def test_offline_loop_meets_the_population_in_every_kind_of_episode():
     physics = PhysicsParams(episode_duration=2.0)
     core = AgentCore(with_overrides(
         AgentParams(), case=5, seed=2, preset='tuned', checkpoint_dir='', horizon=20,
-        minibatch_size=10, max_training_episodes=4, evaluation_episodes=1,
-        max_force=physics.max_force, max_torque=physics.max_torque))
+        minibatch_size=10, max_training_episodes=4, evaluation_episodes=1))
     partner = make_partner(core, seed=2, kind='human:paper', population_every=1,
-                           control_period=physics.control_period)
+                           limits=SimLimits.of(physics))
     met = []
     with SliderPendulumBall(physics) as sim:
         run_session(core, sim, partner,

@@ -111,14 +111,13 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
             parameters[node][name] = value
     sim, agent, human = parameters['sim'], parameters['agent'], parameters['human']
 
-    # One value for what several nodes must agree on (after the overrides, so that e.g.
-    # --set sim.max_force=3 reaches the actors too; seeds and modes come from the settings).
+    # One value for what several nodes must agree on (seeds and modes come from the settings).
+    # The sim's control period and limits are not copied: the agent takes them from the reset
+    # response and the human node from the sim's parameters, so --set sim.max_force=3 reaches
+    # both at run time.
     for node in (sim, agent, human):
         node['seed'] = settings.seed
     sim['mode'] = agent['mode'] = settings.mode
-    for name in ('max_force', 'max_torque'):
-        agent[name] = human[name] = sim[name]
-    human['control_period'] = sim['control_period']
     # The agent announces the roles on /hrc/session; the start values agree with it.
     case = case_table()[settings.case]
     sim['robot_dof'] = case.robot_dof

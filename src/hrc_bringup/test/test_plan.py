@@ -26,9 +26,11 @@ def test_compose_makes_the_nodes_agree():
     assert agent['case'] == 3 and agent['max_training_episodes'] == 12
     assert {sim['seed'], agent['seed'], human['seed']} == {7}
     assert agent['learning_rate'] == 0.0005
-    # The limits are the sim's; the actors take them, overrides included.
-    assert agent['max_force'] == human['max_force'] == sim['max_force'] == 3.0
-    assert agent['max_torque'] == human['max_torque'] == sim['max_torque']
+    # The limits are the sim's alone: the actors read them from the sim at run time, so no
+    # other node's parameters repeat them (an override changes the sim, and with it both).
+    assert sim['max_force'] == 3.0
+    for node in (agent, human):
+        assert not {'max_force', 'max_torque', 'control_period'} & set(node)
     assert parameters['recorder']['session_id'] == 'case3-seed7'
 
 

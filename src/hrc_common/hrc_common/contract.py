@@ -17,6 +17,12 @@ Degrees of freedom and the wrench axis convention
     ``TRANSLATION``, ``ROTATION``, ``DOFS`` (in ``SessionStatus.DOF_*`` order), ``DOF_INDEX``,
     ``DOF_NAME``, ``check_dof``, ``other_dof``, ``dof_name(code, default=None)``,
     ``wrench_axis``, ``wrench_value``, ``set_wrench_value``, ``off_axis_components``.
+What the sim owns and the actors learn from it at run time
+    ``SimLimits(control_period, max_force, max_torque)`` -- the sim's control period (s) and
+    the force (N) / torque (N*m) of a full normalized command; ``full_scale(dof)``,
+    ``problems()``. The sim declares them (``PhysicsParams``); the agent reads them from the
+    ``/hrc/sim/reset`` response, the human node from the sim's parameter service; no other
+    file repeats them.
 Message types (as in bags and ``ros2 topic type``)
     ``TASK_STATE_TYPE``, ``HUMAN_ACTION_TYPE``, ``SESSION_STATUS_TYPE``,
     ``EPISODE_SUMMARY_TYPE``, ``AGENT_STEP_TYPE``, ``WRENCH_STAMPED_TYPE``.
@@ -42,6 +48,7 @@ from dataclasses import dataclass
 import datetime
 import enum
 import functools
+import math
 import os
 import re
 import tempfile
@@ -177,6 +184,44 @@ def off_axis_components(wrench, dof: str) -> dict:
             if name != driving and value != 0.0:
                 found[name] = value
     return found
+
+
+# --------------------------------------------------------------------------- sim limits
+
+@dataclass(frozen=True)
+class SimLimits:
+    """The sim's timing and actuator limits, which every actor must use as the sim does.
+
+    A normalized command of 1 on translation is ``max_force`` N on the slider, on rotation
+    ``max_torque`` N*m on the hinge; the sim clamps to these, once (``hrc_sim_node.commands``).
+    """
+
+    control_period: float   # s of simulation time per control step
+    max_force: float        # N, full-scale force on the slider
+    max_torque: float       # N*m, full-scale torque on the pendulum's hinge
+
+    NAMES = ('control_period', 'max_force', 'max_torque')   # as the sim's parameters
+
+    @classmethod
+    def of(cls, source) -> 'SimLimits':
+        """Return the limits of an object with these fields (PhysicsParams, a reset response)."""
+        return cls(*(float(getattr(source, name)) for name in cls.NAMES))
+
+    def full_scale(self, dof: str) -> float:
+        """Return the force (N) or torque (N*m) of a normalized command of 1 on ``dof``."""
+        return self.max_force if check_dof(dof) == TRANSLATION else self.max_torque
+
+    def problems(self) -> list:
+        """Return why these values cannot be used (each must be finite and > 0)."""
+        return [f'{name} must be a finite number > 0, got {getattr(self, name)!r}'
+                for name in self.NAMES
+                if not (isinstance(getattr(self, name), (int, float))
+                        and math.isfinite(getattr(self, name)) and getattr(self, name) > 0)]
+
+    def describe(self) -> str:
+        """Return one line for logs."""
+        return (f'control period {self.control_period:g} s, max_force {self.max_force:g} N, '
+                f'max_torque {self.max_torque:g} N*m')
 
 
 # --------------------------------------------------------------------------- message types

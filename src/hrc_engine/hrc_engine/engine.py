@@ -34,6 +34,7 @@ import typing
 
 import yaml
 
+from hrc_common.contract import SimLimits
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
 
@@ -151,12 +152,15 @@ class InProcessSession:
         self.agent_params = from_dict(AgentParams, self.parameters['agent'])
         self.physics = SliderPendulumBall(physics_params_of(self.sim_params))
         self.protocol = StepProtocol(ProtocolSettings.of(self.sim_params))
-        self.core = AgentCore(self.agent_params)
+        # What the sim owns, passed as the graph passes it (the reset response, the sim's
+        # parameters): the physics' control period and limits.
+        self.limits = SimLimits.of(self.physics.params)
+        self.core = AgentCore(self.agent_params, limits=self.limits)
         if self.agent_params.resume_from:
             from hrc_agent_node.checkpoint import load_into
             load_into(self.core, self.agent_params.resume_from,
                       resume=not self.agent_params.evaluation_only)
-        self.human = SimulatedHumanSide(self.parameters['human'])
+        self.human = SimulatedHumanSide(self.parameters['human'], self.limits)
         self.clock = WallClock()
         self.run_dir = pathlib.Path(self.settings.runs_dir) / self.session_id
         checkpoint_root = self.agent_params.checkpoint_dir

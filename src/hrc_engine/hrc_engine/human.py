@@ -4,7 +4,8 @@ It answers exactly as the human node does with ``input: sim``: both run
 :class:`hrc_joystick_node.human_core.HumanCore` (roles from the session, involvement, the
 simulated human reset at each new episode or when a step does not follow the last one, its
 fatigue on the state stamps, person N of the population when ``human.person`` is N); the wrench
-is the command times the sim's ``max_force``/``max_torque``.
+is the command times the sim's ``max_force``/``max_torque``, and the simulated human runs on the
+sim's control period (``SimLimits``, given by the session as the node reads them from the sim).
 """
 
 from dataclasses import dataclass
@@ -27,12 +28,12 @@ class HumanAnswer:
 class SimulatedHumanSide:
     """The human node's core (``input: sim``), driven by calls instead of messages."""
 
-    def __init__(self, parameters: dict):
+    def __init__(self, parameters: dict, limits):
         if parameters.get('input', 'sim') not in ('sim', 'model'):
             raise ValueError(f"the in-process engine runs the simulated human or a cloned model "
                              f"only (human.input 'sim' or 'model'), got "
                              f"{parameters.get('input')!r}")
-        self.core = core_from_parameters(parameters)
+        self.core = core_from_parameters(parameters, limits)
 
     def on_session(self, dof: str, involved: bool, subtasks) -> None:
         """Take the roles a SessionStatus announces."""

@@ -91,7 +91,7 @@ def train_ours(setting: str, seed: int, episodes: int, **changes) -> list:
     env = make_env(setting)
     try:
         core = AgentCore(agent_params(env, seed, episodes, **changes), tree=env.task.tree,
-                         cases={env.task.case.case_id: env.task.case})
+                         cases={env.task.case.case_id: env.task.case}, limits=env.task.limits)
         records = []
         env.reset(seed=seed)
         for episode in range(episodes):

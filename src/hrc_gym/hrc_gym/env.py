@@ -107,10 +107,8 @@ class SliderPendulumBallEnv(gymnasium.Env):
                 human_seed = derived_seed(seed if seed is not None
                                           else int(self.np_random.integers(SEED_LIMIT)), 1)
                 self.human = make_human(self.config.human, task.dofs[HUMAN], human_seed,
-                                        task.physics.params.control_period,
-                                        task.human_involved, task.subtasks[HUMAN],
-                                        task.agent_params.max_force,
-                                        task.agent_params.max_torque)
+                                        task.limits, task.human_involved,
+                                        task.subtasks[HUMAN])
         else:
             self._episode += 1
         if self._human_model is not None and hasattr(self.human, 'reset'):

@@ -25,6 +25,7 @@ from hrc_agent_node.agent_core import applied_command, observation_of
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
+from hrc_common.contract import SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
 from hrc_common.dof import ROTATION, TRANSLATION
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
@@ -83,23 +84,22 @@ def resolve_step(case, index: int):
     return steps[index]
 
 
-def make_human(spec: str, dof: str, seed: int, control_period: float, involved: bool,
-               subtasks, max_force: float, max_torque: float):
+def make_human(spec: str, dof: str, seed: int, limits: SimLimits, involved: bool, subtasks):
     """Return the human node's per-step core driving the human named by ``spec``, or None.
 
     ``spec``: 'none' (returns None), a profile name, 'population:<profile>' (person number
     ``seed`` of the population around that profile, ``hrc_joystick_node.population``) or
     'model:<path>' (a cloned human model, the node's input ``model``). The core
     (``HumanCore``) is the one the human node runs: it resets the person at each new episode
-    and runs fatigue and rest on the stamps (simulation time) it is given.
+    and runs fatigue and rest on the stamps (simulation time) it is given; ``limits``: the
+    physics' control period and limits, as the node reads them from the sim.
     """
     if spec == NO_HUMAN:
         return None
     from hrc_joystick_node.human_core import HumanCore, HumanParams
     from hrc_joystick_node.sim_human import load_profiles
 
-    common = dict(dof=dof, involved=involved, control_period=control_period,
-                  max_force=max_force, max_torque=max_torque, seed=int(seed))
+    common = dict(dof=dof, involved=involved, seed=int(seed))
     if spec.startswith(MODEL_PREFIX):
         params = HumanParams(input='model', model_file=spec[len(MODEL_PREFIX):], **common)
     elif spec.startswith(POPULATION_PREFIX):
@@ -108,6 +108,7 @@ def make_human(spec: str, dof: str, seed: int, control_period: float, involved: 
     else:
         params = HumanParams(input='sim', profile=spec, **common)
     core = HumanCore(checked(params), load_profiles())
+    core.set_limits(limits)
     core.on_session(dof, involved, list(subtasks))
     # The node's input check: with input sim or model the selector takes that input (no
     # device, no /joy); until this first check the core answers zero.
@@ -123,8 +124,8 @@ class TaskRun:
         physics_params = physics_params if physics_params is not None else PhysicsParams()
         self.agent_params = with_overrides(
             AgentParams(), case=params.case, preset=params.preset,
-            observe_rates=params.observe_rates, max_force=physics_params.max_force,
-            max_torque=physics_params.max_torque)
+            observe_rates=params.observe_rates)
+        self.limits = SimLimits.of(physics_params)   # the sim's, as every actor uses them
         self.tree = TaskTree.from_file(share_file(TREE_FILE_NAME), params.preset)
         self.case = load_cases(share_file(CASES_FILE_NAME), self.tree)[params.case]
         self.step_spec = resolve_step(self.case, params.training_step)
@@ -188,7 +189,7 @@ class TaskRun:
         partner = HUMAN if actor == ROBOT else ROBOT
         partner_action = 0.0
         if self.human_involved:
-            partner_action = applied_command(self.state, self.dofs[partner], self.agent_params)
+            partner_action = applied_command(self.state, self.dofs[partner], self.limits)
         return observation_of(self.agent_params, self.state, partner_action)
 
     def episode_errors(self) -> dict:

@@ -5,6 +5,7 @@ below and the answers back to messages; the in-process engine (``hrc_engine``) c
 core directly, so both answer every state the same way::
 
     core = HumanCore(HumanParams(input='sim', profile='paper', seed=3), profiles)
+    core.set_limits(SimLimits(control_period, max_force, max_torque))   # the sim's, at run time
     core.on_session('rotation', involved=True, subtasks=['pendulum'], aborted=False)
     answer = core.answer(episode, step, stamp_ns, state)   # a HumanAnswer
 
@@ -22,14 +23,19 @@ What it decides, per state (not the last of its episode, which needs no answer):
   to pause) or ``zero``. The simulated human stands in for a missing or lost joystick only
   with ``on_input_lost: sim``; every answer says which input drove it (``source``) and why.
 
+The sim owns the control period (the simulated human's delay and fatigue run in its steps) and
+the force/torque of a full command (``hrc_common.contract.SimLimits``): the core has no
+parameters for them and answers no state until :meth:`HumanCore.set_limits` gave them (the
+node reads them from the sim's parameter service, the in-process engine from its physics).
+
 The input status (:class:`InputStatus`) is what the node publishes on ``/hrc/human/input``.
 """
 
 from dataclasses import dataclass
 import typing
 
-from hrc_common.contract import InputSource
-from hrc_common.dof import check_dof, DOFS, TRANSLATION
+from hrc_common.contract import InputSource, SimLimits
+from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import param, ParameterError
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
                                       MODEL, PAUSE, SIM, stick_command, StickReading, ZERO)
@@ -78,12 +84,9 @@ class HumanParams:
     involved: bool = param(True, 'whether the human acts, until /hrc/session says')
     hold_ball: bool = param(False, 'whether the human is also asked to hold the ball, until '
                             "/hrc/session lists the human's subtasks")
-    max_force: float = param(2.0, 'force (N) of a full command on translation; same value as '
-                             "the sim's max_force", low=0.01, high=100.0)
-    max_torque: float = param(0.5, 'torque (N*m) of a full command on rotation; same value as '
-                              "the sim's max_torque", low=0.001, high=50.0)
-    control_period: float = param(0.2, 'control period of the sim (s), for the simulated '
-                                  "human's delay and fatigue", low=0.01, high=1.0)
+    sim_node: str = param('sim', "node whose parameters give the sim's control period (s), "
+                          'max_force (N) and max_torque (N*m), read at start through its '
+                          'get_parameters service; states are answered once they are known')
     profile: str = param('paper', 'simulated-human profile (a name in profiles_file)')
     profiles_file: str = param('', 'simulated-human profiles YAML (empty = the installed '
                                'share/hrc_joystick_node/params/sim_human.yaml)')
@@ -149,11 +152,12 @@ def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile
     return person_or_profile(profiles[params.profile], params.person)
 
 
-def core_from_parameters(parameters: dict) -> 'HumanCore':
+def core_from_parameters(parameters: dict, limits: SimLimits) -> 'HumanCore':
     """Return the core for the human node's parameters given as a plain dict.
 
     E.g. as ``hrc_bringup.plan.compose`` composes them; checked as the node checks them
     (ParameterError with every reason). No device or /joy in this process: input ``sim``.
+    ``limits``: the sim's (as the node reads them from the sim's parameters).
     """
     from hrc_common.params import from_dict
     from hrc_joystick_node.sim_human import default_profiles_path, load_profiles
@@ -161,6 +165,7 @@ def core_from_parameters(parameters: dict) -> 'HumanCore':
     params = from_dict(HumanParams, dict(parameters))
     path = params.profiles_file or default_profiles_path()
     core = HumanCore(params, load_profiles(path), str(path))
+    core.set_limits(limits)
     core.on_inputs(False, 'no device in this process', False, '/joy not used')
     return core
 
@@ -178,7 +183,12 @@ class HumanCore:
         self.session_seen = False
         self.aborted = False
         self.selector = InputSelector(params.input, params.on_input_lost)
-        self.sim_human = self._new_sim_human(self.dof)
+        if params.input == MODEL:  # a bad model file is refused now, not at the first state
+            from hrc_joystick_node.human_model import load_human_model
+
+            load_human_model(params.model_file)
+        self.limits: typing.Optional[SimLimits] = None
+        self.sim_human = None   # created when the sim's control period is known (set_limits)
         self._sim_episode = None
         self._sim_step = None
         self.last_answer: typing.Optional[HumanAnswer] = None
@@ -189,14 +199,29 @@ class HumanCore:
         """Return the subtasks before a session says: the own level-2 one (and the ball)."""
         return [OWN_SUBTASK[dof]] + ([BALL] if self.params.hold_ball else [])
 
-    def _new_sim_human(self, dof: str):
+    def set_limits(self, limits: SimLimits) -> bool:
+        """Take the sim's control period and limits; return True if they changed.
+
+        Raises ValueError with every reason when a value is not a finite number > 0.
+        """
+        problems = limits.problems()
+        if problems:
+            raise ValueError("the sim's limits are unusable: " + '; '.join(problems))
+        changed = limits != self.limits
+        if self.limits is None or limits.control_period != self.limits.control_period:
+            self.sim_human = self._new_sim_human(self.dof, limits.control_period)
+            self._sim_episode = None
+        self.limits = limits
+        return changed
+
+    def _new_sim_human(self, dof: str, control_period: float):
         if self.params.input == MODEL:
             from hrc_joystick_node.human_model import ClonedHuman
 
             return ClonedHuman(self.params.model_file, dof, seed=self.params.seed,
-                               control_period=self.params.control_period)
+                               control_period=control_period)
         return SimulatedHuman(self.profile, dof, seed=self.params.seed,
-                              control_period=self.params.control_period)
+                              control_period=control_period)
 
     def on_session(self, dof: str, involved: bool, subtasks, aborted: bool = False
                    ) -> typing.Tuple[bool, typing.List[str]]:
@@ -205,8 +230,8 @@ class HumanCore:
         known, unknown = normalize_subtasks(subtasks)
         changed = (not self.session_seen or dof != self.dof
                    or bool(involved) != self.involved or known != self.subtasks)
-        if dof != self.dof:
-            self.sim_human = self._new_sim_human(dof)
+        if dof != self.dof and self.limits is not None:
+            self.sim_human = self._new_sim_human(dof, self.limits.control_period)
             self._sim_episode = None
         self.dof, self.involved, self.subtasks = dof, bool(involved), known
         self.session_seen = True
@@ -237,6 +262,8 @@ class HumanCore:
         ``{input: StickReading}`` for the joystick inputs the caller read just now (device,
         joy).
         """
+        if self.limits is None:
+            raise RuntimeError("the sim's limits are not known yet: call set_limits() first")
         last = self.last_answer
         if self.aborted:
             return self._zero(episode, step, stamp_ns, 'session aborted by the operator')
@@ -244,7 +271,7 @@ class HumanCore:
             return last._replace(repeated=True)
         command, engaged, source, detail = self._decide(episode, step, stamp_ns, state,
                                                         sticks or {})
-        scale = self.params.max_force if self.dof == TRANSLATION else self.params.max_torque
+        scale = self.limits.full_scale(self.dof)
         answer = HumanAnswer(int(episode), int(step), int(stamp_ns), command, command * scale,
                              self.dof, source, detail, engaged)
         self.last_answer = answer

@@ -8,8 +8,10 @@ Subscribes ``/hrc/state`` (TaskState), ``/hrc/session`` (SessionStatus, transien
 when the input may be ``/joy``, ``/joy`` (sensor_msgs/Joy). For every state that is not the last
 of its episode it publishes ``/hrc/human/action`` (HumanAction, whose ``source`` says which
 input drove it) and ``/hrc/human/cmd_wrench`` (WrenchStamped, only the human's degree of
-freedom set, scaled by ``max_force``/``max_torque``), both carrying the state's stamp, so the
-lockstep sim can match them to the step. It answers even when the human is not involved (zero,
+freedom set, scaled by the sim's ``max_force``/``max_torque``), both carrying the state's
+stamp, so the lockstep sim can match them to the step. The sim owns its control period and
+limits: the node reads them at start from the sim's parameter service (node ``sim_node``) and
+subscribes to states only then. It answers even when the human is not involved (zero,
 ``engaged`` false), so the sim can always wait for both actors. When the session is aborted
 (phase ``aborted``) it sends a zero command at once, answering the newest state, and zero for
 anything after. The joystick device is sampled (drained without blocking) when each state
@@ -29,8 +31,10 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
+from hrc_common.contract import NS_PER_S, SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME, set_wrench_value
 from hrc_common.nodes import run_node
+from hrc_common.parameter_query import ParameterQuery
 from hrc_common.params import as_dict, declare_parameters
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from rclpy.node import Node
@@ -49,6 +53,8 @@ SUMMARY = ('The human side of hrc: reads a Linux joystick device, sensor_msgs/Jo
 HUMAN_INPUT = '/hrc/human/input'
 # The input status is republished at least this often (s) even when nothing changed.
 STATUS_HEARTBEAT = 1.0
+# While the sim's parameters are not known, say so this often (s).
+SIM_WAIT_REPORT_S = 10.0
 
 __all__ = ['HumanNode', 'HumanParams', 'HUMAN_INPUT', 'StateView', 'main', 'state_view',
            'status_message']
@@ -64,7 +70,7 @@ def state_view(message: TaskState, control_period: float) -> StateView:
 
 def stamp_ns(stamp) -> int:
     """Return a builtin_interfaces/Time as integer nanoseconds."""
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
+    return stamp.sec * NS_PER_S + stamp.nanosec
 
 
 def status_message(status: InputStatus, hardware_id: str, extra: dict) -> DiagnosticStatus:
@@ -110,8 +116,13 @@ class HumanNode(Node):
         # serves them in creation order, and the state must be answered with the new roles.
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS, event_callbacks=quiet_sub)
-        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
-                                 event_callbacks=quiet_sub)
+        # States are subscribed once the sim's control period and limits are known (read from
+        # the sim's parameters, never repeated here): until then the graph shows no listener
+        # of /hrc/state on this node, so a session runner waits for it.
+        self.state_subscription = None
+        self.sim_query = ParameterQuery(self, params.sim_node, SimLimits.NAMES,
+                                        self.on_sim_limits)
+        self._waiting_since = time.monotonic()
         self.joy_subscription = None
         if self.joy is not None:
             self.joy_subscription = self.create_subscription(Joy, topics.JOY, self.on_joy,
@@ -131,11 +142,39 @@ class HumanNode(Node):
         """States answered so far (not counting repeats)."""
         return self.core.answered
 
+    # -- the sim's limits ------------------------------------------------------------------
+    def on_sim_limits(self, values: dict) -> None:
+        """Take the sim's control period and limits; then answer states."""
+        try:
+            limits = SimLimits(**values)
+            self.core.set_limits(limits)
+        except (TypeError, ValueError) as error:
+            self.get_logger().error(f'/{self.sim_query.target} parameters unusable: {error}; '
+                                    f'no state is answered')
+            return
+        self.get_logger().info(f'from /{self.sim_query.target}: {limits.describe()}')
+        self.state_subscription = self.create_subscription(
+            TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
+            event_callbacks=qos.NO_SUBSCRIPTION_EVENTS)
+
+    def wait_for_sim(self, now: float) -> None:
+        """Ask the sim for its limits until it answers; say every 10 s that we wait."""
+        if self.sim_query.done:
+            return
+        self.sim_query.poll()
+        if now - self._waiting_since >= SIM_WAIT_REPORT_S:
+            self._waiting_since = now
+            self.get_logger().warning(
+                f"waiting for the sim's control period and limits on {self.sim_query.service} "
+                f'(is the sim running, under the node name {self.sim_query.target!r} '
+                f'(parameter sim_node), in this ROS domain?)')
+
     # -- inputs ----------------------------------------------------------------------------
     def check_inputs(self) -> None:
         """Drain the device, reopen it if absent, watch /joy, pick the input, report it."""
         now = time.monotonic()
         logger = self.get_logger()
+        self.wait_for_sim(now)
         device_present, device_status = False, 'no device configured'
         if self.device is not None:
             was_present = self.device.present
@@ -249,7 +288,7 @@ class HumanNode(Node):
             self.check_inputs()
         answer = self.core.answer(message.episode, message.step,
                                   stamp_ns(message.header.stamp),
-                                  state_view(message, self.params.control_period),
+                                  state_view(message, self.core.limits.control_period),
                                   self._sticks())
         if answer.repeated and self._last_messages is not None:
             # The same state again: repeat the answer (the simulated human was not advanced).
@@ -265,7 +304,7 @@ class HumanNode(Node):
                              source_detail=answer.detail, engaged=answer.engaged)
         if stamp is None:
             action.header.stamp.sec, action.header.stamp.nanosec = divmod(answer.stamp_ns,
-                                                                         1_000_000_000)
+                                                                         NS_PER_S)
         else:
             action.header.stamp = stamp
         action.header.frame_id = 'world'

@@ -1,10 +1,12 @@
 """The human's per-step core without ROS: inputs, roles, abort, repeats, the simulated human."""
 
 import dataclasses
+import math
 import pathlib
 
 import pytest
 
+from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
 from hrc_joystick_node.inputs import DEVICE, JOY, MODEL, SIM, StickReading, ZERO
@@ -30,6 +32,9 @@ class State:
     ball_velocity: float = 0.0
 
 
+LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)   # a sim's
+
+
 def states(count, angle=0.2):
     return [State(step=step, time=0.2 * step, pendulum_angle=angle * (1 - step / count),
                   pendulum_angular_velocity=-angle / count / 0.2) for step in range(count)]
@@ -37,6 +42,34 @@ def states(count, angle=0.2):
 
 def stamp(episode, step, steps_per_episode=201):
     return (episode * steps_per_episode + step) * PERIOD_NS
+
+
+def core_of(params: HumanParams) -> HumanCore:
+    """Return the core of ``params`` once it knows the sim's limits (as the node's does)."""
+    core = HumanCore(params, PROFILES)
+    core.set_limits(LIMITS)
+    return core
+
+
+def test_no_answer_before_the_sims_limits_and_the_sims_values_are_used():
+    core = HumanCore(HumanParams(input='sim', profile='paper', seed=3), PROFILES)
+    core.on_inputs(False, '', False, '')
+    with pytest.raises(RuntimeError, match="the sim's limits are not known yet"):
+        core.answer(0, 0, 0, State(pendulum_angle=0.3))
+    with pytest.raises(ValueError) as refused:
+        core.set_limits(SimLimits(control_period=0.0, max_force=2.0, max_torque=math.inf))
+    assert 'control_period' in str(refused.value) and 'max_torque' in str(refused.value)
+    # Another sim: a 0.1 s period (the simulated human's delay counts in its steps) and a
+    # stronger hinge; the answers follow them.
+    other = SimLimits(control_period=0.1, max_force=3.0, max_torque=0.8)
+    assert core.set_limits(other)
+    reference = SimulatedHuman(PROFILES['paper'], 'rotation', seed=3, control_period=0.1)
+    reference.reset(0)
+    for state in states(10):
+        answer = core.answer(0, state.step, stamp(0, state.step), state)
+        assert answer.command == reference.act(state, ['pendulum'],
+                                               now=stamp(0, state.step) * 1e-9)
+        assert answer.wrench == pytest.approx(0.8 * answer.command)
 
 
 def test_source_codes_are_the_message_constants():
@@ -49,7 +82,7 @@ def test_source_codes_are_the_message_constants():
 
 def test_the_simulated_human_answers_on_the_simulation_clock_and_repeats_do_not_advance_it():
     params = HumanParams(input='sim', profile='paper', seed=3)
-    core = HumanCore(params, PROFILES)
+    core = core_of(params)
     core.on_inputs(False, '', False, '')
     reference = SimulatedHuman(PROFILES['paper'], 'rotation', seed=3)
     reference.reset(0)
@@ -70,7 +103,7 @@ def test_the_simulated_human_answers_on_the_simulation_clock_and_repeats_do_not_
 
 
 def test_roles_not_involved_and_abort():
-    core = HumanCore(HumanParams(input='sim', profile='skilled'), PROFILES)
+    core = core_of(HumanParams(input='sim', profile='skilled'))
     core.on_inputs(False, '', False, '')
     assert core.answer(0, 0, stamp(0, 0), State(pendulum_angle=0.3)).command < 0.0
     changed, unknown = core.on_session('translation', True, ['T2_1', 'juggle'])
@@ -93,7 +126,7 @@ def test_roles_not_involved_and_abort():
 def test_a_joystick_drives_it_and_its_loss_holds_zero_and_asks_for_a_pause():
     params = HumanParams(input='device', device='/dev/input/js0', enable_button=0,
                          deadzone=0.0)
-    core = HumanCore(params, PROFILES)
+    core = core_of(params)
     core.on_inputs(False, 'cannot open /dev/input/js0: No such file or directory', False, '')
     answer = core.answer(0, 0, stamp(0, 0), State())
     assert (answer.command, answer.engaged, answer.source) == (0.0, False, ZERO)
@@ -122,8 +155,7 @@ def test_a_joystick_drives_it_and_its_loss_holds_zero_and_asks_for_a_pause():
 
 
 def test_the_simulated_human_stands_in_only_when_asked_and_says_so():
-    core = HumanCore(HumanParams(input='device', on_input_lost='sim', profile='skilled'),
-                     PROFILES)
+    core = core_of(HumanParams(input='device', on_input_lost='sim', profile='skilled'))
     core.on_inputs(True, 'open', False, '')
     core.on_inputs(False, '/dev/input/js0 vanished', False, '')
     answer = core.answer(0, 0, stamp(0, 0), State(pendulum_angle=0.3))
@@ -135,7 +167,7 @@ def test_the_simulated_human_stands_in_only_when_asked_and_says_so():
 
 
 def test_a_person_of_the_population_and_bad_profiles():
-    core = HumanCore(HumanParams(input='sim', profile='paper', person=4), PROFILES)
+    core = core_of(HumanParams(input='sim', profile='paper', person=4))
     assert core.profile == sample_person(PROFILES['paper'], 4)
     core.on_inputs(False, '', False, '')
     assert core.answer(0, 0, 0, State()).detail == 'paper person 4'
@@ -152,8 +184,8 @@ def test_a_core_from_composed_parameters_as_the_in_process_engine_builds_it():
     path = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'human.yaml'
     parameters = yaml.safe_load(path.read_text())['human']['ros__parameters']
     parameters.update(input='sim', person=2, seed=5)
-    core = core_from_parameters(parameters)
+    core = core_from_parameters(parameters, LIMITS)
     assert core.profile == sample_person(PROFILES['paper'], 2)
     assert core.answer(0, 0, 0, State(pendulum_angle=0.3)).source == SIM
     with pytest.raises(ParameterError, match="unknown parameter 'persn'"):
-        core_from_parameters({'persn': 2})
+        core_from_parameters({'persn': 2}, LIMITS)

@@ -7,6 +7,7 @@ import pickle
 import pytest
 import torch
 
+from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams
 from hrc_joystick_node.human_model import (build_network, ClonedHuman, load_human_model,
@@ -112,6 +113,7 @@ def test_every_problem_of_a_file_is_refused_with_every_reason(tmp_path, model_fi
 
 def test_the_core_drives_the_human_with_the_model(model_file):
     core = HumanCore(HumanParams(input='model', model_file=str(model_file)), PROFILES)
+    core.set_limits(SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5))
     core.on_inputs(False, '', False, '')
     answer = core.answer(0, 0, 0, State(0.3))
     assert answer.source == MODEL and answer.source_code == 2 and answer.engaged

@@ -14,6 +14,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Joy
 
 from hrc_common import qos, topics
+from hrc_common.contract import SimLimits
 from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
 from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
@@ -21,6 +22,7 @@ from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 
 WAIT = 15.0  # s: generous bound for anything over DDS on a busy 2-core machine
+SIM_LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)  # the sim's defaults
 PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
 
 
@@ -36,6 +38,8 @@ class Harness:
         import rclpy
 
         self.prefix = '/test_' + uuid.uuid4().hex[:12]
+        self.context = context
+        self.sim_parameters = None
         self.node = rclpy.create_node('human_node_test', context=context)
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.node)
@@ -63,13 +67,32 @@ class Harness:
         """Return the test's name of topic ``name``."""
         return self.prefix + name
 
-    def start(self, start_node, **kwargs):
-        """Start the human node with every topic remapped under the test's prefix."""
+    def start(self, start_node, parameters=None, sim_node=None, limits=SIM_LIMITS, **kwargs):
+        """Start the human node with every topic remapped under the test's prefix.
+
+        The node reads the sim's period and limits from node ``sim_node``; by default from a
+        stand-in node of this test that declares ``limits`` as the sim does.
+        """
+        if sim_node is None:
+            sim_node = self.serve_sim_parameters(limits)
         remaps = []
         for name in (topics.STATE, topics.SESSION, topics.JOY, topics.HUMAN_ACTION,
                      topics.HUMAN_CMD_WRENCH, HUMAN_INPUT):
             remaps += ['-r', f'{name}:={self.topic(name)}']
-        return start_node('hrc_joystick_node', 'human_node', ros_args=remaps, **kwargs)
+        return start_node('hrc_joystick_node', 'human_node', ros_args=remaps,
+                          parameters=dict(parameters or {}, sim_node=sim_node), **kwargs)
+
+    def serve_sim_parameters(self, limits) -> str:
+        """Serve ``limits`` as parameters of a node with a unique name; return the name."""
+        import rclpy
+
+        name = 'sim_' + self.prefix[len('/test_'):]
+        self.sim_parameters = rclpy.create_node(name, context=self.context)
+        for field, value in zip(SimLimits.NAMES, (limits.control_period, limits.max_force,
+                                                  limits.max_torque)):
+            self.sim_parameters.declare_parameter(field, value)
+        self.executor.add_node(self.sim_parameters)
+        return name
 
     def _on_action(self, message):
         self.action_log.append(message)
@@ -122,6 +145,8 @@ class Harness:
             self._joy_timer = None
 
     def close(self):
+        if self.sim_parameters is not None:
+            self.sim_parameters.destroy_node()
         self.node.destroy_node()
 
 
@@ -204,10 +229,14 @@ def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_n
 
 
 def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node, harness):
+    # A sim with a 4 N slider: the human's wrench follows the sim's limit, read at run time.
     process = harness.start(start_node, params_file=PARAMS / 'human.yaml',
-                            parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1,
-                                        'max_force': 4.0})
+                            parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1},
+                            limits=SimLimits(control_period=0.2, max_force=4.0,
+                                             max_torque=0.5))
     harness.wait_for_human_node(process)
+    assert harness.spin_until(
+        lambda: 'control period 0.2 s, max_force 4 N, max_torque 0.5 N*m' in process.output)
     # Until a session arrives: the parameters (rotation, involved).
     action, wrench = harness.step(task_state(0, 0, pendulum_angle=0.3), process)
     assert action.dof == HumanAction.DOF_ROTATION and action.engaged
@@ -451,15 +480,19 @@ def test_drives_the_real_sim_node_in_lockstep_without_a_missing_command(start_no
     deep = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     harness.node.create_subscription(TaskState, harness.topic(topics.STATE), states.append,
                                      deep)
-    human = harness.start(start_node, parameters={'input': 'sim', 'profile': 'skilled'})
-    harness.wait_for_human_node(human)
     remaps = []
     for name in (topics.STATE, topics.SESSION, topics.HUMAN_CMD_WRENCH, topics.ROBOT_CMD_WRENCH,
                  topics.CLOCK, topics.MARKERS, topics.CAMERA_IMAGE, topics.RESET_SERVICE):
         remaps += ['-r', f'{name}:={harness.topic(name)}']
-    sim = start_node('hrc_sim_node', 'sim_node', ros_args=remaps, parameters={
-        'expected_actors': ['human'], 'marker_rate': 0.0,
-        'lockstep_timeout': 1.0, 'robot_dof': 'translation'})
+    # The real sim under a name of this test: the human node reads its period and limits.
+    sim_name = 'sim_' + harness.prefix[len('/test_'):]
+    sim = start_node('hrc_sim_node', 'sim_node', ros_args=remaps + ['-r', f'__node:={sim_name}'],
+                     parameters={'expected_actors': ['human'], 'marker_rate': 0.0,
+                                 'lockstep_timeout': 1.0, 'robot_dof': 'translation'})
+    human = harness.start(start_node, parameters={'input': 'sim', 'profile': 'skilled'},
+                          sim_node=sim_name)
+    harness.wait_for_human_node(human)
+    assert harness.spin_until(lambda: f'from /{sim_name}: control period 0.2 s' in human.output)
     reset = harness.node.create_client(ResetEpisode, harness.topic(topics.RESET_SERVICE))
     assert harness.spin_until(reset.service_is_ready), sim.output
 

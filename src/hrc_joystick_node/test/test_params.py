@@ -22,13 +22,11 @@ def test_human_yaml_mirrors_the_defaults():
         as_dict(HumanParams())
 
 
-def test_scaling_and_period_agree_with_the_sim():
-    from hrc_sim_node.physics import PhysicsParams
-
-    physics, human = PhysicsParams(), HumanParams()
-    assert human.max_force == physics.max_force
-    assert human.max_torque == physics.max_torque
-    assert human.control_period == physics.control_period
+def test_the_sims_period_and_limits_are_not_parameters_of_the_human():
+    """The sim owns them; the node reads them from the sim (test_human_node), no copy here."""
+    names = {field.name for field in fields(HumanParams)}
+    assert not {'max_force', 'max_torque', 'control_period'} & names
+    assert HumanParams().sim_node == 'sim'
 
 
 def test_the_default_profile_exists_and_the_dataclass_defaults_are_the_skilled_profile():

@@ -34,13 +34,12 @@ import time
 from hrc_common import qos, topics
 from hrc_common.contract import atomic_write, dof_name, PERSONAL_FILE_MODE, phase_label
 from hrc_common.nodes import run_node
+from hrc_common.parameter_query import ParameterQuery
 from hrc_common.params import declare_parameters, param, ParameterError, with_overrides
 from hrc_common.session_control import OPERATOR_SERVICES
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
-from rcl_interfaces.srv import GetParameters
 from rclpy.node import Node
-from rclpy.parameter import parameter_value_to_python
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 import yaml
@@ -287,46 +286,6 @@ class PageServer:
         self.closing.set()
         self.httpd.shutdown()
         self.httpd.server_close()
-
-
-class ParameterQuery:
-    """Read some parameters of another node once, through its get_parameters service."""
-
-    def __init__(self, node: Node, target: str, names: tuple, on_values):
-        self.node = node
-        self.target = target
-        self.names = list(names)
-        self.on_values = on_values
-        self.client = node.create_client(GetParameters, f'/{target}/get_parameters')
-        self.future = None
-        self.done = False
-
-    def poll(self) -> None:
-        """Ask (again) if not answered yet and the service is there."""
-        if self.done or self.future is not None or not self.client.service_is_ready():
-            return
-        self.future = self.client.call_async(GetParameters.Request(names=self.names))
-        self.future.add_done_callback(self._on_answer)
-
-    def restart(self) -> None:
-        """Ask again (the node was restarted, e.g. a new session)."""
-        self.done = False
-
-    def _on_answer(self, future) -> None:
-        self.future = None
-        try:
-            values = [parameter_value_to_python(value) for value in future.result().values]
-        except Exception as error:  # the service call failed: try again later
-            self.node.get_logger().warning(f'reading parameters of /{self.target} failed: '
-                                           f'{error}', throttle_duration_sec=10.0)
-            return
-        if len(values) != len(self.names) or any(value is None for value in values):
-            self.node.get_logger().warning(
-                f'/{self.target} lacks some of the parameters {self.names}: got {values}',
-                throttle_duration_sec=10.0)
-            return
-        self.done = True
-        self.on_values(dict(zip(self.names, values)))
 
 
 class DisplayNode(Node):

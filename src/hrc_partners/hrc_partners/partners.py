@@ -19,7 +19,7 @@ Partners are callables for :func:`hrc_agent_node.offline.run_session` (``partner
 subtasks) -> command`` with ``start_episode(episode)``).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 import pathlib
 import typing
 
@@ -131,16 +131,16 @@ def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None
     from hrc_agent_node.checkpoint import load_into, read_checkpoint
     from hrc_agent_node.config import AgentParams
     from hrc_common.params import from_dict, with_overrides
-    from hrc_sim_node.physics import PhysicsParams
 
     config = read_checkpoint(checkpoint)['config']
-    physics = PhysicsParams()
     settings = dict(seed=int(seed), evaluation_only=True, resume_from=str(checkpoint),
-                    evaluation_episodes=int(episodes), checkpoint_dir='',
-                    max_force=physics.max_force, max_torque=physics.max_torque,
-                    torch_threads=1)
+                    evaluation_episodes=int(episodes), checkpoint_dir='', torch_threads=1)
     settings.update(overrides or {})
-    trained = from_dict(AgentParams, dict(config['params']))
+    # Checkpoints written before the sim's limits left AgentParams still hold max_force and
+    # max_torque among their params: those are the sim's now (run_session gives them).
+    known = {field.name for field in fields(AgentParams)}
+    trained = from_dict(AgentParams, {name: value for name, value in config['params'].items()
+                                      if name in known})
     core = AgentCore(with_overrides(trained, **settings))
     load_into(core, checkpoint, resume=False)
     return core

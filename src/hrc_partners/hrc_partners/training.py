@@ -29,6 +29,7 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     from hrc_agent_node.config import AgentParams
     from hrc_agent_node.offline import run_session
     from hrc_agent_node.partners import SimulatedHumanPartner
+    from hrc_common.contract import SimLimits
     from hrc_common.params import with_overrides
     from hrc_joystick_node.sim_human import load_profile
     from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
@@ -38,8 +39,8 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
-        evaluation_episodes=0, checkpoint_dir='', torch_threads=1,
-        max_force=physics.max_force, max_torque=physics.max_torque))
+        evaluation_episodes=0, checkpoint_dir='', torch_threads=1),
+        limits=SimLimits.of(physics))
     if mixture:
         trained_with = 'mixture:' + '+'.join(mixture)
         partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed,

@@ -36,11 +36,6 @@ class Command:
         return not self.refused
 
 
-def limit_for(dof: str, max_force: float, max_torque: float) -> float:
-    """Return the magnitude limit (N or N*m) of the degree of freedom ``dof``."""
-    return max_force if check_dof(dof) == TRANSLATION else max_torque
-
-
 def read_command(wrench, dof: str, limit: float) -> Command:
     """Apply the rules of this module to a geometry_msgs/Wrench-like object for ``dof``."""
     components = {f'{part}.{axis}': float(getattr(getattr(wrench, part), axis))

@@ -32,8 +32,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 import typing
 
-from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, TRANSLATION
-from hrc_sim_node.commands import ACTORS, Command, HUMAN, limit_for, read_command, ROBOT
+from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, SimLimits, TRANSLATION
+from hrc_sim_node.commands import ACTORS, Command, HUMAN, read_command, ROBOT
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME
 
 # Episode indices travel as uint32 (TaskState.episode, ResetEpisode.episode).
@@ -271,7 +271,7 @@ class StepProtocol:
             self._count(actor + '_stale')
             return CommandResult(actor, 'stale', stamp, awaited)
         dof = self.dof_of[actor]
-        limit = limit_for(dof, self.settings.max_force, self.settings.max_torque)
+        limit = SimLimits.of(self.settings).full_scale(dof)
         command = read_command(wrench, dof, limit)
         result = CommandResult(actor, 'accepted', stamp, awaited, command, dof, limit)
         if not command.accepted:

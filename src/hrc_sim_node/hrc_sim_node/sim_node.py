@@ -31,7 +31,7 @@ import time
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
 from hrc_common import qos, topics
-from hrc_common.contract import BODY_COLOURS
+from hrc_common.contract import BODY_COLOURS, SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
@@ -224,9 +224,11 @@ class SimNode(Node):
 
     def _on_reset(self, request, response):
         response.clock_mode = self.protocol.mode
-        response.control_period = self.params.control_period
-        response.max_force = self.params.max_force
-        response.max_torque = self.params.max_torque
+        # The actors scale and observe commands with these (hrc_common.contract.SimLimits).
+        limits = SimLimits.of(self.params)
+        response.control_period = limits.control_period
+        response.max_force = limits.max_force
+        response.max_torque = limits.max_torque
         if self._exiting:
             response.success = False
             response.message = 'the sim is exiting (max_episodes reached)'

@@ -1,0 +1,56 @@
+"""Read parameters of another node at run time, through its ``get_parameters`` service.
+
+How a node learns what another node owns instead of repeating it in its own YAML: the human
+node and the display read the sim's control period and limits (and the display its geometry)
+from the running sim. rclpy; no spinning of its own: the owner node's timer calls
+:meth:`ParameterQuery.poll` until the answer came.
+"""
+
+from rcl_interfaces.srv import GetParameters
+from rclpy.node import Node
+from rclpy.parameter import parameter_value_to_python
+
+
+class ParameterQuery:
+    """Read some parameters of another node once, through its get_parameters service."""
+
+    def __init__(self, node: Node, target: str, names, on_values):
+        self.node = node
+        self.target = target.lstrip('/')
+        self.names = list(names)
+        self.on_values = on_values
+        self.client = node.create_client(GetParameters, f'/{self.target}/get_parameters')
+        self.future = None
+        self.done = False
+
+    @property
+    def service(self) -> str:
+        """The name of the service asked."""
+        return self.client.srv_name
+
+    def poll(self) -> None:
+        """Ask (again) if not answered yet and the service is there."""
+        if self.done or self.future is not None or not self.client.service_is_ready():
+            return
+        self.future = self.client.call_async(GetParameters.Request(names=self.names))
+        self.future.add_done_callback(self._on_answer)
+
+    def restart(self) -> None:
+        """Ask again (the node was restarted, e.g. a new session)."""
+        self.done = False
+
+    def _on_answer(self, future) -> None:
+        self.future = None
+        try:
+            values = [parameter_value_to_python(value) for value in future.result().values]
+        except Exception as error:  # the service call failed: try again later
+            self.node.get_logger().warning(f'reading parameters of /{self.target} failed: '
+                                           f'{error}', throttle_duration_sec=10.0)
+            return
+        if len(values) != len(self.names) or any(value is None for value in values):
+            self.node.get_logger().warning(
+                f'/{self.target} lacks some of the parameters {self.names}: got {values}',
+                throttle_duration_sec=10.0)
+            return
+        self.done = True
+        self.on_values(dict(zip(self.names, values)))
