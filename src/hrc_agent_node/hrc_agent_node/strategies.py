@@ -27,6 +27,8 @@ judged only on episodes trained under it.
 
 from dataclasses import dataclass
 
+from hrc_common.contract import check_case_table
+
 from hrc_agent_node.task_tree import load_data_file, TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
@@ -74,39 +76,28 @@ def load_cases(path, tree) -> dict:
 
 
 def cases_from_dict(document, tree) -> dict:
-    """Resolve the parsed cases document against ``tree``; raise CasesError with every reason."""
-    if not isinstance(document, dict) or not isinstance(document.get('strategies'), dict) \
-            or not isinstance(document.get('cases'), dict):
-        raise CasesError('a cases file needs the mappings `strategies` and `cases`')
-    problems = []
-    cases = {}
+    """Resolve the parsed cases document against ``tree``; raise CasesError with every reason.
+
+    The file's shape (case ids, strategy names, robot_action) is the contract's
+    (``hrc_common.contract.check_case_table``); what is checked here is the strategies' steps
+    against the tree.
+    """
     actions = list(tree.actions)
     if len(actions) != 2:
         raise CasesError(f'cases assign one action to the robot and the other to the human; the '
                          f'tree has {len(actions)} actions {actions}')
-    for raw_id, entry in document['cases'].items():
+    table, problems = check_case_table(document)
+    cases = {}
+    for case_id, spec in table.items():
+        missing = [dof for dof in (spec.robot_dof, spec.human_dof) if dof not in actions]
+        if missing:
+            problems.append(f'case {case_id}: {", ".join(missing)} is not an action of the '
+                            f'tree {actions}')
+            continue
         try:
-            case_id = int(raw_id)
-        except (TypeError, ValueError):
-            problems.append(f'case id {raw_id!r} is not an integer')
-            continue
-        if not isinstance(entry, dict):
-            problems.append(f'case {case_id}: needs strategy and robot_action')
-            continue
-        strategy = entry.get('strategy')
-        robot_action = entry.get('robot_action')
-        if not isinstance(strategy, str) or strategy not in document['strategies']:
-            problems.append(f'case {case_id}: unknown strategy {strategy!r}; defined: '
-                            f'{sorted(document["strategies"])}')
-            continue
-        if not isinstance(robot_action, str) or robot_action not in actions:
-            problems.append(f'case {case_id}: robot_action {robot_action!r} is not an action of '
-                            f'the tree {actions}')
-            continue
-        human_action = actions[1] if robot_action == actions[0] else actions[0]
-        try:
-            cases[case_id] = _resolve_case(case_id, strategy, document['strategies'][strategy],
-                                           robot_action, human_action, tree)
+            cases[case_id] = _resolve_case(case_id, spec.strategy,
+                                           document['strategies'][spec.strategy],
+                                           spec.robot_dof, spec.human_dof, tree)
         except CasesError as error:
             problems.append(str(error))
     if problems:

@@ -36,9 +36,9 @@ Ids
     ``make_session_id(case, seed, now, timestamped=True)`` ('case{N}-seed{S}-{YYYYmmdd-HHMMSS}',
     or 'case{N}-seed{S}' inside an experiment).
 Cases (``params/cases.yaml``, the only place they are defined)
-    ``CaseSpec``, ``CaseTableError``, ``load_case_table(path=None)``, ``case_table()``
-    (cached default), ``case_ids()``, ``case_problem(case)`` -> reason or None,
-    ``cases_file_path()``.
+    ``CaseSpec``, ``CaseTableError``, ``load_case_table(path=None)``,
+    ``check_case_table(document)`` -> (table, problems), ``case_table()`` (cached default),
+    ``case_ids()``, ``case_problem(case)`` -> reason or None, ``cases_file_path()``.
 Files
     ``atomic_write(path, data, mode=0o644)``; ``PERSONAL_FILE_MODE`` (0o600) for files that
     hold a subject id or notes.
@@ -348,9 +348,8 @@ def cases_file_path() -> str:
 def load_case_table(path=None) -> dict:
     """Return {case id: CaseSpec} from a cases file (default: ``cases_file_path()``).
 
-    Checks the shape: a mapping with ``strategies`` (a mapping) and ``cases`` (a mapping of
-    positive integer ids to {strategy: a key of strategies, robot_action: a DOF}). Every
-    problem is reported at once in one CaseTableError.
+    Checks the shape (``check_case_table``); every problem is reported at once in one
+    CaseTableError.
     """
     path = path or cases_file_path()
     try:
@@ -360,9 +359,22 @@ def load_case_table(path=None) -> dict:
         raise CaseTableError(f'cannot read cases file {path}: {error.strerror}') from None
     except (yaml.YAMLError, UnicodeDecodeError) as error:
         raise CaseTableError(f'cases file {path} is not YAML: {error}') from None
+    table, problems = check_case_table(document)
+    if problems:
+        raise CaseTableError(f'cases file {path}: ' + '; '.join(problems))
+    return table
+
+
+def check_case_table(document) -> tuple:
+    """Return ({case id: CaseSpec} of the well-formed cases, [every problem]) of a parsed file.
+
+    The shape: a mapping with ``strategies`` (a mapping of strategy names; what a strategy
+    holds is the agent's, ``hrc_agent_node.strategies``) and ``cases`` (a non-empty mapping of
+    positive integer ids to {strategy: a key of strategies, robot_action: a DOF}).
+    """
     if not isinstance(document, dict):
-        raise CaseTableError(f'cases file {path}: expected a mapping with strategies and cases, '
-                             f'got {type(document).__name__}')
+        return {}, [f'expected a mapping with strategies and cases, got '
+                    f'{type(document).__name__}']
     strategies = document.get('strategies')
     cases = document.get('cases')
     problems = []
@@ -380,21 +392,21 @@ def load_case_table(path=None) -> dict:
         if not isinstance(entry, dict):
             problems.append(f'case {case_id}: expected a mapping, got {type(entry).__name__}')
             continue
-        unknown = sorted(set(entry) - {'strategy', 'robot_action'})
+        unknown = sorted(set(entry) - {'strategy', 'robot_action'}, key=str)
         if unknown:
             problems.append(f'case {case_id}: unknown keys {unknown}')
         strategy = entry.get('strategy')
         robot = entry.get('robot_action')
-        if strategy not in strategies:
-            problems.append(f'case {case_id}: strategy {strategy!r} is not one of '
-                            f'{sorted(strategies)}')
+        known_strategy = isinstance(strategy, str) and strategy in strategies
+        if not known_strategy:
+            problems.append(f'case {case_id}: unknown strategy {strategy!r}; defined: '
+                            f'{sorted(strategies, key=str)}')
         if robot not in DOFS:
-            problems.append(f'case {case_id}: robot_action {robot!r} is not one of {DOFS}')
-        else:
+            problems.append(f'case {case_id}: robot_action {robot!r} is not an action; the '
+                            f'actions: {list(DOFS)}')
+        elif known_strategy:
             table[case_id] = CaseSpec(case_id, strategy, robot, other_dof(robot))
-    if problems:
-        raise CaseTableError(f'cases file {path}: ' + '; '.join(problems))
-    return dict(sorted(table.items()))
+    return dict(sorted(table.items())), problems
 
 
 @functools.lru_cache(maxsize=None)
