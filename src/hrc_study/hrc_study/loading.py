@@ -1,7 +1,5 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
-import pathlib
-
 from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
 
 
@@ -81,20 +79,15 @@ def _final_flag(summary):
 
 
 def load_sessions(paths, log=print) -> list:
-    """Return SessionRecords of every session folder under ``paths`` (sorted by case, seed)."""
-    from hrc_bag import bag_reader
-    from hrc_bag.report import find_sessions, load_session
+    """Return SessionRecords of every session folder under ``paths`` (sorted by case, seed).
 
-    decoder = bag_reader.MessageDecoder()
-    records = []
-    for path in find_sessions([pathlib.Path(path) for path in paths]):
-        session = load_session(path, decoder)
-        if not session.summaries:
-            log(f'{path}: no episode summaries, skipped')
-            continue
-        if not session.complete:
-            log(f'{path}: a file was not closed (recorder killed?): read up to its last chunk')
-        records.append(record_from_bag_session(session))
+    The sessions are read by ``hrc_bag.report.load_sessions`` (its notices and skipped
+    sessions go to ``log``; a path without sessions raises FileNotFoundError, files that are
+    not MCAP raise ``hrc_bag.bag_reader.BagError`` with every reason).
+    """
+    from hrc_bag.report import load_sessions as load_bag_sessions
+
+    records = [record_from_bag_session(session) for session in load_bag_sessions(paths, log)]
     records.sort(key=lambda record: (record.profile, record.case_id, record.seed,
                                      record.session_id))
     return records
