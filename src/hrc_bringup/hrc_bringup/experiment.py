@@ -124,13 +124,10 @@ def _ray_node_id() -> str:
 
 def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session with the in-process engine; return (exit code, error text)."""
-    from hrc_bringup.plan import parse_override
+    from hrc_bringup.overrides import parse_overrides
     from hrc_engine.engine import EngineConfig, run_session
 
-    overrides = {}
-    for text in task.overrides:
-        node, name, value = parse_override(text)
-        overrides[f'{node}.{name}'] = value
+    overrides = parse_overrides(task.overrides)
     run_session(EngineConfig(
         case=task.case, seed=task.seed, training_episodes=task.training_episodes,
         evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
@@ -323,12 +320,11 @@ def parse_args(argv=None):
         if profile in options.profile_seeds:
             reasons.append(f'--profiles repeats {profile!r}')
         options.profile_seeds[profile] = int(count) if colon else options.seeds
-    from hrc_bringup.plan import parse_override
-    for override in options.overrides:
-        try:
-            parse_override(override)
-        except ValueError as error:
-            reasons.append(str(error))
+    from hrc_bringup.overrides import parse_overrides
+    try:
+        parse_overrides(options.overrides)
+    except ValueError as error:
+        reasons.append(str(error))
     if reasons:
         parser.error('; '.join(reasons))
     options.argv = list(sys.argv[1:] if argv is None else argv)

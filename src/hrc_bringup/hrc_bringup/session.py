@@ -50,7 +50,8 @@ from hrc_live.input_check import (device_missing_message, device_presence, INPUT
                                   joy_missing_message, joystick_devices, lost_reason)
 import yaml
 
-from hrc_bringup.plan import (compose, NODES, new_session_id, parse_override, SessionSettings,
+from hrc_bringup.overrides import parse_overrides
+from hrc_bringup.plan import (compose, NODES, new_session_id, SessionSettings,
                               write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
@@ -166,12 +167,10 @@ def parse_args(argv=None):
             overrides.update(file_overrides(path))
         except (OSError, ValueError, yaml.YAMLError) as error:
             parser.error(f'--params {path}: {error}')
-    for text in options.overrides:
-        try:
-            node, name, value = parse_override(text)
-        except ValueError as error:
-            parser.error(str(error))
-        overrides[f'{node}.{name}'] = value
+    try:
+        overrides.update(parse_overrides(options.overrides))
+    except ValueError as error:
+        parser.error(str(error))
     settings = SessionSettings(
         case=options.case, seed=options.seed, mode=options.mode,
         human_input=options.human_input, human_profile=options.human_profile,
