@@ -299,7 +299,10 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
                     time.sleep(0.2)
                 return text in output()
 
-            assert wait_output('episode 1', 90), output()
+            # Episode 0 ran with the person (its summary line), so the cable is pulled during
+            # episode 1. ('episode 1' alone also matches the runner's first line, "the person
+            # joins at episode 1": the outage then fell before the session started.)
+            assert wait_output('| episode   0 | training]', 90), output()
             lab.link.outage(2.0)      # the cable is pulled for 2 s during the episode
             assert wait_output("no answer from the person's side", 30), output()
             time.sleep(2.5)           # the link is back; the operator resumes

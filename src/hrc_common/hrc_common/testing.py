@@ -93,3 +93,19 @@ def wait_for(condition, timeout: float, interval: float = 0.02, spin=None) -> bo
         if spin is None:
             time.sleep(interval)
     return condition()
+
+
+def serve_sim_parameters(context, limits, name: str = 'sim'):
+    """Return a node ``name`` declaring the sim's period and limits, as the sim node does.
+
+    For tests that run a human node without a sim: the node reads ``control_period``,
+    ``max_force`` and ``max_torque`` from ``/<name>/get_parameters`` before it answers states.
+    ``limits``: an ``hrc_common.contract.SimLimits``. The caller spins the node (add it to the
+    test's executor) and destroys it.
+    """
+    import rclpy
+
+    node = rclpy.create_node(name, context=context)
+    for field in limits.NAMES:
+        node.declare_parameter(field, float(getattr(limits, field)))
+    return node

@@ -15,6 +15,7 @@ from sensor_msgs.msg import Joy
 
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
+from hrc_common.testing import serve_sim_parameters
 from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
 from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
@@ -84,13 +85,8 @@ class Harness:
 
     def serve_sim_parameters(self, limits) -> str:
         """Serve ``limits`` as parameters of a node with a unique name; return the name."""
-        import rclpy
-
         name = 'sim_' + self.prefix[len('/test_'):]
-        self.sim_parameters = rclpy.create_node(name, context=self.context)
-        for field, value in zip(SimLimits.NAMES, (limits.control_period, limits.max_force,
-                                                  limits.max_torque)):
-            self.sim_parameters.declare_parameter(field, value)
+        self.sim_parameters = serve_sim_parameters(self.context, limits, name)
         self.executor.add_node(self.sim_parameters)
         return name
 

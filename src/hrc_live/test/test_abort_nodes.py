@@ -5,9 +5,11 @@ must stop stepping at once and hold, the human node must send zero at once and k
 """
 
 from hrc_common import qos, topics
-from hrc_common.testing import wait_for
+from hrc_common.contract import SimLimits
+from hrc_common.testing import serve_sim_parameters, wait_for
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
+from hrc_sim_node.physics import PhysicsParams
 import pytest
 
 
@@ -33,6 +35,14 @@ class Peer:
                                                   qos.SESSION_QOS)
         self.state = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
         self.reset = self.node.create_client(ResetEpisode, topics.RESET_SERVICE)
+        self.context = context
+        self.sim_parameters = None
+
+    def serve_sim_parameters(self):
+        """Stand in for the sim's parameter service (a human node reads its limits there)."""
+        self.sim_parameters = serve_sim_parameters(self.context,
+                                                   SimLimits.of(PhysicsParams()))
+        self.executor.add_node(self.sim_parameters)
 
     def spin(self, seconds: float = 0.05):
         self.executor.spin_once(timeout_sec=seconds)
@@ -48,6 +58,8 @@ class Peer:
 
     def close(self):
         self.executor.shutdown()
+        if self.sim_parameters is not None:
+            self.sim_parameters.destroy_node()
         self.node.destroy_node()
 
 
@@ -78,6 +90,7 @@ def test_the_realtime_sim_holds_at_once_on_an_abort(start_node, peer):
 
 
 def test_the_human_node_sends_zero_at_once_on_an_abort(start_node, peer):
+    peer.serve_sim_parameters()
     human = start_node('hrc_joystick_node', 'human_node', parameters={'input': 'sim'})
     peer.publish_session(SessionStatus.PHASE_TRAINING)
     step = [0]

@@ -9,13 +9,15 @@ import pty
 import subprocess
 
 from hrc_common import qos, topics
+from hrc_common.contract import SimLimits
 from hrc_common.params import load_yaml
-from hrc_common.testing import executable_path, wait_for
+from hrc_common.testing import executable_path, serve_sim_parameters, wait_for
 from hrc_joystick_node.human_node import HumanParams
 from hrc_joystick_node.js_event import (JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT,
                                         pack_event)
 from hrc_live.joystick_setup import deadzone_from_rest
 from hrc_msgs.msg import HumanAction, TaskState
+from hrc_sim_node.physics import PhysicsParams
 import pytest
 import yaml
 
@@ -196,15 +198,18 @@ def test_the_human_node_reads_the_written_file_and_the_stick(fifo, tmp_path, sta
                               '--invert', '--deadzone', 0.1, '--enable-button', 4, '-o',
                               output_file)
     assert code == 0, output
+    node = rclpy.create_node('test_live_joystick', context=rclpy_context)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    # The sim's period and limits, which the human node reads before it answers states.
+    sim_parameters = serve_sim_parameters(rclpy_context, SimLimits.of(PhysicsParams()))
+    executor.add_node(sim_parameters)
     human = start_node('hrc_joystick_node', 'human_node', params_file=output_file)
     assert wait_for(lambda: 'opened' in human.output, timeout=60), human.output
     # The stick half-way right (raw +16384: -0.5 in the Joy convention, +0.5 inverted) with the
     # enable button held.
     os.write(writer, initial_state() + pack_event(40, 16384, JS_EVENT_AXIS, 2)
              + pack_event(50, 1, JS_EVENT_BUTTON, 4))
-    node = rclpy.create_node('test_live_joystick', context=rclpy_context)
-    executor = SingleThreadedExecutor(context=rclpy_context)
-    executor.add_node(node)
     actions = []
     node.create_subscription(HumanAction, topics.HUMAN_ACTION, actions.append,
                              qos.HUMAN_ACTION_QOS)
@@ -224,6 +229,7 @@ def test_the_human_node_reads_the_written_file_and_the_stick(fifo, tmp_path, sta
     assert action.source == HumanAction.SOURCE_DEVICE and str(path) in action.source_detail
     assert action.command == pytest.approx((16384 / 32767 - 0.1) / 0.9, abs=1e-3)
     executor.shutdown()
+    sim_parameters.destroy_node()
     node.destroy_node()
 
 
