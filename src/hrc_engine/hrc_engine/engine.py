@@ -34,13 +34,13 @@ import typing
 
 import yaml
 
-from hrc_common.contract import SimLimits
+from hrc_common.contract import NS_PER_S, SimLimits
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
 
 # The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns):
 # hrc_common.qos without rclpy (a test checks that both agree).
-COMMAND_DEADLINE_NS = 1_000_000_000
+COMMAND_DEADLINE_NS = NS_PER_S   # 1 s
 OFFERED_QOS = {
     '/hrc/state': (True, False, 0),
     '/hrc/robot/cmd_wrench': (True, False, COMMAND_DEADLINE_NS),

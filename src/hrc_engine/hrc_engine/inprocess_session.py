@@ -40,15 +40,13 @@ def parse_args(argv=None) -> EngineConfig:
     parser.add_argument('--json', action='store_true', help='print the result as JSON')
     options = parser.parse_args(argv)
 
-    from hrc_bringup.plan import parse_override
+    from hrc_bringup.overrides import parse_overrides
 
     reasons, overrides = [], {}
-    for text in options.set:
-        try:
-            node, name, value = parse_override(text)
-            overrides[f'{node}.{name}'] = value
-        except ValueError as error:
-            reasons.append(str(error))
+    try:
+        overrides = parse_overrides(options.set)
+    except ValueError as error:
+        reasons.append(str(error))
     if options.episodes < 0:
         reasons.append(f'--episodes must be >= 0, got {options.episodes}')
     if reasons:
