@@ -419,9 +419,8 @@ class InputGuard:
         # The human node's input status (src/hrc_joystick_node/README.md): pause_requested
         # when its joystick is missing or lost, state 'ok' when it is back.
         from diagnostic_msgs.msg import DiagnosticStatus
-        from hrc_joystick_node.human_node import HUMAN_INPUT
         self.input_status = {}          # the newest status's key-values, plus 'message'
-        node.create_subscription(DiagnosticStatus, HUMAN_INPUT, self._on_input_status,
+        node.create_subscription(DiagnosticStatus, topics.HUMAN_INPUT, self._on_input_status,
                                  qos.SESSION_QOS)
 
     def present(self) -> tuple:

@@ -18,6 +18,10 @@ JOY = '/joy'
 CAMERA_IMAGE = '/hrc/sim/image'
 MARKERS = '/hrc/sim/markers'
 RESET_SERVICE = '/hrc/sim/reset'
+# The human node's input status (diagnostic_msgs/DiagnosticStatus, transient local).
+HUMAN_INPUT = '/hrc/human/input'
+# The session runner's "joystick disconnected" words for the pages (std_msgs/String).
+INPUT_LOST = '/hrc/session/input_lost'
 
 # The type of each topic of the session graph (by default name): what a recording holds.
 TYPES = {

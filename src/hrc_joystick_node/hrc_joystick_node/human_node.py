@@ -50,7 +50,7 @@ SUMMARY = ('The human side of hrc: reads a Linux joystick device, sensor_msgs/Jo
            '/hrc/human/cmd_wrench on the degree of freedom the session gives the human; '
            'reports its input on /hrc/human/input.')
 # The input status topic (diagnostic_msgs/DiagnosticStatus, reliable, transient local, depth 1).
-HUMAN_INPUT = '/hrc/human/input'
+HUMAN_INPUT = topics.HUMAN_INPUT
 # The input status is republished at least this often (s) even when nothing changed.
 STATUS_HEARTBEAT = 1.0
 # While the sim's parameters are not known, say so this often (s).

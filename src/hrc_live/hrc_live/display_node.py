@@ -21,7 +21,7 @@ nothing is configured twice. A lost input of the person (``input_lost_topic``, s
 session runner) shows "joystick disconnected" on both pages.
 """
 
-from dataclasses import dataclass, fields
+from dataclasses import fields
 import datetime
 import http.server
 import json
@@ -35,7 +35,7 @@ from hrc_common import qos, topics
 from hrc_common.contract import atomic_write, dof_name, PERSONAL_FILE_MODE, phase_label
 from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
-from hrc_common.params import declare_parameters, param, ParameterError, with_overrides
+from hrc_common.params import declare_parameters, ParameterError, with_overrides
 from hrc_common.session_control import OPERATOR_SERVICES
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
@@ -48,6 +48,7 @@ from hrc_live.display_core import (AgentPlan, console_document, DisplayModel, Hu
                                    overlay, overlay_document, ResultView, scene_geometry,
                                    SessionView, SOURCE_NAMES, state_document, StateView,
                                    status_document)
+from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_live.tlx import check_tlx, raw_tlx
 
@@ -66,29 +67,6 @@ SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limi
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
 # Events kept per client before the oldest are dropped (a stalled browser must not grow memory).
 CLIENT_QUEUE = 200
-
-
-@dataclass
-class DisplayParams:
-    """Parameters of the display node (mirrored in params/display.yaml)."""
-
-    port: int = param(8765, 'TCP port of the pages on 127.0.0.1 (localhost only); 0 = any free '
-                      'port (logged)', low=0, high=65535)
-    words_rate: float = param(5.0, 'how often the words and the console are recomputed and '
-                              'pushed when changed (Hz); states are pushed as they come',
-                              low=0.5, high=30.0)
-    result_seconds: float = param(5.0, 'the result of an episode stays up during the break '
-                                  'and this long into the next episode (s)', low=0.0,
-                                  high=600.0)
-    tlx_file: str = param('', 'file the raw NASA-TLX answers are appended to (YAML, mode '
-                          '0600); empty = no questionnaire on the page')
-    tlx_title: str = param('', 'what the questionnaire asks about, shown above it (e.g. the '
-                           'condition without naming the case)')
-    sim_node: str = param('sim', 'node whose parameters give the geometry and timing')
-    agent_node: str = param('agent', 'node whose parameters give the episode counts and the '
-                            'break between episodes')
-    query_period: float = param(1.0, 'interval between attempts to read the sim and agent '
-                                'parameters until they answer (s)', low=0.05, high=60.0)
 
 
 def state_view(message: TaskState) -> StateView:

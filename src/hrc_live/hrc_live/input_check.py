@@ -20,12 +20,13 @@ import os
 import stat
 import termios
 
+from hrc_common import topics
 from hrc_common.contract import InputSource
 
 SOURCE_NONE = int(InputSource.NONE)
 # The session runner says on this topic (std_msgs/String, transient local) why the person's
 # input is lost ('' = it is not); the display node shows it on both pages.
-INPUT_LOST_TOPIC = '/hrc/session/input_lost'
+INPUT_LOST_TOPIC = topics.INPUT_LOST
 NOT_INVOLVED = 'not involved'
 
 

@@ -265,7 +265,7 @@ def settings_yaml(settings: JoystickSettings, detected: str = '') -> str:
 def check_settings(settings: JoystickSettings) -> None:
     """Raise ParameterError if the human node would refuse these settings."""
     from hrc_common.params import as_dict, from_dict
-    from hrc_joystick_node.human_node import HumanParams
+    from hrc_joystick_node.human_core import HumanParams
 
     from_dict(HumanParams, {**as_dict(HumanParams()), **settings.parameters()})
 
