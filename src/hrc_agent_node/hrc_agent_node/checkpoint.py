@@ -69,7 +69,7 @@ def network_signature(core) -> dict:
 def make_checkpoint(core) -> dict:
     """Return the checkpoint dictionary of an AgentCore between episodes."""
     return {'format': FORMAT, 'format_version': FORMAT_VERSION,
-            'config': {'params': as_dict(core.params), 'preset': core.tree.preset,
+            'config': {'params': as_dict(core.params), 'preset': core.preset,
                        'case': core.case_id, 'strategy': core.strategy,
                        'robot_dof': core.robot_dof, 'human_dof': core.human_dof,
                        'session_id': core.session_id},

@@ -219,8 +219,8 @@ class InProcessSession:
                 self.writer.close()
             self.physics.close()
         return SessionResult(
-            self.session_id, core.case.case_id, self.agent_params.seed, core.case.strategy,
-            core.total_episodes, core.human_involved_episodes, bool(core.progress.finished),
+            self.session_id, core.case_id, self.agent_params.seed, core.strategy,
+            core.total_episodes, core.human_involved_episodes, bool(core.converged),
             summary, self.episodes, self.steps, time.perf_counter() - started,
             str(pathlib.Path(self.settings.bags_dir) / self.session_id)
             if self.writer is not None else '', str(self.run_dir),
@@ -289,7 +289,7 @@ class InProcessSession:
                   flush=True)
         if core.phase == 'updating':
             self._announce(f'updating the policy after episode {result.episode} '
-                           f'({len(core.buffer)} samples)')
+                           f'({core.buffered_samples} samples)')
             core.update()
         self._save_checkpoint(LATEST_CHECKPOINT)
         if core.phase != 'done':

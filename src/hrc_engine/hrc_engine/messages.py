@@ -90,7 +90,7 @@ def agent_step(record, stamp: int) -> dict:
 def episode_summary(core, result, stamp: int) -> dict:
     """Return the EpisodeSummary of a finished episode (stamp of its final state)."""
     return {'header': header(stamp), 'session_id': core.session_id,
-            'case_id': core.case.case_id, 'episode': result.episode,
+            'case_id': core.case_id, 'episode': result.episode,
             'training_step': result.training_step, 'human_involved': result.human_involved,
             'evaluation': result.evaluation, 'steps': result.steps,
             'terminated': result.terminated, 'truncated': result.truncated,
@@ -107,9 +107,9 @@ def session_status(core, text: str, wall_ns: int) -> dict:
     step = core.training_step
     sec, nanosec = stamp_fields(wall_ns)
     return {'header': {'stamp': {'sec': sec, 'nanosec': nanosec}, 'frame_id': ''},
-            'session_id': core.session_id, 'case_id': core.case.case_id,
-            'strategy': core.case.strategy, 'training_step': step.index,
-            'training_step_count': len(core.case.steps),
+            'session_id': core.session_id, 'case_id': core.case_id,
+            'strategy': core.strategy, 'training_step': step.index,
+            'training_step_count': core.training_step_count,
             'robot_dof': DOF_INDEX[core.robot_dof], 'human_dof': DOF_INDEX[core.human_dof],
             'human_involved': core.human_involved,
             'robot_subtasks': list(core.robot_subtasks),
