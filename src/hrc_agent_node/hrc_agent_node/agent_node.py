@@ -178,22 +178,31 @@ class AgentNode(Node):
             self.act(state, 0.0)  # same_step: the missing answer is observed as 0
 
     def missing_subscribers(self, now: float) -> bool:
-        """Return True while a node of ``wait_for_subscribers`` does not subscribe to the state.
+        """Return True while a node of ``wait_for_subscribers`` is not ready for the session.
 
-        Checked before the first episode of this process only; after ``reset_timeout`` the
-        session aborts with the names, rather than run with a recorder that misses the start.
+        Ready: it subscribes to the states and to the session, and every session reader the
+        graph shows is matched by this node's session writer (so the announcement of the first
+        episode reaches it before the reset: a human node that had not matched yet answered the
+        first states with its default roles). Checked before the first episode of this process
+        only; after ``reset_timeout`` the session aborts with the names.
         """
         wanted = {name for name in self.params.wait_for_subscribers if name}
         if not wanted or getattr(self, 'subscribers_seen', False):
             return False
-        present = {info.node_name for info in self.get_subscriptions_info_by_topic(topics.STATE)}
-        missing = sorted(wanted - present)
-        if not missing:
+        on_state = {info.node_name for info in self.get_subscriptions_info_by_topic(topics.STATE)}
+        session_readers = self.get_subscriptions_info_by_topic(topics.SESSION)
+        on_session = {info.node_name for info in session_readers}
+        missing = sorted((wanted - on_state) | (wanted - on_session))
+        matched = self.session_pub.get_subscription_count() >= len(session_readers)
+        if not missing and matched:
             self.subscribers_seen = True
             return False
         if now - self.waiting_since > self.params.reset_timeout:
-            self.abort(f'{", ".join(missing)} did not subscribe to {topics.STATE} within '
-                       f'{self.params.reset_timeout} s')
+            why = (f'{", ".join(missing)} did not subscribe to {topics.STATE} and '
+                   f'{topics.SESSION}' if missing else
+                   f'{len(session_readers)} readers of {topics.SESSION} in the graph, '
+                   f'{self.session_pub.get_subscription_count()} matched')
+            self.abort(f'{why} within {self.params.reset_timeout} s')
         return True
 
     def start_episode(self):

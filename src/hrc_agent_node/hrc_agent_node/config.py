@@ -59,10 +59,11 @@ class AgentParams:
     reset_timeout: float = param(30.0, 'Wall seconds to wait for the sim reset service before '
                                        'the session aborts', low=0.1, high=3600.0)
     wait_for_subscribers: list = param(
-        [''], 'Node names that must subscribe to /hrc/state before the first episode starts '
-              '(the session runner puts the recorder here, so the first state of the session '
-              'is recorded whatever the start-up order or the network); [""] = none. Waits at '
-              'most reset_timeout')
+        [''], 'Node names that must subscribe to /hrc/state and /hrc/session (every session '
+              'reader matched) before the first episode starts (the session runner puts the '
+              'recorder and the human node here, so the first state is recorded and answered '
+              'with the session roles whatever the start-up order or the network); [""] = '
+              'none. Waits at most reset_timeout')
     episode_break: float = param(3.0, 'Realtime only: wall seconds from the end of an episode '
                                       'to the next reset, so the person rests and sees the '
                                       'result and a countdown (the PPO update runs within it); '

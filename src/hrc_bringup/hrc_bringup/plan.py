@@ -134,12 +134,15 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
     human['input'] = settings.human_input
     if settings.human_profile:
         human['profile'] = settings.human_profile
+    # Before the first episode the agent waits until these listen to the states and have the
+    # session's announcement: the human node (else it may answer the first states with its
+    # default roles) and the recorder (else it misses the first state).
+    agent['wait_for_subscribers'] = ['human']
     if settings.record:
         recorder = parameters['recorder']
         recorder['session_id'] = settings.session_id
         recorder['output_dir'] = settings.bags_dir
-        # The first state of the session is recorded whatever the start-up order or network.
-        agent['wait_for_subscribers'] = ['recorder']
+        agent['wait_for_subscribers'] = ['human', 'recorder']
     return parameters
 
 

@@ -10,8 +10,9 @@ of its episode it publishes ``/hrc/human/action`` (HumanAction, whose ``source``
 input drove it) and ``/hrc/human/cmd_wrench`` (WrenchStamped, only the human's degree of
 freedom set, scaled by the sim's ``max_force``/``max_torque``), both carrying the state's
 stamp, so the lockstep sim can match them to the step. The sim owns its control period and
-limits: the node reads them at start from the sim's parameter service (node ``sim_node``) and
-subscribes to states only then. It answers even when the human is not involved (zero,
+limits: the node reads them at start from the sim's parameter service (node ``sim_node``); a
+state that arrives before they are known is answered when they come. It answers even when the
+human is not involved (zero,
 ``engaged`` false), so the sim can always wait for both actors. When the session is aborted
 (phase ``aborted``) it sends a zero command at once, answering the newest state, and zero for
 anything after. The joystick device is sampled (drained without blocking) when each state
@@ -116,12 +117,15 @@ class HumanNode(Node):
         # serves them in creation order, and the state must be answered with the new roles.
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS, event_callbacks=quiet_sub)
-        # States are subscribed once the sim's control period and limits are known (read from
-        # the sim's parameters, never repeated here): until then the graph shows no listener
-        # of /hrc/state on this node, so a session runner waits for it.
-        self.state_subscription = None
+        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
+                                 event_callbacks=quiet_sub)
+        # The sim's control period and limits, read from the sim's parameters (never repeated
+        # here). States are subscribed from the start, so that discovery matches the sim's
+        # writer early (a state published to a reader not matched yet is lost); one that comes
+        # before the limits waits for them (on_sim_limits answers it).
         self.sim_query = ParameterQuery(self, params.sim_node, SimLimits.NAMES,
                                         self.on_sim_limits)
+        self._state_before_limits = None
         self._waiting_since = time.monotonic()
         self.joy_subscription = None
         if self.joy is not None:
@@ -153,9 +157,9 @@ class HumanNode(Node):
                                     f'no state is answered')
             return
         self.get_logger().info(f'from /{self.sim_query.target}: {limits.describe()}')
-        self.state_subscription = self.create_subscription(
-            TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
-            event_callbacks=qos.NO_SUBSCRIPTION_EVENTS)
+        waiting, self._state_before_limits = self._state_before_limits, None
+        if waiting is not None:
+            self.on_state(waiting)
 
     def wait_for_sim(self, now: float) -> None:
         """Ask the sim for its limits until it answers; say every 10 s that we wait."""
@@ -284,6 +288,9 @@ class HumanNode(Node):
         """Answer one sim state with the human's action and wrench (not the last state)."""
         if message.truncated or message.terminated:
             return  # the last state of an episode needs no answer
+        if self.core.limits is None:
+            self._state_before_limits = message   # the newest: answered once the sim says
+            return
         if not self.core.aborted:
             self.check_inputs()
         answer = self.core.answer(message.episode, message.step,
