@@ -32,6 +32,8 @@ def test_compose_makes_the_nodes_agree():
     for node in (agent, human):
         assert not {'max_force', 'max_torque', 'control_period'} & set(node)
     assert parameters['recorder']['session_id'] == 'case3-seed7'
+    # The first episode waits for the human node's and the recorder's subscriptions.
+    assert sorted(agent['wait_for_subscribers']) == ['human', 'recorder']
 
 
 @pytest.mark.parametrize('settings, reason', [
