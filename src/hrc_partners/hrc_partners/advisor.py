@@ -57,8 +57,8 @@ class ScriptedRobot:
 
         self.controller = ScriptedPartner(dof, max_torque=max_torque, noise=noise, seed=seed)
 
-    def start_episode(self) -> None:
-        """Nothing to reset."""
+    def start_episode(self, limits) -> None:
+        """Nothing to reset (``limits``: the sim's, unused by the scripted controller)."""
 
     def act(self, state, human_command: float) -> float:
         """Return the robot's command in [-1, 1]."""
@@ -79,8 +79,9 @@ class TrainedRobot:
         self.core = evaluation_core(checkpoint, seed, episodes=10000)
         self.dof = self.core.robot_dof
 
-    def start_episode(self) -> None:
-        """Open an evaluation episode of the core."""
+    def start_episode(self, limits) -> None:
+        """Open an evaluation episode of the core, which acts with the sim's ``limits``."""
+        self.core.set_limits(limits)
         self.core.start_episode()
 
     def act(self, state, human_command: float) -> float:
@@ -97,8 +98,10 @@ def team_episode(sim, robot, person, person_dof: str, seed: int, clock_start: fl
     """Run one episode; return (team total error, the person's own-subtask error)."""
     from hrc_sim_node.protocol import per_dof, roles
 
+    from hrc_common.contract import SimLimits
+
     subtasks = [OWN_SUBTASK[person_dof], 'ball']
-    robot.start_episode()
+    robot.start_episode(SimLimits.of(sim.params))
     state = sim.reset(int(seed))
     team, own, steps = 0.0, 0.0, 0
     period = sim.params.control_period

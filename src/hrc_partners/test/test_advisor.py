@@ -47,3 +47,26 @@ def test_advice_text_names_the_stand_in():
     text = advice.describe()
     assert 'stand-in for a trained robot' in text
     assert len(advice.assignments['rotation'].team_errors) == 2
+
+
+def test_a_trained_robot_plays_a_team_episode_with_the_sims_limits(tmp_path):
+    """The trained robot's core learns the sim's limits from the episode (it has none itself)."""
+    from hrc_agent_node.agent_core import AgentCore
+    from hrc_agent_node.checkpoint import save_checkpoint
+    from hrc_agent_node.config import AgentParams
+    from hrc_common.params import with_overrides
+    from hrc_joystick_node.sim_human import SimulatedHuman
+    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+    checkpoint = save_checkpoint(
+        AgentCore(with_overrides(AgentParams(), case=2, checkpoint_dir='')), tmp_path / 'c.pt')
+    robot = advisor.TrainedRobot(checkpoint)
+    assert robot.dof == 'rotation'
+    physics = PhysicsParams(episode_duration=2.0, max_torque=0.8)
+    with SliderPendulumBall(physics) as sim:
+        person = SimulatedHuman(load_profile('paper'), 'translation', seed=0,
+                                control_period=physics.control_period)
+        person.reset(0)
+        team, own = advisor.team_episode(sim, robot, person, 'translation', 0, 0.0)
+    assert team > 0.0 and own >= 0.0
+    assert robot.core.limits.max_torque == 0.8
