@@ -69,6 +69,9 @@ ANNOUNCE_ACK_TIMEOUT_S = 0.5
 # Human actions kept for stamp matching (a few steps are enough: they answer the newest state).
 HUMAN_ACTIONS_KEPT = 50
 TICK_S = 0.02
+# s: once the nodes of wait_for_subscribers are seen, how long every /hrc/session reader of the
+# graph may take to match this node's writer before the first episode starts anyway.
+SESSION_MATCH_GRACE_S = 10.0
 
 SUMMARY = ('The PPO robot of an hrc session: answers every state on /hrc/robot/cmd_wrench, '
            "learns between episodes, moves through the case's training steps, evaluates, "
@@ -130,6 +133,7 @@ class AgentNode(Node):
         self.reset_requested_at = None
         self.reset_future = None
         self.waiting_since = time.monotonic()
+        self.named_nodes_since = None   # when the nodes of wait_for_subscribers were first seen
         self.exit_at = None
         self.exit_code = 0
         self.human_timeouts = 0
@@ -193,16 +197,25 @@ class AgentNode(Node):
         session_readers = self.get_subscriptions_info_by_topic(topics.SESSION)
         on_session = {info.node_name for info in session_readers}
         missing = sorted((wanted - on_state) | (wanted - on_session))
-        matched = self.session_pub.get_subscription_count() >= len(session_readers)
-        if not missing and matched:
-            self.subscribers_seen = True
-            return False
+        matched = self.session_pub.get_subscription_count()
+        if not missing:
+            if self.named_nodes_since is None:
+                self.named_nodes_since = now
+            if matched >= len(session_readers):
+                self.subscribers_seen = True
+                return False
+            if now - self.named_nodes_since > SESSION_MATCH_GRACE_S:
+                # A reader that never matches (another type or QoS, e.g. a tool) must not hold
+                # the session: the named nodes are there; go on and say so.
+                self.get_logger().warning(
+                    f'{len(session_readers)} readers of {topics.SESSION} in the graph, '
+                    f'{matched} matched after {SESSION_MATCH_GRACE_S:g} s: starting anyway')
+                self.subscribers_seen = True
+                return False
+            return True
         if now - self.waiting_since > self.params.reset_timeout:
-            why = (f'{", ".join(missing)} did not subscribe to {topics.STATE} and '
-                   f'{topics.SESSION}' if missing else
-                   f'{len(session_readers)} readers of {topics.SESSION} in the graph, '
-                   f'{self.session_pub.get_subscription_count()} matched')
-            self.abort(f'{why} within {self.params.reset_timeout} s')
+            self.abort(f'{", ".join(missing)} did not subscribe to {topics.STATE} and '
+                       f'{topics.SESSION} within {self.params.reset_timeout} s')
         return True
 
     def start_episode(self):

@@ -2,7 +2,8 @@
 
 A session is one paper case run with one seed. The plan starts from each node's parameter file
 (``params/<node>.yaml``), applies the session-level settings so that every node agrees (case,
-seed, roles, clock mode, force and torque limits, session id), then the user's overrides
+seed, roles, clock mode, session id; the sim's limits and control period are not copied: the
+actors read them from the sim at run time), then the user's overrides
 (``--set node.name=value``), and writes one ROS 2 parameter file with a section per node plus a
 ``session.yaml`` describing the whole session (it travels in every bag).
 """

@@ -627,6 +627,11 @@ def run_session(settings: SessionSettings, options) -> int:
     if live_input:
         # Never a silent stand-in: the simulated human only when the operator asked for it.
         parameters['human']['on_input_lost'] = 'sim' if options.stand_in == 'sim' else 'pause'
+    if 'human' in options.remote_nodes:
+        # The station's human node is started by hand, possibly long after this runner: the
+        # agent waits for it (wait_for_subscribers) as long as the runner waits for its input.
+        agent = parameters['agent']
+        agent['reset_timeout'] = max(float(agent['reset_timeout']), float(options.input_wait))
     params_path, _ = write_session_files(settings, parameters, run_dir)
 
     env = dict(os.environ)

@@ -154,7 +154,9 @@ class HumanNode(Node):
             self.core.set_limits(limits)
         except (TypeError, ValueError) as error:
             self.get_logger().error(f'/{self.sim_query.target} parameters unusable: {error}; '
-                                    f'no state is answered')
+                                    f'no state is answered until they are',
+                                    throttle_duration_sec=10.0)
+            self.sim_query.restart()   # ask again: a restarted sim may give usable ones
             return
         self.get_logger().info(f'from /{self.sim_query.target}: {limits.describe()}')
         waiting, self._state_before_limits = self._state_before_limits, None

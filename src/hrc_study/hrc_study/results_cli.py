@@ -56,7 +56,7 @@ def main(argv=None) -> int:
 
     try:
         sessions = load_sessions(arguments.paths, log=log)
-    except FileNotFoundError as error:
+    except (FileNotFoundError, ValueError) as error:   # ValueError: BagError, a bad file
         log(str(error))
         return 1
     if not sessions:

@@ -122,3 +122,13 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
         assert (tmp_path / 'results' / name).stat().st_size > 0
     assert [target for target, _, met in result['targets'] if met is False] == [
         'every case converges in >= 8/10 seeds']
+
+
+def test_a_file_that_is_not_mcap_is_named_without_a_traceback(tmp_path, capsys):
+    from hrc_study.results_cli import main
+
+    session = tmp_path / 'bags' / 'broken'
+    session.mkdir(parents=True)
+    (session / 'broken_ep0000.mcap').write_text('not an MCAP file')
+    assert main([str(tmp_path / 'bags'), '--out', str(tmp_path / 'out')]) == 1
+    assert 'is not an MCAP file' in capsys.readouterr().err
