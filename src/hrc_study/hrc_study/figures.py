@@ -162,43 +162,31 @@ def figure_three_factor(choice, path) -> None:
     """Write Fig. 7: the three factors per strategy (outer is better) with 95% intervals.
 
     Radius 1 - 0.8 * value / largest value of the factor (hrc_bag's scale): the whisker on each
-    axis spans the bootstrap interval of the factor.
+    axis spans the bootstrap interval of the factor. Drawn by hrc_bag's Fig. 7.
     """
     from hrc_bag.report import factor_score
+    from hrc_bag.report.figures import draw_three_factor
 
-    pyplot = _pyplot()
     axes_keys = [('human', 'less human-involved\ntraining'), ('time', 'less total training'),
                  ('performance', 'higher team\nperformance')]
-    angles = [math.pi / 2 + 2 * math.pi * index / 3 for index in range(3)]
     largest = {key: max(max(entry.factors[key].estimate, entry.factors[key].high)
                         for entry in choice.ranking) for key, _ in axes_keys}
-    figure = pyplot.figure(figsize=(6.8, 6.8))
-    axis = figure.add_subplot(projection='polar')
+    polygons = []
     for entry in sorted(choice.ranking, key=lambda item: item.strategy):
-        scores = [factor_score(entry.factors[key].estimate, largest[key])
-                  for key, _ in axes_keys]
-        line, = axis.plot(angles + angles[:1], scores + scores[:1], marker='o',
-                          label=f'{STRATEGY_SHORT.get(entry.strategy, entry.strategy)}: '
-                          + ', '.join(f'{entry.factors[key].estimate:.3g}'
-                                      for key, _ in axes_keys))
-        axis.fill(angles + angles[:1], scores + scores[:1], color=line.get_color(), alpha=0.12)
-        for angle, (key, _) in zip(angles, axes_keys):
-            interval = entry.factors[key]
-            if not (math.isnan(interval.low) or math.isnan(interval.high)):
-                axis.plot([angle, angle], [factor_score(interval.high, largest[key]),
-                                           factor_score(interval.low, largest[key])],
-                          color=line.get_color(), linewidth=2.5, alpha=0.8)
-    axis.set_xticks(angles)
-    axis.set_xticklabels([label for _, label in axes_keys])
-    axis.set_ylim(0.0, 1.0)
-    axis.set_yticklabels([])
-    axis.legend(loc='upper center', bbox_to_anchor=(0.5, -0.07), fontsize='small',
-                title='strategy: human-involved episodes, episodes, total error')
-    axis.set_title('Fig. 7: three factors per strategy, whiskers: 95% bootstrap intervals '
-                   '(outer is better)', fontsize='medium')
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    pyplot.close(figure)
+        label = (f'{STRATEGY_SHORT.get(entry.strategy, entry.strategy)}: '
+                 + ', '.join(f'{entry.factors[key].estimate:.3g}' for key, _ in axes_keys))
+        radii = [factor_score(entry.factors[key].estimate, largest[key])
+                 for key, _ in axes_keys]
+        whiskers = [None if math.isnan(entry.factors[key].low)
+                    or math.isnan(entry.factors[key].high)
+                    else (factor_score(entry.factors[key].high, largest[key]),
+                          factor_score(entry.factors[key].low, largest[key]))
+                    for key, _ in axes_keys]
+        polygons.append((label, radii, whiskers))
+    draw_three_factor(polygons, [label for _, label in axes_keys], path,
+                      'Fig. 7: three factors per strategy, whiskers: 95% bootstrap intervals '
+                      '(outer is better)',
+                      'strategy: human-involved episodes, episodes, total error', size=6.8)
 
 
 def figure_convergence(sessions, profile: str, path) -> None:

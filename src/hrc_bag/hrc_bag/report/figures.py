@@ -117,36 +117,54 @@ def figure_actions(rows, path, seconds: float = 4.0, start: float = 0.0) -> None
 
 def figure_three_factor(rows, path) -> None:
     """Write Fig. 7: the three-factor diagram, one polygon per strategy."""
-    pyplot = _pyplot()
     factors = three_factors(rows)
-    angles = [math.pi / 2 + 2 * math.pi * index / 3 for index in range(3)]
-    figure = pyplot.figure(figsize=(6.4, 6.4))
-    axis = figure.add_subplot(projection='polar')
     largest = {key: max((entry[key][0] for entry in factors
                          if not math.isnan(entry[key][0])), default=0.0)
                for key, _ in FACTOR_AXES}
+    polygons = []
     for entry in factors:
-        scores = [factor_score(entry[key][0], largest[key]) for key, _ in FACTOR_AXES]
-        if any(math.isnan(score) for score in scores):
-            scores = [0.0 if math.isnan(score) else score for score in scores]
         label = STRATEGY_TITLES.get(entry['strategy'], entry['strategy'] or 'unknown')
         values = ', '.join(f'{entry[key][0]:.2f}' for key, _ in FACTOR_AXES)
-        line, = axis.plot(angles + angles[:1], scores + scores[:1], marker='o',
-                          label=f'{label}: {values}')
-        axis.fill(angles + angles[:1], scores + scores[:1], color=line.get_color(), alpha=0.15)
-        for angle, (key, _) in zip(angles, FACTOR_AXES):
+        scores = [factor_score(entry[key][0], largest[key]) for key, _ in FACTOR_AXES]
+        whiskers = []   # mean +- sample std over the sessions, where there is a spread
+        for key, _ in FACTOR_AXES:
             mean, spread, count = entry[key]
-            if count > 1 and spread > 0:
-                low = factor_score(mean + spread, largest[key])
-                high = factor_score(max(mean - spread, 0.0), largest[key])
-                axis.plot([angle, angle], [low, high], color=line.get_color(), linewidth=2)
+            whiskers.append((factor_score(mean + spread, largest[key]),
+                             factor_score(max(mean - spread, 0.0), largest[key]))
+                            if count > 1 and spread > 0 else None)
+        polygons.append((f'{label}: {values}', scores, whiskers))
+    draw_three_factor(polygons, [text for _, text in FACTOR_AXES], path,
+                      'Fig. 7: three-factor diagram (outer is better)',
+                      'strategy: human-involved, total episodes, total error')
+
+
+def draw_three_factor(polygons, axis_labels, path, title: str, legend_title: str,
+                      size: float = 6.4) -> None:
+    """Write a Fig. 7 radar: one polygon per ``(label, radii, whiskers)``, outer is better.
+
+    ``radii``: :func:`factor_score` per axis (NaN drawn at the centre); ``whiskers``: per axis
+    ``(low, high)`` radii of a spread or interval, or None. Shared by the bag report (mean and
+    standard deviation) and the study (bootstrap intervals).
+    """
+    pyplot = _pyplot()
+    angles = [math.pi / 2 + 2 * math.pi * index / len(axis_labels)
+              for index in range(len(axis_labels))]
+    figure = pyplot.figure(figsize=(size, size))
+    axis = figure.add_subplot(projection='polar')
+    for label, radii, whiskers in polygons:
+        radii = [0.0 if math.isnan(radius) else radius for radius in radii]
+        line, = axis.plot(angles + angles[:1], radii + radii[:1], marker='o', label=label)
+        axis.fill(angles + angles[:1], radii + radii[:1], color=line.get_color(), alpha=0.15)
+        for angle, whisker in zip(angles, whiskers):
+            if whisker is not None:
+                axis.plot([angle, angle], list(whisker), color=line.get_color(), linewidth=2)
     axis.set_xticks(angles)
-    axis.set_xticklabels([text for _, text in FACTOR_AXES])
+    axis.set_xticklabels(axis_labels)
     axis.set_ylim(0.0, 1.0)
     axis.set_yticklabels([])
     axis.legend(loc='upper center', bbox_to_anchor=(0.5, -0.06), fontsize='small',
-                title='strategy: human-involved, total episodes, total error')
-    axis.set_title('Fig. 7: three-factor diagram (outer is better)')
+                title=legend_title)
+    axis.set_title(title, fontsize='medium')
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     pyplot.close(figure)
