@@ -157,6 +157,7 @@ class StepProtocol:
         self.mode = settings.mode
         self.expected = tuple(settings.expected_actors)
         self.period_ns = int(round(settings.control_period * NS_PER_S))
+        self.limits = SimLimits.of(settings)   # once: read_command runs for every command
         self.dof_of = roles(settings.robot_dof)
         self.human_involved = True
         self.episode = 0
@@ -271,7 +272,7 @@ class StepProtocol:
             self._count(actor + '_stale')
             return CommandResult(actor, 'stale', stamp, awaited)
         dof = self.dof_of[actor]
-        limit = SimLimits.of(self.settings).full_scale(dof)
+        limit = self.limits.full_scale(dof)
         command = read_command(wrench, dof, limit)
         result = CommandResult(actor, 'accepted', stamp, awaited, command, dof, limit)
         if not command.accepted:
