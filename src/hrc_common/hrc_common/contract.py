@@ -199,13 +199,25 @@ class SimLimits:
     control_period: float   # s of simulation time per control step
     max_force: float        # N, full-scale force on the slider
     max_torque: float       # N*m, full-scale torque on the pendulum's hinge
+    human_period: float = 0.0   # s: the human's command is applied this often; 0 = unknown
+    #                             (the reset response does not carry it: the robot needs none)
 
     NAMES = ('control_period', 'max_force', 'max_torque')   # as the sim's parameters
+    OPTIONAL_NAMES = ('human_period',)                      # the sim's too, not in every source
 
     @classmethod
     def of(cls, source) -> 'SimLimits':
         """Return the limits of an object with these fields (PhysicsParams, a reset response)."""
-        return cls(*(float(getattr(source, name)) for name in cls.NAMES))
+        return cls(*(float(getattr(source, name)) for name in cls.NAMES),
+                   *(float(getattr(source, name, None) or 0.0) for name in cls.OPTIONAL_NAMES))
+
+    @property
+    def human_step(self) -> float:
+        """Return the period (s) at which the human acts.
+
+        ``human_period``, else the control period (a source without it: once a period).
+        """
+        return self.human_period if self.human_period > 0 else self.control_period
 
     def full_scale(self, dof: str) -> float:
         """Return the force (N) or torque (N*m) of a normalized command of 1 on ``dof``."""

@@ -108,4 +108,6 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
     node = rclpy.create_node(name, context=context)
     for field in limits.NAMES:
         node.declare_parameter(field, float(getattr(limits, field)))
+    # The human's period, as the sim declares it (the human acts once a period when unset).
+    node.declare_parameter('human_period', float(limits.human_step))
     return node

@@ -7,6 +7,9 @@ from hrc_common.contract import (AGENT_STEP_TYPE, EPISODE_SUMMARY_TYPE, HUMAN_AC
                                  SESSION_STATUS_TYPE, TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
 
 STATE = '/hrc/state'
+# States within a control period at the human's rate (TaskState, slice > 0), for the human node
+# and the person's page; not recorded (the period's state carries the applied human commands).
+SLICE_STATE = '/hrc/sim/slice_state'
 ROBOT_CMD_WRENCH = '/hrc/robot/cmd_wrench'
 HUMAN_CMD_WRENCH = '/hrc/human/cmd_wrench'
 HUMAN_ACTION = '/hrc/human/action'

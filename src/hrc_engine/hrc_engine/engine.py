@@ -143,6 +143,7 @@ class InProcessSession:
         from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
         from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
         from hrc_sim_node.sim_params import LOCKSTEP, SimParams
+        from hrc_sim_node.stepper import SimStepper
 
         self.config = config
         self.settings, self.parameters = compose_parameters(config)
@@ -152,6 +153,7 @@ class InProcessSession:
         self.agent_params = from_dict(AgentParams, self.parameters['agent'])
         self.physics = SliderPendulumBall(physics_params_of(self.sim_params))
         self.protocol = StepProtocol(ProtocolSettings.of(self.sim_params))
+        self.stepper = SimStepper(self.physics, self.protocol)
         # What the sim owns, passed as the graph passes it (the reset response, the sim's
         # parameters): the physics' control period and limits.
         self.limits = SimLimits.of(self.physics.params)
@@ -227,20 +229,26 @@ class InProcessSession:
             dict(self.protocol.totals), self.episode_seconds)
 
     def _episode(self) -> None:
-        """One episode: reset, the lockstep steps, the episode's end as the agent handles it."""
+        """One episode: reset, the lockstep steps, the episode's end as the agent handles it.
+
+        Each control step as the lockstep graph takes it (hrc_sim_node.stepper): both actors
+        answer the period's state; at the human's rate the human then answers each slice
+        state (only its wrench is published for those, as the human node does) while the
+        robot's answer holds for the period.
+        """
         from hrc_sim_node.commands import HUMAN, ROBOT
 
-        core, protocol, physics = self.core, self.protocol, self.physics
+        core, protocol, stepper = self.core, self.protocol, self.stepper
         started = time.perf_counter()
         plan = core.start_episode()
         self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
                        f'starting: ' + core.status_line())
-        state = physics.reset(seed=plan.seed)
-        protocol.start_episode(plan.episode)
+        advanced = stepper.start_episode(plan.episode, plan.seed)
         if self.writer is not None:
             self.writer.begin_episode(plan.episode)
-        stamp = self._publish_state(state, {})
-        while not (state.truncated or state.terminated):
+        self._publish_state(advanced)
+        while not advanced.episode_over:
+            state, stamp = advanced.state, advanced.stamp
             answer = self.human.answer(plan.episode, state, stamp)
             human_wrench = messages.wrench_on(answer.dof, answer.wrench)
             # The human's answer to the same state only when the core asks for it (same_step).
@@ -255,20 +263,31 @@ class InProcessSession:
             now = time.monotonic()
             protocol.on_command(ROBOT, stamp, robot_wrench, now)
             order = protocol.on_command(HUMAN, stamp, human_wrench, now).order
-            if order is None:  # cannot happen: both actors answered the awaited stamp
-                raise RuntimeError(f'step {state.step}: the protocol did not step')
-            state = physics.step(order.force, order.torque)
-            stamp = self._publish_state(state, order.missing)
+            while True:
+                if order is None:  # cannot happen: every awaited actor answered
+                    raise RuntimeError(f'step {state.step}: the protocol did not step')
+                advanced = stepper.apply(order)
+                if advanced.period_end:
+                    break
+                answer = self.human.answer(plan.episode, advanced.state, advanced.stamp,
+                                           advanced.slice)
+                human_wrench = messages.wrench_on(answer.dof, answer.wrench)
+                self._write('/hrc/human/cmd_wrench',
+                            messages.wrench_stamped(advanced.stamp, human_wrench))
+                order = protocol.on_command(HUMAN, advanced.stamp, human_wrench,
+                                            time.monotonic()).order
+            self._publish_state(advanced)
             self.steps += 1
         self.episode_seconds.append(time.perf_counter() - started)
-        self._finish_episode(state, stamp)
+        self._finish_episode(advanced.state, advanced.stamp)
 
-    def _publish_state(self, state, missing: dict) -> int:
-        stamp = self.protocol.next_stamp(state.step, state.truncated or state.terminated)
-        self._stamps[state.step] = stamp
-        self._write('/hrc/state', messages.task_state(state, self.protocol.episode, stamp,
-                                                      missing))
-        return stamp
+    def _publish_state(self, advanced) -> int:
+        """Write the state of a control step (an hrc_sim_node.stepper.Advanced)."""
+        self._stamps[advanced.state.step] = advanced.stamp
+        self._write('/hrc/state', messages.task_state(
+            advanced.state, self.protocol.episode, advanced.stamp, advanced.missing,
+            human_applied=advanced.human_applied))
+        return advanced.stamp
 
     def _write_step(self, record) -> None:
         self._write('/hrc/agent/step', messages.agent_step(record, self._stamps[record.step]))

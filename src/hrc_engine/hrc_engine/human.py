@@ -39,8 +39,9 @@ class SimulatedHumanSide:
         """Take the roles a SessionStatus announces."""
         self.core.on_session(dof, involved, list(subtasks))
 
-    def answer(self, episode: int, state, stamp_ns: int) -> HumanAnswer:
-        """Return the answer to a non-final state of ``episode`` stamped ``stamp_ns``."""
-        answer = self.core.answer(episode, state.step, stamp_ns, state)
+    def answer(self, episode: int, state, stamp_ns: int, slice_index: int = 0) -> HumanAnswer:
+        """Return the answer to a non-final (slice) state of ``episode`` stamped ``stamp_ns``."""
+        answer = self.core.answer(episode, state.step, stamp_ns, state,
+                                  slice_index=slice_index)
         return HumanAnswer(answer.command, answer.wrench, answer.dof, answer.source_code,
                            answer.detail, answer.engaged)

@@ -54,7 +54,8 @@ def wrench_stamped(stamp: int, wrench: Wrench) -> dict:
             'wrench': {'force': vars(wrench.force), 'torque': vars(wrench.torque)}}
 
 
-def task_state(state, episode: int, stamp: int, missing: dict) -> dict:
+def task_state(state, episode: int, stamp: int, missing: dict, slice_index: int = 0,
+               human_applied=()) -> dict:
     """Return the TaskState the sim publishes for a PhysicsState."""
     return {'header': header(stamp), 'episode': episode, 'step': state.step,
             'slider_position': state.slider_position,
@@ -65,6 +66,8 @@ def task_state(state, episode: int, stamp: int, missing: dict) -> dict:
             'applied_force': state.applied_force, 'applied_torque': state.applied_torque,
             'robot_command_missing': bool(missing.get(ROBOT, False)),
             'human_command_missing': bool(missing.get(HUMAN, False)),
+            'slice': int(slice_index),
+            'human_applied': [float(value) for value in human_applied],
             'terminated': bool(state.terminated), 'truncated': bool(state.truncated)}
 
 

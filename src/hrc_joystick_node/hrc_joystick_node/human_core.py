@@ -118,6 +118,7 @@ class HumanAnswer(typing.NamedTuple):
     detail: str             # e.g. device path, profile name, why zero
     engaged: bool
     repeated: bool = False  # the same state again: the earlier answer, model not advanced
+    slice: int = 0          # > 0: the answer to a slice state (the human's rate) of ``step``
 
     @property
     def source_code(self) -> int:
@@ -208,8 +209,9 @@ class HumanCore:
         if problems:
             raise ValueError("the sim's limits are unusable: " + '; '.join(problems))
         changed = limits != self.limits
-        if self.limits is None or limits.control_period != self.limits.control_period:
-            self.sim_human = self._new_sim_human(self.dof, limits.control_period)
+        if self.limits is None or limits.human_step != self.limits.human_step:
+            # The simulated person acts at the human's rate (the sim's human_period).
+            self.sim_human = self._new_sim_human(self.dof, limits.human_step)
             self._sim_episode = None
         self.limits = limits
         return changed
@@ -231,7 +233,7 @@ class HumanCore:
         changed = (not self.session_seen or dof != self.dof
                    or bool(involved) != self.involved or known != self.subtasks)
         if dof != self.dof and self.limits is not None:
-            self.sim_human = self._new_sim_human(dof, self.limits.control_period)
+            self.sim_human = self._new_sim_human(dof, self.limits.human_step)
             self._sim_episode = None
         self.dof, self.involved, self.subtasks = dof, bool(involved), known
         self.session_seen = True
@@ -254,26 +256,28 @@ class HumanCore:
 
     # -- the step ------------------------------------------------------------------------
     def answer(self, episode: int, step: int, stamp_ns: int, state,
-               sticks: typing.Optional[dict] = None) -> HumanAnswer:
+               sticks: typing.Optional[dict] = None, slice_index: int = 0) -> HumanAnswer:
         """Answer one state (not the last of its episode).
 
         ``state``: anything with the PhysicsState attributes the simulated human reads;
         ``stamp_ns``: its stamp (simulation time since the session start, ns); ``sticks``:
         ``{input: StickReading}`` for the joystick inputs the caller read just now (device,
-        joy).
+        joy); ``slice_index`` > 0: a slice state within the period of ``step`` (the sim's
+        human_period), which the simulated person acts on as on any other moment.
         """
         if self.limits is None:
             raise RuntimeError("the sim's limits are not known yet: call set_limits() first")
         last = self.last_answer
         if self.aborted:
             return self._zero(episode, step, stamp_ns, 'session aborted by the operator')
-        if last is not None and (last.episode, last.step) == (episode, step):
+        if last is not None and (last.episode, last.step, last.slice) == (episode, step,
+                                                                          slice_index):
             return last._replace(repeated=True)
-        command, engaged, source, detail = self._decide(episode, step, stamp_ns, state,
-                                                        sticks or {})
+        command, engaged, source, detail = self._decide(episode, (step, slice_index),
+                                                        stamp_ns, state, sticks or {})
         scale = self.limits.full_scale(self.dof)
         answer = HumanAnswer(int(episode), int(step), int(stamp_ns), command, command * scale,
-                             self.dof, source, detail, engaged)
+                             self.dof, source, detail, engaged, slice=int(slice_index))
         self.last_answer = answer
         self.answered += 1
         return answer
@@ -292,8 +296,11 @@ class HumanCore:
         self.last_answer = answer
         return answer
 
-    def _decide(self, episode, step, stamp_ns, state, sticks) -> tuple:
-        """Return (command, engaged, input, detail) for one new state."""
+    def _decide(self, episode, moment, stamp_ns, state, sticks) -> tuple:
+        """Return (command, engaged, input, detail) for one new state.
+
+        ``moment``: (step, slice) of the state, ordered in time within the episode.
+        """
         active = self.selector.active
         if not self.involved:
             return 0.0, False, ZERO, f'not involved in this training step (input: {active})'
@@ -306,10 +313,10 @@ class HumanCore:
             return command, engaged, active, reading.name + (f' ({why})' if why else '')
         if active in (SIM, MODEL):
             if (episode != self._sim_episode or self._sim_step is None
-                    or step <= self._sim_step):
+                    or moment <= self._sim_step):
                 self.sim_human.reset(episode)
                 self._sim_episode = episode
-            self._sim_step = step
+            self._sim_step = moment
             command = self.sim_human.act(state, self.subtasks, now=stamp_ns * 1e-9)
             if active == MODEL:
                 note = self.sim_human.note

@@ -61,9 +61,14 @@ __all__ = ['HumanNode', 'HumanParams', 'HUMAN_INPUT', 'StateView', 'main', 'stat
            'status_message']
 
 
-def state_view(message: TaskState, control_period: float) -> StateView:
-    """Return the simulated human's view of a TaskState (time = s since the episode's reset)."""
-    return StateView(message.step, message.step * control_period, message.slider_position,
+def state_view(message: TaskState, control_period: float, human_period: float = 0.0
+               ) -> StateView:
+    """Return the simulated human's view of a TaskState (time = s since the episode's reset).
+
+    A slice state (``slice`` > 0) lies ``slice`` human periods into its step's period.
+    """
+    time_s = message.step * control_period + message.slice * human_period
+    return StateView(message.step, time_s, message.slider_position,
                      message.slider_velocity, message.pendulum_angle,
                      message.pendulum_angular_velocity, message.ball_position,
                      message.ball_velocity)
@@ -123,8 +128,13 @@ class HumanNode(Node):
         # here). States are subscribed from the start, so that discovery matches the sim's
         # writer early (a state published to a reader not matched yet is lost); one that comes
         # before the limits waits for them (on_sim_limits answers it).
-        self.sim_query = ParameterQuery(self, params.sim_node, SimLimits.NAMES,
+        self.sim_query = ParameterQuery(self, params.sim_node,
+                                        SimLimits.NAMES + SimLimits.OPTIONAL_NAMES,
                                         self.on_sim_limits)
+        # At the human's rate the sim sends the states within each period here; each is
+        # answered with a wrench (lockstep: the sim waits for it), no HumanAction.
+        self.create_subscription(TaskState, topics.SLICE_STATE, self.on_state, qos.STATE_QOS,
+                                 event_callbacks=quiet_sub)
         self._state_before_limits = None
         self._waiting_since = time.monotonic()
         self.joy_subscription = None
@@ -295,13 +305,16 @@ class HumanNode(Node):
             return
         if not self.core.aborted:
             self.check_inputs()
+        limits = self.core.limits
         answer = self.core.answer(message.episode, message.step,
                                   stamp_ns(message.header.stamp),
-                                  state_view(message, self.core.limits.control_period),
-                                  self._sticks())
+                                  state_view(message, limits.control_period,
+                                             limits.human_step),
+                                  self._sticks(), slice_index=message.slice)
         if answer.repeated and self._last_messages is not None:
             # The same state again: repeat the answer (the simulated human was not advanced).
-            self.action_publisher.publish(self._last_messages[1])
+            if message.slice == 0:
+                self.action_publisher.publish(self._last_messages[1])
             self.wrench_publisher.publish(self._last_messages[2])
             return
         self._publish(answer, message.header.stamp)
@@ -320,7 +333,8 @@ class HumanNode(Node):
         wrench = WrenchStamped()
         wrench.header = action.header
         set_wrench_value(wrench.wrench, answer.dof, answer.wrench)
-        self.action_publisher.publish(action)
+        if answer.slice == 0:   # one HumanAction per control step: a slice sends its wrench
+            self.action_publisher.publish(action)
         self.wrench_publisher.publish(wrench)
         self._last_messages = (answer, action, wrench)
 

@@ -172,6 +172,12 @@ class PhysicsParams:
     substeps: int = param(
         20, 'physics substeps per control period (step = control_period / substeps)',
         low=1, high=1000)
+    human_period: float = param(
+        0.02, "period (s) at which the human's command is applied within a control period "
+        '(the robot acts every control_period); control_period/human_period and '
+        'substeps/(control_period/human_period) must be whole numbers; = control_period: '
+        'the human acts once per period and the command is held (the behaviour before it '
+        'existed)', low=0.001, high=1.0)
     episode_duration: float = param(
         40.0, 'episode length (s); a multiple of control_period; the episode is truncated then',
         low=0.2, high=3600.0)
@@ -222,6 +228,16 @@ class PhysicsParams:
         return self.control_period / self.substeps
 
     @property
+    def human_slices(self) -> int:
+        """Slices of a control period in which the human's command is applied anew (>= 1)."""
+        return max(1, int(round(self.control_period / self.human_period)))
+
+    @property
+    def substeps_per_slice(self) -> int:
+        """Physics substeps in one human slice."""
+        return max(1, self.substeps // self.human_slices)
+
+    @property
     def pendulum_com_distance(self) -> float:
         """Distance from the hinge to the beam's centre of mass (m)."""
         return self.pendulum_length / 2
@@ -240,6 +256,17 @@ class PhysicsParams:
         if abs(ratio - round(ratio)) > 1e-6:
             reasons.append(f'episode_duration {self.episode_duration} s is not a multiple of '
                            f'control_period {self.control_period} s')
+        slices = self.control_period / self.human_period
+        if self.human_period > self.control_period + 1e-12:
+            reasons.append(f'human_period {self.human_period} s exceeds control_period '
+                           f'{self.control_period} s (the human acts at least once a period)')
+        elif abs(slices - round(slices)) > 1e-6:
+            reasons.append(f'control_period {self.control_period} s is not a whole multiple of '
+                           f'human_period {self.human_period} s')
+        elif self.substeps % max(1, round(slices)):
+            reasons.append(f'substeps {self.substeps} cannot be split into '
+                           f'{round(slices)} equal human slices (control_period / human_period)'
+                           f': choose substeps a multiple of {round(slices)}')
         if self.initial_slider_spread > self.rod_length / 2:
             reasons.append(f'initial_slider_spread {self.initial_slider_spread} m exceeds the '
                            f"rod's half length {self.rod_length / 2} m")
@@ -352,6 +379,13 @@ def _clamp(value: float, bound: float) -> float:
     return max(-bound, min(bound, value))
 
 
+def _period_mean(values: list, weights: list) -> float:
+    """Return the time-weighted mean of a period's slices; a value held throughout exactly."""
+    if all(value == values[0] for value in values):
+        return values[0]
+    return sum(value * weight for value, weight in zip(values, weights))
+
+
 class SliderPendulumBall:
     """The slider-pendulum-ball system (see the module docstring: state, actions, dynamics).
 
@@ -374,7 +408,14 @@ class SliderPendulumBall:
             raise RuntimeError('PyBullet could not connect (GUI needs a display)')
         self._rng = None
         self._state = None
+        self._clear_period()
         self._build()
+
+    def _clear_period(self) -> None:
+        """Forget the running control period's slices (at a reset and at each period's end)."""
+        self._joint_cache = None         # joint states after the last slice of this period
+        self._period_applied = []        # (force N, torque N*m, share of the period) per slice
+        self._period_substeps = 0
 
     # -- model -----------------------------------------------------------------------------
     def _build(self):
@@ -448,6 +489,7 @@ class SliderPendulumBall:
         # Rebuilding the world (a few ms) rather than moving the joints makes every episode
         # independent of the previous one: no solver warm start carries over.
         self._build()
+        self._clear_period()
         for joint, position in zip(JOINTS, (slider, angle, ball)):
             self._bullet.resetJointState(self._body, joint, float(position), 0.0,
                                          physicsClientId=self._client)
@@ -460,17 +502,32 @@ class SliderPendulumBall:
         Values beyond the limits are clamped to ``max_force``/``max_torque``; non-finite
         values raise ValueError (nothing is applied then).
         """
+        self.advance(force, torque, self.params.substeps - self._period_substeps)
+        return self.finish_period()
+
+    def advance(self, force: float, torque: float, substeps: int) -> PhysicsState:
+        """Hold ``force`` (N) and ``torque`` (N*m) for ``substeps`` physics substeps.
+
+        A part of the control period (a human slice, ``substeps_per_slice``): the period's
+        step index does not change; :meth:`finish_period` ends the period. Returns the state
+        now, mid-period (what a person sees at that moment; ``time`` includes the slice),
+        whose ``applied_*`` are this slice's. Clamping and refusals as :meth:`step`.
+        """
         force = _clamp(_finite('force', force), self.params.max_force)
         torque = _clamp(_finite('torque', torque), self.params.max_torque)
         if self._state is None:
             raise RuntimeError('call reset() before step()')
         if self._state.truncated or self._state.terminated:
             raise RuntimeError(f'the episode ended at step {self._state.step}: call reset()')
+        substeps = int(substeps)
+        if not 0 < substeps <= self.params.substeps - self._period_substeps:
+            raise ValueError(f'{substeps} substeps do not fit in the control period '
+                             f'({self._period_substeps} of {self.params.substeps} done)')
         bullet, client, body, params = self._bullet, self._client, self._body, self.params
         compensate = params.gravity_compensation
         torque_control = bullet.TORQUE_CONTROL
-        joint_states = self._joint_states()
-        for _ in range(params.substeps):
+        joint_states = self._joint_cache or self._joint_states()
+        for _ in range(substeps):
             (_, slider_velocity), (angle, angular_velocity), (_, ball_velocity) = joint_states
             slider_force = force - params.slider_damping * slider_velocity
             hinge_torque = torque - params.pendulum_damping * angular_velocity
@@ -484,9 +541,36 @@ class SliderPendulumBall:
                                              physicsClientId=client)
             bullet.stepSimulation(physicsClientId=client)
             joint_states = self._hold_at_stops(self._joint_states())
+        self._joint_cache = joint_states
+        # The period's applied wrench is the time-weighted mean of its slices; a whole period
+        # held at one value gives that value exactly (weight 1.0).
+        weight = substeps / params.substeps
+        self._period_applied.append((force, torque, weight))
+        self._period_substeps += substeps
+        return self._read_state(self._state.step, force, torque,
+                                elapsed=self._period_substeps * params.time_step)
+
+    def finish_period(self) -> PhysicsState:
+        """End the control period (every substep must be done); return the new step's state.
+
+        Its ``applied_force``/``applied_torque`` are the period's time-weighted means.
+        """
+        if self._period_substeps != self.params.substeps:
+            raise RuntimeError(f'the control period is not complete: {self._period_substeps} '
+                               f'of {self.params.substeps} substeps done')
+        force = _period_mean([value for value, _, _ in self._period_applied],
+                             [weight for _, _, weight in self._period_applied])
+        torque = _period_mean([value for _, value, _ in self._period_applied],
+                              [weight for _, _, weight in self._period_applied])
+        self._clear_period()
         step = self._state.step + 1
         self._state = self._read_state(step, force, torque)
         return self._state
+
+    @property
+    def period_substeps(self) -> int:
+        """Substeps done in the running control period (0 at its start)."""
+        return self._period_substeps
 
     def step_normalized(self, translation: float, rotation: float) -> PhysicsState:
         """Step with commands in [-1, 1] (clamped) scaled by ``max_force``/``max_torque``."""
@@ -495,11 +579,15 @@ class SliderPendulumBall:
         return self.step(translation * self.params.max_force,
                          rotation * self.params.max_torque)
 
-    def _read_state(self, step: int, force: float, torque: float) -> PhysicsState:
+    def _read_state(self, step: int, force: float, torque: float,
+                    elapsed: float = 0.0) -> PhysicsState:
         (slider, slider_velocity), (angle, angular_velocity), (ball, ball_velocity) = \
             self._joint_states()
+        time = step * self.params.control_period
+        if elapsed:
+            time += elapsed
         return PhysicsState(
-            step=step, time=step * self.params.control_period,
+            step=step, time=time,
             slider_position=slider, slider_velocity=slider_velocity,
             pendulum_angle=angle, pendulum_angular_velocity=angular_velocity,
             ball_position=ball, ball_velocity=ball_velocity,

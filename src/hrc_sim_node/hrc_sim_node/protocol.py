@@ -103,6 +103,9 @@ class StepOrder:
     missing: dict                        # expected actor -> its command counted as zero
     reason: str                          # 'answered' | 'timeout' | 'tick' | 'free_run'
     ignored: list = field(default_factory=list)   # (actor, value) not applied: not involved
+    slices: int = 1                      # human slices of the period this order covers
+    final: bool = True                   # this order completes the control period
+    human_value: float = 0.0             # the human's applied command (N or N*m) in it
 
     @property
     def absent(self) -> list:
@@ -136,13 +139,23 @@ class ProtocolSettings:
     max_force: float = 2.0                 # N
     max_torque: float = 0.5                # N*m
     robot_dof: str = TRANSLATION
+    human_period: typing.Optional[float] = None   # s: the human's command is applied this
+    #                                         often; None: once a period (the sim passes its own)
 
     @classmethod
     def of(cls, params) -> 'ProtocolSettings':
         """Return the settings carried by ``params`` (a SimParams or alike)."""
         return cls(params.mode, tuple(params.expected_actors), params.lockstep_timeout,
                    params.command_timeout, params.control_period, params.max_force,
-                   params.max_torque, params.robot_dof)
+                   params.max_torque, params.robot_dof,
+                   getattr(params, 'human_period', params.control_period))
+
+    @property
+    def human_slices(self) -> int:
+        """Human slices per control period (1: the human acts once a period)."""
+        if not self.human_period:
+            return 1
+        return max(1, int(round(self.control_period / self.human_period)))
 
 
 class StepProtocol:
@@ -157,6 +170,11 @@ class StepProtocol:
         self.mode = settings.mode
         self.expected = tuple(settings.expected_actors)
         self.period_ns = int(round(settings.control_period * NS_PER_S))
+        self.slices = settings.human_slices
+        self.slice_ns = self.period_ns // self.slices
+        if self.slice_ns * self.slices != self.period_ns:
+            raise ProtocolError(f'control_period {settings.control_period} s does not split '
+                                f'into {self.slices} human slices of whole nanoseconds')
         self.limits = SimLimits.of(settings)   # once: read_command runs for every command
         self.dof_of = roles(settings.robot_dof)
         self.human_involved = True
@@ -171,6 +189,10 @@ class StepProtocol:
         self._answers = {}                   # lockstep: actor -> Command for the awaited state
         self._kept = {}                      # realtime: actor -> (Command, receipt s, stamp)
         self._episode_first_stamp = None     # realtime: stamps of this episode start here
+        self._slice = 0                      # human slices of the running period applied
+        self._period = {}                    # actor -> Command held over the period (lockstep)
+        self._period_missing = {}            # actor -> missing in any slice of the period
+        self.slice_stamp_ns = None           # stamp of the newest slice state (None: none)
 
     # -- episodes ----------------------------------------------------------------------------
     def set_mode(self, mode: str) -> bool:
@@ -208,7 +230,14 @@ class StepProtocol:
         self._answers = {}
         self._kept = {}
         self._episode_first_stamp = None
+        self._start_period()
         return abandoned
+
+    def _start_period(self) -> None:
+        self._slice = 0
+        self._period = {}
+        self._period_missing = {}
+        self.slice_stamp_ns = None
 
     def next_episode(self) -> typing.Optional[int]:
         """Return the index after the current episode, None when uint32 is exhausted."""
@@ -219,6 +248,7 @@ class StepProtocol:
         self.sim_time_ns = 0 if self.sim_time_ns is None else self.sim_time_ns + self.period_ns
         self.step = int(step)
         self._answers = {}
+        self._start_period()
         if self._episode_first_stamp is None:
             self._episode_first_stamp = self.sim_time_ns
         self.awaited = None if final else self.sim_time_ns
@@ -226,6 +256,41 @@ class StepProtocol:
             self.active = False
             self.finished_episodes += 1
         return self.sim_time_ns
+
+    @property
+    def sliced(self) -> bool:
+        """Return True when the running period is applied slice by slice (human's rate).
+
+        Lockstep: only while the human is involved and awaited (a human who sits out, or a
+        graph that does not wait for the human, steps whole periods, as before human slices);
+        realtime: whenever the period has several slices (the wall timer ticks per slice).
+        """
+        if self.slices == 1:
+            return False
+        if self.mode == REALTIME:
+            return True
+        return self.human_involved and HUMAN in self.expected
+
+    @property
+    def slice_index(self) -> int:
+        """Return the index of the slice the running period is at (0: its start)."""
+        return self._slice
+
+    def next_slice_stamp(self) -> int:
+        """Return the stamp (ns) of the slice state about to be published; arm its wait.
+
+        Lockstep: the human's command answering it is awaited next (the robot's answer to the
+        period's state holds for the whole period). Realtime: the human's commands may answer
+        it from now on.
+        """
+        if not self.active or not 0 < self._slice < self.slices:
+            raise ProtocolError(f'no slice state is due (slice {self._slice} of '
+                                f'{self.slices}, episode running: {self.active})')
+        stamp = self.sim_time_ns + self._slice * self.slice_ns
+        self.slice_stamp_ns = stamp
+        self.awaited = stamp
+        self._answers = {}
+        return stamp
 
     def hold(self) -> None:
         """Stop the running episode at once (operator abort): nothing more is applied."""
@@ -254,9 +319,10 @@ class StepProtocol:
             return False
         if self.mode == LOCKSTEP:
             return stamp == self.awaited
+        newest = self.sim_time_ns if self.slice_stamp_ns is None else self.slice_stamp_ns
         return (self._episode_first_stamp is not None
-                and self._episode_first_stamp <= stamp <= self.sim_time_ns
-                and (stamp - self._episode_first_stamp) % self.period_ns == 0)
+                and self._episode_first_stamp <= stamp <= newest
+                and (stamp - self._episode_first_stamp) % self.slice_ns == 0)
 
     def on_command(self, actor: str, stamp: int, wrench, now: float) -> CommandResult:
         """Read one command of ``actor`` (a Wrench-like object) stamped ``stamp`` (ns).
@@ -267,7 +333,8 @@ class StepProtocol:
         if not self.active:
             self._count(actor + '_between_episodes')
             return CommandResult(actor, 'between_episodes', stamp)
-        awaited = self.awaited if self.mode == LOCKSTEP else self.sim_time_ns
+        awaited = self.awaited if self.mode == LOCKSTEP else (
+            self.sim_time_ns if self.slice_stamp_ns is None else self.slice_stamp_ns)
         if not self.is_answer(stamp):
             self._count(actor + '_stale')
             return CommandResult(actor, 'stale', stamp, awaited)
@@ -294,18 +361,24 @@ class StepProtocol:
             self._count(actor + '_duplicate')   # the first answer to a state stands
             return result
         self._answers[actor] = command
-        if all(expected in self._answers for expected in self.expected):
+        if all(expected in self._answers for expected in self._awaited_actors()):
             missing = {expected: not self._answers[expected].accepted
-                       for expected in self.expected}
+                       for expected in self._awaited_actors()}
             result.order = self._order(self._answers, missing, 'answered')
         return result
+
+    def _awaited_actors(self) -> tuple:
+        """Return the actors whose answer the awaited (slice) state needs (lockstep)."""
+        if self._slice == 0:
+            return self.expected
+        return (HUMAN,)    # a slice state: the robot's answer holds for the whole period
 
     def on_timeout(self) -> typing.Optional[StepOrder]:
         """Lockstep: the wait for the awaited state's commands timed out; step without them."""
         if self.mode != LOCKSTEP or not self.waiting:
             return None
         missing = {actor: actor not in self._answers or not self._answers[actor].accepted
-                   for actor in self.expected}
+                   for actor in self._awaited_actors()}
         return self._order(self._answers, missing, 'timeout')
 
     def free_run(self) -> typing.Optional[StepOrder]:
@@ -330,7 +403,21 @@ class StepProtocol:
         return self._order(commands, missing, 'tick')
 
     def _order(self, commands: dict, missing: dict, reason: str) -> StepOrder:
-        """Count the missing commands and sum the applied ones per degree of freedom."""
+        """Count the missing commands and sum the applied ones per degree of freedom.
+
+        Whole period (one slice, or not :attr:`sliced`): as before human slices. Sliced:
+        lockstep takes the robot's answer to the period's state for every slice and the
+        human's answer to each slice state; realtime takes the kept commands at each tick.
+        A period's ``*_missing`` counter counts once however many of its slices missed.
+        """
+        sliced = self.sliced
+        if sliced and self.mode == LOCKSTEP and self._slice > 0:
+            commands = dict(self._period, **{HUMAN: commands.get(HUMAN)})
+            missing = dict(self._period_missing, **{
+                HUMAN: self._period_missing.get(HUMAN, False) or missing.get(HUMAN, False)})
+        elif sliced and self.mode == LOCKSTEP:
+            self._period = {actor: command for actor, command in commands.items()
+                            if actor != HUMAN}
         applied, ignored = {}, []
         for actor, command in commands.items():
             if command is None or not command.accepted:
@@ -341,12 +428,24 @@ class StepProtocol:
                     ignored.append((actor, command.value))
                 continue
             applied[actor] = command.value
-        for actor, is_missing in missing.items():
-            if is_missing:
-                self._count(actor + '_missing')
+        if sliced:
+            if self.mode == REALTIME:
+                missing = {actor: self._period_missing.get(actor, False) or is_missing
+                           for actor, is_missing in missing.items()}
+            self._period_missing = dict(missing)
+            self._slice += 1
+            final = self._slice >= self.slices
+        else:
+            final = True
+        if final:
+            for actor, is_missing in missing.items():
+                if is_missing:
+                    self._count(actor + '_missing')
         wrench = per_dof(applied, self.dof_of)
-        self.awaited = None                  # the next state arms the next wait
-        return StepOrder(wrench[TRANSLATION], wrench[ROTATION], missing, reason, ignored)
+        self.awaited = None                  # the next (slice) state arms the next wait
+        return StepOrder(wrench[TRANSLATION], wrench[ROTATION], missing, reason, ignored,
+                         slices=1 if sliced else self.slices, final=final,
+                         human_value=applied.get(HUMAN, 0.0))
 
 
 def summary_line(episode: int, state, counters: Counter, mode: str, end: str = '') -> str:

@@ -43,6 +43,7 @@ from hrc_sim_node.physics import (body_poses, physics_params_of, PhysicsParams,
 from hrc_sim_node.protocol import (ProtocolSettings, stamp_fields, stamp_ns,
                                    StepProtocol, summary_line, WarningThrottle)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
+from hrc_sim_node.stepper import SimStepper
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -95,12 +96,16 @@ class SimNode(Node):
         except RuntimeError as error:
             raise ParameterError(f'SimParams rejected: gui: {error}') from error
         self.protocol = StepProtocol(ProtocolSettings.of(params))
+        self.stepper = SimStepper(self.physics, self.protocol)
         self._state = None              # last PhysicsState
         self._seeded = False
         self._exiting = False
         self._throttle = WarningThrottle(WARN_THROTTLE_S)
 
         self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS,
+                                                event_callbacks=NO_PUBLISHER_EVENTS)
+        # States within a period at the human's rate (the human node, the person's page).
+        self._slice_pub = self.create_publisher(TaskState, topics.SLICE_STATE, qos.STATE_QOS,
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
         # /clock is published in lockstep only; the publisher exists in both modes because a
         # reset may switch the mode.
@@ -132,7 +137,10 @@ class SimNode(Node):
         # (A timer, not a guard condition: rclpy's EventsExecutor has no guard conditions.)
         self._free_run = self.create_timer(FREE_RUN_PERIOD_S, self._on_free_run)
         self._free_run.cancel()
-        self._step_timer = self.create_timer(params.control_period, self._on_realtime_tick)
+        # Realtime: one tick per human slice (human_period), so the physics advances with
+        # wall time at the human's rate and each slice takes the newest human command.
+        self._step_timer = self.create_timer(params.control_period / self.protocol.slices,
+                                             self._on_realtime_tick)
         self._step_timer.cancel()
         if params.marker_rate > 0:
             self.create_timer(1.0 / params.marker_rate, self._publish_markers)
@@ -142,7 +150,8 @@ class SimNode(Node):
         actors = ', '.join(params.expected_actors) or 'none (free run)'
         dof_of = self.protocol.dof_of
         self.get_logger().info(
-            f'{params.mode} sim: control period {params.control_period} s, '
+            f'{params.mode} sim: control period {params.control_period} s, human period '
+            f'{params.control_period / self.protocol.slices:g} s, '
             f'{params.steps_per_episode} steps per episode, max_force {params.max_force} N, '
             f'max_torque {params.max_torque} N*m, robot drives {dof_of[ROBOT]}, human '
             f'drives {dof_of[HUMAN]}, expected actors: {actors}')
@@ -171,17 +180,17 @@ class SimNode(Node):
                 'reset requested: ' + summary_line(self.episode, self._state, abandoned,
                                                    self.protocol.mode, end='abandoned'))
         if seed >= 0:
-            state = self.physics.reset(seed=seed)
             origin = f'seed {seed}'
         elif not self._seeded:
-            state = self.physics.reset(seed=self.params.seed)
+            seed = self.params.seed
             origin = f'seed {self.params.seed} (parameter seed)'
         else:
-            state = self.physics.reset()  # next from the seeded sequence
+            seed = None  # next from the seeded sequence
             origin = 'next initial state of the seeded sequence'
         self._seeded = True
-        self.protocol.start_episode(episode)
-        message = self._publish(state, missing={})
+        first = self.stepper.start_episode(episode, seed)
+        state = first.state
+        message = self._publish(first)
         self.get_logger().info(
             f'episode {episode} started ({origin}, {self.protocol.mode}): '
             f'S_x={state.slider_position:+.4f} m, P_z={state.pendulum_angle:+.4f} rad, '
@@ -258,25 +267,30 @@ class SimNode(Node):
 
     # -- stepping ------------------------------------------------------------------------------
     def _advance(self, order):
-        """Apply one control period as ``order`` (a StepOrder) says, and publish."""
+        """Apply one control period or human slice as ``order`` (a StepOrder) says; publish."""
         for actor, value in order.ignored:
             self._warn('human_not_involved', f'{actor} command {value:+.3g} ignored: the '
                        f'session says the human is not involved now')
-        state = self.physics.step(order.force, order.torque)
-        self._publish(state, order.missing)
-        if state.truncated or state.terminated:
+        advanced = self.stepper.apply(order)
+        self._publish(advanced)
+        if advanced.episode_over:
             self._end_episode()
 
-    def _publish(self, state, missing: dict) -> TaskState:
-        """Publish /clock (lockstep) and the state; arm the wait for its commands."""
-        self._state = state
-        last = state.truncated or state.terminated
-        stamp = stamp_of(self.protocol.next_stamp(state.step, last))
+    def _publish(self, advanced) -> TaskState:
+        """Publish /clock (lockstep) and the (slice) state; arm the wait for its commands."""
+        state = advanced.state
+        last = advanced.episode_over
+        stamp = stamp_of(advanced.stamp)
         lockstep = self.protocol.mode == LOCKSTEP
         if lockstep:
             self._clock_pub.publish(Clock(clock=stamp))
-        message = state_message(state, self.episode, stamp, missing)
-        self._state_pub.publish(message)
+        message = state_message(state, self.episode, stamp, advanced.missing,
+                                advanced.slice, advanced.human_applied)
+        if advanced.period_end:
+            self._state = state
+            self._state_pub.publish(message)
+        else:
+            self._slice_pub.publish(message)
         if lockstep and not last:
             if self.protocol.expected:
                 self._timeout_timer.reset()
@@ -436,8 +450,9 @@ def command_stamp(data: bytes) -> tuple:
     return struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
 
 
-def state_message(state, episode: int, stamp: Time, missing: dict) -> TaskState:
-    """Convert a PhysicsState into a TaskState message."""
+def state_message(state, episode: int, stamp: Time, missing: dict, slice_index: int = 0,
+                  human_applied=()) -> TaskState:
+    """Convert a PhysicsState into a TaskState message (``slice_index`` > 0: a slice state)."""
     message = TaskState(
         episode=episode, step=state.step,
         slider_position=state.slider_position, slider_velocity=state.slider_velocity,
@@ -447,6 +462,7 @@ def state_message(state, episode: int, stamp: Time, missing: dict) -> TaskState:
         applied_force=state.applied_force, applied_torque=state.applied_torque,
         robot_command_missing=bool(missing.get(ROBOT, False)),
         human_command_missing=bool(missing.get(HUMAN, False)),
+        slice=int(slice_index), human_applied=[float(value) for value in human_applied],
         terminated=state.terminated, truncated=state.truncated)
     message.header.stamp = stamp
     message.header.frame_id = 'world'
