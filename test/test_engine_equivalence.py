@@ -1,6 +1,7 @@
 """The in-process engine and the node graph in lockstep run the same session.
 
-The same short session (case 5: robot and human together from the start; a PPO update after
+The same short session (case 5: robot and human together from the start, the human at its own
+rate, the sim's default human_period, answering ten slice states per step; a PPO update after
 the second episode, so the evaluation episode runs the updated policy) is run twice: by the
 session runner (sim, agent, human and recorder as separate processes over DDS) and by
 ``inprocess_session``. Both bags are read back with rosbags and compared episode by episode:
@@ -16,6 +17,7 @@ rclpy serves the state subscription first, created first): the graph then differ
 from run to run, not from the engine, which always applies the announcement first.
 """
 
+import bisect
 import collections
 import subprocess
 
@@ -24,6 +26,8 @@ from hrc_common.testing import executable_path
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
         '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
 STEPS = 40
+PERIOD_NS = 200_000_000
+SLICES = 10          # the sim's default human_period 0.02 s: the human answers 10 times a step
 TOPICS = ('/hrc/state', '/hrc/robot/cmd_wrench', '/hrc/human/cmd_wrench', '/hrc/human/action',
           '/hrc/agent/step', '/hrc/episode')
 
@@ -38,17 +42,27 @@ def fields_of(message):
     return message
 
 
+def stamp_ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
 def by_episode(bag):
-    """Return {topic: {episode: [message fields]}} (commands by the episode of their stamp)."""
-    episode_of_stamp = {(s.header.stamp.sec, s.header.stamp.nanosec): s.episode
-                        for s in bag['/hrc/state']}
+    """Return {topic: {episode: [message fields]}} (commands by the episode of their stamp).
+
+    A command answers a state (its stamp) or, at the human's rate, a slice state within the
+    period that follows a state (stamp up to one control period later).
+    """
+    states = sorted((stamp_ns(state.header.stamp), state.episode) for state in bag['/hrc/state'])
+    stamps = [stamp for stamp, _ in states]
     grouped = {topic: collections.defaultdict(list) for topic in TOPICS}
     for topic in TOPICS:
         for message in bag[topic]:
             episode = getattr(message, 'episode', None)
             if episode is None:
-                stamp = message.header.stamp
-                episode = episode_of_stamp[(stamp.sec, stamp.nanosec)]
+                stamp = stamp_ns(message.header.stamp)
+                index = bisect.bisect_right(stamps, stamp) - 1
+                assert index >= 0 and stamp - stamps[index] < PERIOD_NS, (topic, stamp)
+                episode = states[index][1]
             grouped[topic][episode].append(fields_of(message))
     return grouped
 
@@ -79,6 +93,12 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
                 assert one == other, f'{topic} episode {episode} message {index}: graph ' \
                     f'{one} != engine {other}'
     assert len(graph_messages['/hrc/state'][2]) == STEPS + 1
+    # The human acted at its own rate: a wrench for each slice of every step, the applied
+    # ones in each period's state.
+    for episode in (0, 1, 2):
+        assert len(graph_messages['/hrc/human/cmd_wrench'][episode]) == STEPS * SLICES
+        assert all(len(state['human_applied']) == SLICES
+                   for state in graph_messages['/hrc/state'][episode][1:])
     assert graph_messages['/hrc/episode'][2][0]['evaluation']
 
     # SessionStatus: the same sequence of announcements apart from the wall-clock stamp.
