@@ -35,6 +35,9 @@ class SimClient:
         self.session = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
         self.state_subscription = node.create_subscription(TaskState, topics.STATE,
                                                            self._on_state, qos.STATE_QOS)
+        self.slice_states = []
+        self.slice_subscription = node.create_subscription(
+            TaskState, topics.SLICE_STATE, self.slice_states.append, qos.STATE_QOS)
         node.create_subscription(Clock, topics.CLOCK, self.clocks.append,
                                  QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
         node.create_subscription(Image, topics.CAMERA_IMAGE, self.images.append,

@@ -30,6 +30,11 @@ def printed(process, text: str, timeout: float = 10.0) -> bool:
 
 
 def start_sim(start_node, sim_client, **parameters):
+    """Start a sim; the human acts once a period unless ``human_period`` is given.
+
+    (These tests are about the per-period protocol; slices: test_lockstep_at_the_human_rate.)
+    """
+    parameters.setdefault('human_period', parameters.get('control_period', 0.2))
     process = start_node('hrc_sim_node', 'sim_node', parameters=parameters)
     sim_client.connect()
     return process
@@ -371,3 +376,28 @@ def test_a_second_publisher_cannot_push_out_the_actors_matching_command(
     assert flood >= at_least, f'only {flood} flood commands reached the sim'
     # Throttled: a few warnings for the whole flood.
     assert process.output.count('answers no state') <= 2 + 6 * 2
+
+
+def test_lockstep_at_the_human_rate_asks_the_human_every_slice(start_node, sim_client):
+    """Ten slice states per step on /hrc/sim/slice_state; the period's state holds the
+    human's ten applied commands (clamped to the sim's max_torque), the robot's one."""
+    start_sim(start_node, sim_client, human_period=0.02, **PATIENT)
+    sim_client.wait(lambda: sim_client.slice_subscription.get_publisher_count() > 0)
+    first = sim_client.reset(seed=2).state
+    sim_client.answer('robot', first, force_z=1.0)
+    sim_client.answer('human', first, torque_x=0.05)
+    sent = [0.05]
+    for index in range(1, 10):
+        assert sim_client.wait(lambda: len(sim_client.slice_states) >= index), index
+        slice_state = sim_client.slice_states[index - 1]
+        assert (slice_state.step, slice_state.slice) == (0, index)
+        assert slice_state.header.stamp.nanosec == index * 20_000_000
+        assert not sim_client.states[1:]        # the step waits for the human's answers
+        torque = 0.1 * index if index != 9 else 3.0   # the last beyond the limit: clamped
+        sim_client.answer('human', slice_state, torque_x=torque)
+        sent.append(min(torque, 0.5))
+    state = sim_client.next_state(1)
+    assert (state.step, state.slice) == (1, 0)
+    assert list(state.human_applied) == pytest.approx(sent)
+    assert state.applied_force == 1.0
+    assert state.applied_torque == pytest.approx(sum(sent) / 10)
