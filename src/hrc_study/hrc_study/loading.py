@@ -51,7 +51,7 @@ def record_from_bag_session(session) -> SessionRecord:
         slider_error=float(summary.slider_error), pendulum_error=float(summary.pendulum_error),
         ball_error=float(summary.ball_error), total_error=float(summary.total_error),
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
-        final_evaluation=_final_flag(summary))
+        final_evaluation=_final_flag(summary), kind=_kind_label(summary))
         for summary in session.summaries]
     strategy, robot_dof = CASES.get(session.case_id, (session.strategy, session.robot_dof))
     try:
@@ -68,6 +68,17 @@ def record_from_bag_session(session) -> SessionRecord:
                          episode_limit=episode_limit_of(session.config),
                          path=str(session.path),
                          extra={'bag_session': session, 'person': person_of(session.config)})
+
+
+def _kind_label(summary) -> str:
+    """Return the summary's kind label, '' when it does not say (bags before the field)."""
+    from hrc_common.contract import EpisodeKind
+
+    try:
+        kind = EpisodeKind(int(getattr(summary, 'kind', 0)))
+    except ValueError:
+        return ''
+    return '' if kind is EpisodeKind.UNKNOWN else kind.label
 
 
 def _final_flag(summary):

@@ -14,7 +14,13 @@ Definitions (the issue #13 rules, see docs/results.md):
   whenever the human acted in them (the person's time is the burden metric).
 * Episodes to convergence: every episode before the final block; "converged" when an episode
   of the strategy's last training step carries the convergence flag. A session that stopped at
-  the episode limit without it is right-censored at its episode count.
+  the episode limit without it is right-censored at its episode count (and so is its count of
+  human-involved episodes).
+* Episode kinds (``EpisodeSummary.kind``: training, judging, evaluation, practice): when the
+  summaries say, the final block starts at the first evaluation episode and practice episodes
+  count in neither the training totals nor the final block. Bags recorded before the field
+  (kind unknown, ``EpisodeRecord.kind == ''``): the rule above, and every non-evaluation
+  episode reads as training (judging episodes cannot be told apart there).
 """
 
 from dataclasses import dataclass, field
@@ -50,6 +56,22 @@ class EpisodeRecord:
     human_effort: float
     robot_effort: float
     final_evaluation: bool = None   # None: unknown, inferred (see final_block)
+    kind: str = ''                  # training | judging | evaluation | practice; '' unknown
+
+
+KINDS = ('training', 'judging', 'evaluation', 'practice')
+
+
+def kind_of(episode: EpisodeRecord) -> str:
+    """Return the episode's kind: its own when known, else evaluation or training (old bags)."""
+    if episode.kind in KINDS:
+        return episode.kind
+    return 'evaluation' if episode.evaluation else 'training'
+
+
+def kinds_known(session) -> bool:
+    """Return whether the session's summaries say their kind (bags with EpisodeSummary.kind)."""
+    return any(episode.kind in KINDS for episode in session.episodes)
 
 
 @dataclass
@@ -82,6 +104,9 @@ def final_block_start(session: SessionRecord) -> int:
     convergence flag (that one judged convergence during training).
     """
     episodes = session.episodes
+    if kinds_known(session):
+        kinds = [kind_of(episode) for episode in episodes]
+        return kinds.index('evaluation') if 'evaluation' in kinds else len(episodes)
     if any(episode.final_evaluation is not None for episode in episodes):
         flags = [bool(episode.final_evaluation) for episode in episodes]
         return flags.index(True) if True in flags else len(episodes)
@@ -98,11 +123,13 @@ def measures(session: SessionRecord) -> dict:
     """Return the per-session values of Table II and the three factors (NaN: no data).
 
     Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
-    training), percentage, converged (bool), the four errors and two
-    efforts (means over the final evaluation block), evaluation_episodes.
+    training, not practice), percentage, converged (bool), the four errors and two
+    efforts (means over the final evaluation block), evaluation_episodes, practice_episodes.
     """
     start = final_block_start(session)
-    training, final = session.episodes[:start], session.episodes[start:]
+    before, final = session.episodes[:start], session.episodes[start:]
+    training = [episode for episode in before if kind_of(episode) != 'practice']
+    final = [episode for episode in final if kind_of(episode) != 'practice']
     involved = sum(1 for episode in training if episode.human_involved)
     last_step = session.steps - 1
     converged = any(episode.converged and episode.training_step == last_step
@@ -113,6 +140,7 @@ def measures(session: SessionRecord) -> dict:
         'percentage': 100.0 * involved / len(training) if training else math.nan,
         'converged': converged,
         'evaluation_episodes': float(len(final)),
+        'practice_episodes': float(len(session.episodes) - len(training) - len(final)),
     }
     for key in ERROR_KEYS + EFFORT_KEYS:
         samples = [getattr(episode, key) for episode in final]
