@@ -24,6 +24,7 @@ Definitions (the issue #13 rules, see docs/results.md):
 """
 
 from dataclasses import dataclass, field
+import functools
 import math
 
 # Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
@@ -37,6 +38,11 @@ CASES = {1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided
          5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation')}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
+# Effort in physical units: the variance of the command in N^2 (translation, the slider's
+# force) or (N*m)^2 (rotation, the pendulum's torque) = variance of the normalized command
+# times the limit squared (the sim's max_force / max_torque: a normalized 1 is the limit).
+PHYSICAL_EFFORT_KEYS = ('human_effort_physical', 'robot_effort_physical')
+EFFORT_UNITS = {'translation': 'N^2', 'rotation': '(N*m)^2'}
 
 
 @dataclass(frozen=True)
@@ -96,6 +102,25 @@ class SessionRecord:
         return self.step_count or STEP_COUNTS.get(self.strategy, 1)
 
 
+@functools.lru_cache(maxsize=1)
+def default_limits() -> dict:
+    """Return the sim's default command limits {dof: N or N*m} (hrc_sim_node's PhysicsParams)."""
+    from hrc_sim_node.physics import PhysicsParams
+
+    params = PhysicsParams()
+    return {'translation': float(params.max_force), 'rotation': float(params.max_torque)}
+
+
+def command_limits(session: SessionRecord) -> dict:
+    """Return {dof: limit} of a session: its recorded sim parameters, else the sim's defaults."""
+    return {**default_limits(), **session.extra.get('limits', {})}
+
+
+def other_dof_of(dof: str) -> str:
+    """Return the degree of freedom the other actor drives."""
+    return 'rotation' if dof == 'translation' else 'translation'
+
+
 def final_block_start(session: SessionRecord) -> int:
     """Return the index in ``session.episodes`` where the final evaluation block starts.
 
@@ -124,7 +149,9 @@ def measures(session: SessionRecord) -> dict:
 
     Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
     training, not practice), percentage, converged (bool), the four errors and two
-    efforts (means over the final evaluation block), evaluation_episodes, practice_episodes.
+    efforts (means over the final evaluation block), evaluation_episodes, practice_episodes,
+    the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
+    PHYSICAL_EFFORT_KEYS).
     """
     start = final_block_start(session)
     before, final = session.episodes[:start], session.episodes[start:]
@@ -145,6 +172,11 @@ def measures(session: SessionRecord) -> dict:
     for key in ERROR_KEYS + EFFORT_KEYS:
         samples = [getattr(episode, key) for episode in final]
         values[key] = sum(samples) / len(samples) if samples else math.nan
+    limits = command_limits(session)
+    values['robot_effort_physical'] = values['robot_effort'] * limits.get(
+        session.robot_dof, math.nan) ** 2
+    values['human_effort_physical'] = values['human_effort'] * limits.get(
+        other_dof_of(session.robot_dof), math.nan) ** 2
     return values
 
 

@@ -93,8 +93,8 @@ def test_priorities_are_checked_with_every_reason():
 
 
 def test_results_document_carries_the_computed_numbers(tmp_path):
-    from hrc_study.results_doc import cell, write_results
-    from hrc_study.statistics import kaplan_meier, mean_interval
+    from hrc_study.results_doc import cell, column_interval, write_results
+    from hrc_study.statistics import kaplan_meier
 
     sessions = paper_like(seeds=4) + paper_like(seeds=3, profile='paper_symmetric', seed=2)
     outcomes = [{'profile': 'paper', 'case': case, 'seed': seed, 'exit_code': 0,
@@ -108,7 +108,10 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
                            parse_priorities('human=1'), note='A note.', resamples=100)
     text = (tmp_path / 'results.md').read_text()
     case2 = [measures(s) for s in sessions if s.case_id == 2 and s.profile == 'paper']
-    assert cell(mean_interval(v['total_error'] for v in case2), 3) in text
+    assert cell(column_interval([v['total_error'] for v in case2], 'total_error'), 3) in text
+    # the physical effort of case 2's robot (rotation): N*m squared
+    assert cell(column_interval([v['robot_effort_physical'] for v in case2],
+                                'robot_effort_physical'), 4) + ' (N*m)^2' in text
     case4 = [measures(s) for s in sessions if s.case_id == 4 and s.profile == 'paper']
     km = kaplan_meier([v['total_episodes'] for v in case4], [v['converged'] for v in case4])
     assert f'| 4 | 4/4 | {km.describe()} |' in text
@@ -132,3 +135,17 @@ def test_a_file_that_is_not_mcap_is_named_without_a_traceback(tmp_path, capsys):
     (session / 'broken_ep0000.mcap').write_text('not an MCAP file')
     assert main([str(tmp_path / 'bags'), '--out', str(tmp_path / 'out')]) == 1
     assert 'is not an MCAP file' in capsys.readouterr().err
+
+
+def test_student_t_setting_reproduces_the_tables_before_issue_23(tmp_path):
+    from hrc_study.results_doc import cell, table2_markdown, UNITS_CAVEAT, write_results
+    from hrc_study.statistics import mean_interval
+
+    sessions = paper_like(seeds=4)
+    write_results(sessions, tmp_path, 'hrc_results x', resamples=50, intervals='student-t')
+    text = (tmp_path / 'results.md').read_text()
+    case5 = [measures(s) for s in sessions if s.case_id == 5]
+    old_cell = cell(mean_interval(v['total_error'] for v in case5), 3)
+    assert old_cell in text and 'Intervals: Student t' in text
+    assert old_cell not in table2_markdown({5: case5})     # the default (BCa) differs
+    assert UNITS_CAVEAT in text     # beside the comparison with the paper
