@@ -284,8 +284,9 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
     """Record a synthetic session straight into an EpisodeRecorder (no DDS), deterministically.
 
     Log times follow the simulation time (1 ms apart within a step); the recorder's clock is
-    advanced past ``close_grace`` after each episode. Returns the SyntheticSession (its
-    ``published`` holds every message).
+    advanced past ``close_grace`` after each episode. ``plan``: (training_step, human_involved,
+    evaluation) per episode, optionally a fourth item, the summary's ``EpisodeSummary.KIND_*``.
+    Returns the SyntheticSession (its ``published`` holds every message).
     """
     from rclpy.serialization import serialize_message
 
@@ -318,10 +319,13 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
 
     robot_dof = 0 if case_id % 2 else 1
     session = SyntheticSession(None, session_id, case_id, strategy, seed, robot_dof, sink)
-    for episode, (training_step, human_involved, evaluation) in enumerate(plan):
+    for episode, entry in enumerate(plan):
+        training_step, human_involved, evaluation = entry[:3]
+        kind = entry[3] if len(entry) > 3 else None     # EpisodeSummary.KIND_*, None: inferred
         phase = SessionStatus.PHASE_EVALUATION if evaluation else SessionStatus.PHASE_TRAINING
         session.publish_status(episode, phase, training_step, human_involved)
-        session.publish_episode(episode, steps, training_step, human_involved, evaluation)
+        session.publish_episode(episode, steps, training_step, human_involved, evaluation,
+                                kind=kind)
         clock[0] += params.close_grace + 0.1
         recorder.tick()
     session.publish_status(len(plan), SessionStatus.PHASE_DONE)
