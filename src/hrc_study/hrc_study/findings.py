@@ -355,11 +355,23 @@ def _adjust_and_judge(findings, alpha: float) -> None:
             finding.reason = _inconclusive_reason(finding, alpha)
 
 
+def _power_note(finding: Finding) -> str:
+    """Say when the deciding comparison is already at the smallest p its test can give."""
+    pick = min if finding.any_component else max
+    deciding = pick(finding.components, key=lambda component: component.result.p_value)
+    floor = deciding.result.floor_p
+    if floor > 0 and deciding.result.p_value <= floor * (1 + 1e-9):
+        return (f'; power: {deciding.label} is at the smallest p its test can give on these '
+                f'sessions ({floor:.3g}; {deciding.result.detail}): more seeds are needed to '
+                f'decide it')
+    return ''
+
+
 def _inconclusive_reason(finding: Finding, alpha: float) -> str:
-    """Say which comparison keeps the finding from holding."""
+    """Say which comparison keeps the finding from holding (and when power is the reason)."""
     if finding.p_value < alpha:
         return (f'significant alone (raw p = {finding.p_value:.3g}) but not after Holm over '
-                f'the findings (p = {finding.p_holm:.3g})')
+                f'the findings (p = {finding.p_holm:.3g})' + _power_note(finding))
     pick = min if finding.any_component else max
     deciding = pick(finding.components, key=lambda component: component.result.p_value)
     direction = ('points the claimed way' if deciding.result.p_value

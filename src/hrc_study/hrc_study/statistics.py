@@ -207,6 +207,7 @@ class TestResult:
     effect: float          # effect size (sign: positive = in the claimed direction)
     effect_name: str
     detail: str            # the compared estimates, in words
+    floor_p: float = 0.0   # the smallest one-sided p the test can give on this design (power)
 
 
 def rank_biserial(x, y) -> float:
@@ -231,7 +232,8 @@ def mann_whitney_less(x, y) -> TestResult:
     greater = stats.mannwhitneyu(x, y, alternative='greater').pvalue
     return TestResult('Mann-Whitney U (one-sided)', float(less), float(greater),
                       rank_biserial(x, y), 'rank-biserial r',
-                      f'median {numpy.median(x):.4g} vs {numpy.median(y):.4g}')
+                      f'median {numpy.median(x):.4g} vs {numpy.median(y):.4g}',
+                      1 / math.comb(x.size + y.size, x.size))
 
 
 def logrank_faster(x_times, x_events, y_times, y_events) -> TestResult:
@@ -294,8 +296,10 @@ def wilcoxon_less(x, y) -> TestResult:
         warnings.simplefilter('ignore')   # exact distribution unavailable with ties: normal
         less = stats.wilcoxon(differences, alternative='less').pvalue
         greater = stats.wilcoxon(differences, alternative='greater').pvalue
+    # every pair in the claimed direction: the exact one-sided p is 2^-n, its smallest value
+    floor = 0.5 ** int(numpy.count_nonzero(differences))
     return TestResult(name, float(less), float(greater), signed_rank_biserial(differences),
-                      'matched rank-biserial r', detail)
+                      'matched rank-biserial r', detail, floor)
 
 
 def stratified_logrank(times, events, in_x, strata) -> tuple:

@@ -243,3 +243,16 @@ def test_fig5_keeps_every_seed_and_plots_judging_apart():
     # old sessions (kinds unknown): no judging row, every non-evaluation episode is training
     old = [make_session(2, 0, 0.2, 10, True)]
     assert returns_of_kind(old[0], 'judging') == []
+
+
+def test_an_inconclusive_finding_names_the_power_limit():
+    # five seeds of the control profile, every pair in the claimed direction: the signed-rank
+    # p cannot go below 2^-5 = 0.031, which Holm over six findings (the others undecided:
+    # equal cases) cannot pass
+    equal = [make_session(case_id, seed, 0.5 + 0.01 * ((seed * 3 + case_id) % 7), 100, True)
+             for case_id in range(1, 7) for seed in range(10)]
+    findings = evaluate_findings(equal + paper_like(seeds=5, profile='symmetric', seed=1))
+    control = {finding.key: finding for finding in findings}["e'"]
+    assert control.p_value == pytest.approx(1 / 32)
+    assert control.verdict == 'inconclusive'
+    assert 'power' in control.reason and '0.0312' in control.reason
