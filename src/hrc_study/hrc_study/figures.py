@@ -133,7 +133,7 @@ def figure_training(sessions, profile: str, path) -> None:
             axis.set_xlabel('episode of training (training and judging episodes counted)')
         axes[row][0].set_ylabel('episode return (robot reward)')
     figure.suptitle('Fig. 5: median return over all seeds, band: inter-quartile range across '
-                    'seeds; a session that stopped (converged or at the limit) is carried at '
+                    'seeds\na session that stopped (converged or at the limit) is carried at '
                     'its last value (tick: where it stopped); dashed: median episode at which '
                     'the human joins', fontsize='medium')
     figure.tight_layout()

@@ -392,6 +392,12 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
     if chooser_problem:
         parts += [f'Not computed: {chooser_problem}.', '']
     parts += ['## Figures', '', '![Fig. 5](results/fig5_training.png)', '',
+              'Fig. 5: training episodes (top) and the deterministic judging episodes (bottom) '
+              'apart (EpisodeSummary.kind; bags recorded before that field cannot tell them '
+              'apart and show both on top). Line: median over all seeds of the case; band: '
+              'inter-quartile range across the seeds (half of them lie inside); a session '
+              'that converged or hit the limit is carried at its last value (tick: where it '
+              'stopped), so no average is over the survivors only.', '',
               '![Fig. 6](results/fig6_actions.png)', '']
     if choices:
         parts += ['![Fig. 7](results/fig7_three_factor.png)', '']
