@@ -223,6 +223,8 @@ def test_episode_kinds_are_recorded_and_read_and_old_bags_infer_them(tmp_path):
     assert [summary.episode for summary in session.training] == [1, 2, 3]   # judging included
     assert [summary.episode for summary in session.evaluation] == [4, 5]
     assert report.session_metrics(session)['total_episodes'] == 3.0       # practice apart
+    # Fig. 5's training curve leaves the judging episode out (its return is deterministic)
+    assert len(report.training_curve(session)['returns']) == 2
     # a summary decoded from a bag recorded before EpisodeSummary.kind has no such field
     old = types.SimpleNamespace(evaluation=True)
     assert kind_of(old) is EpisodeKind.EVALUATION
