@@ -115,6 +115,9 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
     case4 = [measures(s) for s in sessions if s.case_id == 4 and s.profile == 'paper']
     km = kaplan_meier([v['total_episodes'] for v in case4], [v['converged'] for v in case4])
     assert f'| 4 | 4/4 | {km.describe()} |' in text
+    human = kaplan_meier([v['human_involved_episodes'] for v in case4],
+                         [v['converged'] for v in case4])
+    assert f'| {human.describe()} | 14 |' in text       # (b)'s measure, censored, by KM
     assert "| (e') |" in text and 'paper_symmetric' in text and 'A note.' in text
     assert '60 of 61 planned sessions finished in 7.0 min wall' in text
     assert '1 not started (--stop-after)' in text and '**your priorities**' in text
