@@ -374,8 +374,11 @@ def _inconclusive_reason(finding: Finding, alpha: float) -> str:
                 f'the findings (p = {finding.p_holm:.3g})' + _power_note(finding))
     pick = min if finding.any_component else max
     deciding = pick(finding.components, key=lambda component: component.result.p_value)
-    direction = ('points the claimed way' if deciding.result.p_value
-                 < deciding.result.p_reverse else 'points the other way')
+    if deciding.result.p_value == deciding.result.p_reverse:
+        direction = 'shows no difference either way'     # e.g. no comparable event at all
+    else:
+        direction = ('points the claimed way' if deciding.result.p_value
+                     < deciding.result.p_reverse else 'points the other way')
     return (f'{deciding.label} {direction} but is not significant (raw p = '
             f'{deciding.result.p_value:.3g}; {deciding.result.detail})')
 

@@ -175,6 +175,7 @@ def test_finding_b_treats_capped_human_counts_as_censored():
     assert [component.result.test.split(' (')[0] for component in b.components] == [
         'log-rank stratified by seed and person'] * 4
     assert b.p_value == 1.0 and b.verdict == 'inconclusive'
+    assert 'no difference either way' in b.reason and 'no comparable event' in b.reason
 
 
 def test_finding_d_contrasts_case_5_with_cases_1_and_3():
