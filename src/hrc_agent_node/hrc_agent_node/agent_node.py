@@ -50,7 +50,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
-from hrc_common.contract import Phase, SimLimits
+from hrc_common.contract import episode_kind, Phase, SimLimits
 from hrc_common.dof import DOF_INDEX, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
@@ -516,6 +516,8 @@ class AgentNode(Node):
         # Judging episodes are not Table II evaluation: they count with the training episodes
         # (their AgentStep messages are deterministic).
         msg.evaluation = result.evaluation
+        msg.kind = int(episode_kind(evaluation=result.evaluation, judging=result.judging,
+                                    practice=getattr(result, 'practice', False)))
         msg.steps = result.steps
         msg.terminated = result.terminated
         msg.truncated = result.truncated

@@ -21,7 +21,7 @@ import typing
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
-from hrc_common.contract import NS_PER_S
+from hrc_common.contract import episode_kind, EpisodeKind, NS_PER_S
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 import numpy
 from rclpy.node import Node
@@ -147,8 +147,12 @@ class SyntheticSession:
     def publish_episode(self, episode: int, steps: int = 10, training_step: int = 0,
                         human_involved: bool = False, evaluation: bool = False,
                         step_period: float = 0.0, final: bool = True,
-                        stop: typing.Optional[typing.Callable] = None) -> EpisodeSummary:
+                        stop: typing.Optional[typing.Callable] = None,
+                        kind: typing.Optional[int] = None) -> EpisodeSummary:
         """Publish the traffic of one episode of ``steps`` states (the last one final).
+
+        ``kind``: the summary's ``EpisodeSummary.KIND_*`` (None: evaluation or training, from
+        ``evaluation``; KIND_UNKNOWN writes a summary as bags before the field read).
 
         With ``final`` false the episode stops after ``steps`` non-final states (as if the
         graph died); so it does, unfinished, as soon as ``stop()`` is true. Returns the
@@ -198,6 +202,7 @@ class SyntheticSession:
         summary.training_step = training_step
         summary.human_involved = human_involved
         summary.evaluation = evaluation
+        summary.kind = int(episode_kind(kind, evaluation=evaluation)) if kind is None else kind
         summary.steps = steps
         summary.truncated = True
         summary.episode_return = float(-errors.sum())
@@ -207,7 +212,8 @@ class SyntheticSession:
         summary.robot_effort = float(numpy.var(robot_actions)) if robot_actions else 0.0
         summary.human_effort = float(numpy.var(human_actions)) if human_actions else 0.0
         self._publish(hrc_topics.EPISODE, summary)
-        if not evaluation:
+        if episode_kind(summary.kind, evaluation=evaluation) in (EpisodeKind.TRAINING,
+                                                                 EpisodeKind.JUDGING):
             self.total_episodes += 1
             self.human_involved_episodes += int(human_involved)
         return summary
@@ -278,8 +284,9 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
     """Record a synthetic session straight into an EpisodeRecorder (no DDS), deterministically.
 
     Log times follow the simulation time (1 ms apart within a step); the recorder's clock is
-    advanced past ``close_grace`` after each episode. Returns the SyntheticSession (its
-    ``published`` holds every message).
+    advanced past ``close_grace`` after each episode. ``plan``: (training_step, human_involved,
+    evaluation) per episode, optionally a fourth item, the summary's ``EpisodeSummary.KIND_*``.
+    Returns the SyntheticSession (its ``published`` holds every message).
     """
     from rclpy.serialization import serialize_message
 
@@ -312,10 +319,13 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
 
     robot_dof = 0 if case_id % 2 else 1
     session = SyntheticSession(None, session_id, case_id, strategy, seed, robot_dof, sink)
-    for episode, (training_step, human_involved, evaluation) in enumerate(plan):
+    for episode, entry in enumerate(plan):
+        training_step, human_involved, evaluation = entry[:3]
+        kind = entry[3] if len(entry) > 3 else None     # EpisodeSummary.KIND_*, None: inferred
         phase = SessionStatus.PHASE_EVALUATION if evaluation else SessionStatus.PHASE_TRAINING
         session.publish_status(episode, phase, training_step, human_involved)
-        session.publish_episode(episode, steps, training_step, human_involved, evaluation)
+        session.publish_episode(episode, steps, training_step, human_involved, evaluation,
+                                kind=kind)
         clock[0] += params.close_grace + 0.1
         recorder.tick()
     session.publish_status(len(plan), SessionStatus.PHASE_DONE)

@@ -13,6 +13,11 @@ Human input sources (``HumanAction.source``)
     ``InputSource`` -- IntEnum whose values equal ``hrc_msgs/msg/HumanAction`` ``SOURCE_*``;
     ``InputSource.X.label`` ('device', 'joy', 'simulated', 'replay', 'none');
     ``source_label(code, default=None)``.
+Episode kinds (``EpisodeSummary.kind``)
+    ``EpisodeKind`` -- IntEnum whose values equal ``hrc_msgs/msg/EpisodeSummary`` ``KIND_*``
+    (UNKNOWN, TRAINING, JUDGING, EVALUATION, PRACTICE); ``.label``;
+    ``episode_kind(kind, evaluation, judging, practice)``: the kind, inferred from the flags
+    when the code is unknown (old bags: evaluation, else training).
 Degrees of freedom and the wrench axis convention
     ``TRANSLATION``, ``ROTATION``, ``DOFS`` (in ``SessionStatus.DOF_*`` order), ``DOF_INDEX``,
     ``DOF_NAME``, ``check_dof``, ``other_dof``, ``dof_name(code, default=None)``,
@@ -119,6 +124,46 @@ def source_label(code: int, default: str = None) -> str:
         return InputSource(code).label
     except ValueError:
         return default if default is not None else f'source {code}'
+
+
+# --------------------------------------------------------------------------- episode kinds
+
+
+class EpisodeKind(enum.IntEnum):
+    """What an episode was for; values equal hrc_msgs/msg/EpisodeSummary KIND_*."""
+
+    UNKNOWN = 0      # not said (bags recorded before EpisodeSummary.kind): see episode_kind
+    TRAINING = 1     # the policy explores; its experience trains it
+    JUDGING = 2      # deterministic episode during training that judges convergence
+    EVALUATION = 3   # the frozen deterministic policy after training (Table II)
+    PRACTICE = 4     # the person practises before training (not a training episode)
+
+    @property
+    def label(self) -> str:
+        """Return the lower-case name shown to users ('training', ...)."""
+        return self.name.lower()
+
+
+def episode_kind(kind: int = EpisodeKind.UNKNOWN, evaluation: bool = False,
+                 judging: bool = False, practice: bool = False) -> EpisodeKind:
+    """Return the kind of an episode: ``kind`` when known, else inferred from the flags.
+
+    Inference (an unknown code, or a summary without the field): practice, then judging, then
+    evaluation when their flag is set, else training. Bags recorded before the field existed
+    only have ``evaluation``; there, a judging episode recorded as evaluation reads as
+    evaluation (hrc_study's final-block rule separates those).
+    """
+    try:
+        known = EpisodeKind(int(kind))
+    except (TypeError, ValueError):
+        known = EpisodeKind.UNKNOWN
+    if known is not EpisodeKind.UNKNOWN:
+        return known
+    if practice:
+        return EpisodeKind.PRACTICE
+    if judging:
+        return EpisodeKind.JUDGING
+    return EpisodeKind.EVALUATION if evaluation else EpisodeKind.TRAINING
 
 
 # --------------------------------------------------------------------------- degrees of freedom

@@ -37,6 +37,21 @@ def test_input_sources_equal_the_message_constants():
     assert contract.source_label(9) == 'source 9'
 
 
+def test_episode_kinds_equal_the_message_constants_and_old_bags_infer_them():
+    from hrc_msgs.msg import EpisodeSummary
+    declared = {name for name in dir(EpisodeSummary) if name.startswith('KIND_')}
+    assert declared == {f'KIND_{kind.name}' for kind in contract.EpisodeKind}
+    for kind in contract.EpisodeKind:
+        assert getattr(EpisodeSummary, f'KIND_{kind.name}') == kind.value
+    kind_of = contract.episode_kind
+    assert kind_of(EpisodeSummary.KIND_JUDGING, evaluation=True) is contract.EpisodeKind.JUDGING
+    # unknown (old bags): the flags decide, training by default
+    assert kind_of(0, evaluation=True) is contract.EpisodeKind.EVALUATION
+    assert kind_of(0, judging=True) is contract.EpisodeKind.JUDGING
+    assert kind_of(0, practice=True).label == 'practice'
+    assert kind_of(None).label == 'training' and kind_of(99).label == 'training'
+
+
 def test_dof_indices_and_types_equal_the_messages():
     from hrc_msgs.msg import HumanAction, SessionStatus
     assert contract.DOF_INDEX == {TRANSLATION: SessionStatus.DOF_TRANSLATION,

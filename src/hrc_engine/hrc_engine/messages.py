@@ -8,7 +8,7 @@ the graph. ``hrc_bag.session_writer`` encodes them to CDR.
 
 from dataclasses import dataclass, field
 
-from hrc_common.contract import DOF_INDEX, InputSource, Phase, wrench_axis
+from hrc_common.contract import DOF_INDEX, episode_kind, InputSource, Phase, wrench_axis
 from hrc_sim_node.commands import HUMAN, ROBOT
 from hrc_sim_node.protocol import stamp_fields
 
@@ -95,7 +95,10 @@ def episode_summary(core, result, stamp: int) -> dict:
     return {'header': header(stamp), 'session_id': core.session_id,
             'case_id': core.case_id, 'episode': result.episode,
             'training_step': result.training_step, 'human_involved': result.human_involved,
-            'evaluation': result.evaluation, 'steps': result.steps,
+            'evaluation': result.evaluation,
+            'kind': int(episode_kind(evaluation=result.evaluation, judging=result.judging,
+                                     practice=getattr(result, 'practice', False))),
+            'steps': result.steps,
             'terminated': result.terminated, 'truncated': result.truncated,
             'episode_return': result.episode_return,
             'slider_error': float(result.errors.get('slider', 0.0)),

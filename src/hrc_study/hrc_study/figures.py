@@ -1,13 +1,16 @@
 """Fig. 5-7 of the study over seeds, and the convergence curves (matplotlib, Agg; no ROS)."""
 
 import dataclasses
+from dataclasses import dataclass
 import math
+import warnings
 
 from hrc_common.contract import other_dof
 import numpy
 
-from hrc_study.sessions import final_block_start, measures, STRATEGY_SHORT
-from hrc_study.statistics import censored, mean_interval
+from hrc_study.sessions import (final_block_start, kind_of, kinds_known, measures,
+                                STRATEGY_SHORT)
+from hrc_study.statistics import censored
 
 PANELS = [('translation', '(a) robot: translation, human: rotation (cases 1, 3, 5)'),
           ('rotation', '(b) robot: rotation, human: translation (cases 2, 4, 6)')]
@@ -29,59 +32,109 @@ def by_case(sessions, profile: str) -> dict:
     return dict(sorted(groups.items()))
 
 
-def training_returns(session) -> list:
-    """Return the returns of the training (non-evaluation) episodes before the final block."""
-    return [episode.episode_return
-            for episode in session.episodes[:final_block_start(session)]
-            if not episode.evaluation]
+def returns_of_kind(session, kind: str) -> list:
+    """Return [(episode position, return)] of the ``kind`` episodes before the final block.
 
-
-def return_band(sessions) -> tuple:
-    """Return (episodes, mean, low, high, sessions left) of training returns per episode.
-
-    The band is the 95% interval of the mean over the sessions still training at that episode.
+    The position counts every episode of training from 1 (training and judging episodes share
+    one axis). Sessions whose summaries do not say their kind (bags before
+    ``EpisodeSummary.kind``): every non-evaluation episode is 'training', none 'judging'.
     """
-    curves = [training_returns(session) for session in sessions]
-    length = max((len(curve) for curve in curves), default=0)
-    mean, low, high, left = [], [], [], []
-    for index in range(length):
-        interval = mean_interval(curve[index] for curve in curves if index < len(curve))
-        mean.append(interval.estimate)
-        low.append(interval.low if interval.count > 1 else interval.estimate)
-        high.append(interval.high if interval.count > 1 else interval.estimate)
-        left.append(interval.count)
-    return list(range(1, length + 1)), mean, low, high, left
+    points = []
+    for index, episode in enumerate(session.episodes[:final_block_start(session)]):
+        if kind_of(episode) == kind:
+            points.append((index + 1, episode.episode_return))
+    return points
+
+
+def training_returns(session) -> list:
+    """Return the returns of the training episodes before the final block (judging excluded)."""
+    return [value for _, value in returns_of_kind(session, 'training')]
+
+
+@dataclass
+class ReturnBand:
+    """Return per episode position across all sessions of a case (Fig. 5)."""
+
+    episodes: list          # episode positions 1..longest session
+    median: list            # median over the sessions (NaN before any session has a value)
+    low: list               # 25th percentile over the sessions
+    high: list              # 75th percentile
+    running: list           # sessions still training at that position
+    stops: list             # each session's last position (converged or stopped at the limit)
+
+
+def return_band(sessions, kind: str = 'training') -> ReturnBand:
+    """Return the median and inter-quartile range of ``kind`` returns per episode position.
+
+    Every session counts at every position: after its last episode (it converged, or stopped at
+    the episode limit) its last return is carried forward, and between two episodes of the
+    kind (judging) the earlier value holds. No survivor averaging: the band is over all
+    sessions that have had an episode of the kind by then; the band is the inter-quartile range
+    (half of the sessions lie inside it), not an interval of the mean.
+    """
+    series = [returns_of_kind(session, kind) for session in sessions]
+    lengths = [final_block_start(session) for session in sessions]
+    longest = max(lengths, default=0)
+    values = numpy.full((len(series), longest), numpy.nan)
+    for row, points in enumerate(series):
+        for position, value in points:
+            values[row, position - 1:] = value
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)   # columns without a value yet
+        low, median, high = (numpy.nanpercentile(values, quantile, axis=0).tolist()
+                             if longest else [] for quantile in (25, 50, 75))
+    running = [sum(1 for length in lengths if length >= position)
+               for position in range(1, longest + 1)]
+    return ReturnBand(list(range(1, longest + 1)), median, low, high, running, lengths)
+
+
+KIND_ROWS = [('training', 'training episodes (stochastic policy)'),
+             ('judging', 'judging episodes (deterministic policy, judge convergence)')]
 
 
 def figure_training(sessions, profile: str, path) -> None:
-    """Write Fig. 5: mean training return per episode with its 95% band across seeds."""
+    """Write Fig. 5: training and judging returns apart, median and IQR over all seeds."""
     pyplot = _pyplot()
     groups = by_case(sessions, profile)
-    figure, axes = pyplot.subplots(1, 2, figsize=(13, 4.8), sharey=True)
-    for axis, (dof, title) in zip(axes, PANELS):
-        for case_id, members in groups.items():
-            if members[0].robot_dof != dof:
-                continue
-            episodes, mean, low, high, _ = return_band(members)
-            if not episodes:
-                continue
-            line, = axis.plot(episodes, mean, label=f'case {case_id} ({len(members)} seeds, '
-                              f'{STRATEGY_SHORT.get(members[0].strategy, "")})')
-            axis.fill_between(episodes, low, high, color=line.get_color(), alpha=0.2)
-            joins = [_first_human_episode(member) for member in members]
-            joins = [join for join in joins if join is not None]
-            if joins and numpy.median(joins) > 1:
-                axis.axvline(numpy.median(joins), color=line.get_color(), linestyle='--',
-                             linewidth=0.9)
-        axis.set_title(title, fontsize='medium')
-        axis.set_xlabel('training episode')
-        axis.grid(alpha=0.3)
-        if axis.get_lines():
-            axis.legend(loc='lower right', fontsize='small')
-    axes[0].set_ylabel('episode return (robot reward)')
-    figure.suptitle('Fig. 5: mean training return over seeds (judging episodes included), band: '
-                    '95% interval of the mean '
-                    '(sessions drop out as they converge); dashed: median episode at which '
+    figure, axes = pyplot.subplots(2, 2, figsize=(13, 8.4), sharex='col', squeeze=False)
+    known = any(kinds_known(session) for members in groups.values() for session in members)
+    for row, (kind, kind_title) in enumerate(KIND_ROWS):
+        for axis, (dof, title) in zip(axes[row], PANELS):
+            for case_id, members in groups.items():
+                if members[0].robot_dof != dof:
+                    continue
+                band = return_band(members, kind)
+                if not band.episodes or all(math.isnan(value) for value in band.median):
+                    continue
+                line, = axis.plot(band.episodes, band.median, label=(
+                    f'case {case_id} ({len(members)} seeds, '
+                    f'{STRATEGY_SHORT.get(members[0].strategy, "")})'))
+                axis.fill_between(band.episodes, band.low, band.high, color=line.get_color(),
+                                  alpha=0.2)
+                # each session's last training episode: a tick on the median line
+                stops = [stop for stop in band.stops if stop > 0]
+                axis.plot(stops, [band.median[stop - 1] for stop in stops], '|',
+                          color=line.get_color(), markersize=9)
+                joins = [_first_human_episode(member) for member in members]
+                joins = [join for join in joins if join is not None]
+                if kind == 'training' and joins and numpy.median(joins) > 1:
+                    axis.axvline(numpy.median(joins), color=line.get_color(), linestyle='--',
+                                 linewidth=0.9)
+            axis.set_title(f'{title}\n{kind_title}', fontsize='medium')
+            axis.grid(alpha=0.3)
+            if axis.get_lines():
+                axis.legend(loc='lower right', fontsize='small')
+            elif kind == 'judging':
+                axis.text(0.5, 0.5, 'no judging episodes recorded' if known else
+                          'episode kinds not recorded (bags before EpisodeSummary.kind):\n'
+                          'judging episodes are in the training row',
+                          transform=axis.transAxes, ha='center', va='center',
+                          fontsize='small')
+            axis.set_xlabel('episode of training (training and judging episodes counted)')
+        axes[row][0].set_ylabel('episode return (robot reward)')
+    figure.suptitle('Fig. 5: median return over all seeds, band: inter-quartile range across '
+                    'seeds\na session that stopped (converged or at the limit) is carried at '
+                    'its last value (tick: where it stopped); dashed: median episode at which '
                     'the human joins', fontsize='medium')
     figure.tight_layout()
     figure.savefig(path, dpi=110)
@@ -89,10 +142,8 @@ def figure_training(sessions, profile: str, path) -> None:
 
 
 def _first_human_episode(session):
-    training = [episode for episode in session.episodes[:final_block_start(session)]
-                if not episode.evaluation]
-    for index, episode in enumerate(training):
-        if episode.human_involved:
+    for index, episode in enumerate(session.episodes[:final_block_start(session)]):
+        if kind_of(episode) == 'training' and episode.human_involved:
             return index + 1
     return None
 

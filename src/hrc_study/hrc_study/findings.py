@@ -9,21 +9,40 @@ the one-sided component p-values, which needs no multiplicity correction within 
 Verdicts (alpha = 0.05 on Holm-adjusted p-values):
 
 * holds: every component comparison is significant in the claimed direction;
-* does not hold: some component is significant in the opposite direction (its reverse p-values
-  form their own Holm family);
+* does not hold: some component is significant in the opposite direction after Holm's
+  correction over the finding's components (the reversal p of a finding is the smallest
+  Holm-adjusted reverse p of its components; these then form their own Holm family across the
+  findings);
 * inconclusive: neither, with the reason (which comparison is not significant, its effect);
   also when a case the claim needs has fewer than 2 sessions.
+
+Pairing: the same seed and simulated person run in every case, so when every session of the two
+compared cases has its twin (same seed and ``human.person``) the comparison is paired: the
+Wilcoxon signed-rank test for complete measures, the log-rank test stratified by pair for
+censored counts. Otherwise (sessions that do not pair) the unpaired test (Mann-Whitney U,
+log-rank) is used, and the test's name says which.
+
+Censoring: a session that stops at the episode limit without converging has an unknown number
+of episodes to convergence and an unknown number of human-involved episodes to convergence:
+both are right-censored at the count reached and are compared by survival methods (a count
+capped by the limit is not smaller because another part of the same session used the cap).
 
 Claims (the paper's section V; cases within a role assignment compared, never across):
 
 (a) task first gives the best team performance: total error of case 1 < cases 3, 5 and of
-    case 2 < cases 4, 6 (Mann-Whitney U; effect: rank-biserial r);
-(b) task first needs the least human involvement: human-involved episodes, same comparisons;
-(c) human first converges fastest: episodes to convergence (right-censored at the limit) of
-    case 3 < cases 1, 5 and case 4 < cases 2, 6 (logrank; effect: restricted-mean difference);
-(d) case 5 fails or is worst: it converges in fewer than half of its seeds (exact binomial
-    test against 1/2), or its total error is above every other case's (Mann-Whitney U); the
-    disjunction's p-value is twice the smaller (Bonferroni over the two);
+    case 2 < cases 4, 6 (Wilcoxon signed-rank; effect: matched rank-biserial r);
+(b) task first needs the least human involvement: human-involved episodes until convergence
+    (censored when the session did not converge), same comparisons (stratified log-rank:
+    "fewer" = converged after fewer human-involved episodes; effect: restricted-mean
+    difference);
+(c) human first converges fastest: episodes to convergence (censored at the limit) of
+    case 3 < cases 1, 5 and case 4 < cases 2, 6 (stratified log-rank);
+(d) case 5 fails or is worst, contrasted with every other case (1, 2, 3, 4, 6): it converges
+    later than each of them (stratified log-rank, intersection-union over the five), or its
+    total error is above each of theirs (Wilcoxon signed-rank, intersection-union over the
+    five); the disjunction's p-value is twice the smaller (Bonferroni over the two). It does
+    not hold only when both branches are refuted (some case converges significantly later than
+    case 5 *and* some case has a significantly larger error);
 (e) the robot on rotation beats its swapped twin: total error of case 2 < 1, 4 < 3, 6 < 5;
     repeated for every other simulated-human profile present (the symmetric-perception
     control), as a separate finding (e').
@@ -33,10 +52,10 @@ from dataclasses import dataclass, field
 import math
 
 import numpy
-from scipy import stats
 
 from hrc_study.sessions import measures
-from hrc_study.statistics import holm, logrank_faster, mann_whitney_less, TestResult
+from hrc_study.statistics import (holm, logrank_faster, mann_whitney_less,
+                                  stratified_logrank_faster, TestResult, wilcoxon_less)
 
 ALPHA = 0.05
 MIN_SESSIONS = 2
@@ -48,6 +67,7 @@ class Component:
 
     label: str              # e.g. 'case 2 vs case 4'
     result: TestResult
+    p_reverse_holm: float = math.nan    # its reverse p, Holm-adjusted within the finding
 
 
 @dataclass
@@ -60,7 +80,7 @@ class Finding:
     test: str
     components: list = field(default_factory=list)
     p_value: float = math.nan           # the finding's raw p (claimed direction)
-    p_reverse: float = math.nan         # raw p of the strongest reversal
+    p_reverse: float = math.nan         # p of the strongest reversal, Holm within the finding
     p_holm: float = math.nan
     p_reverse_holm: float = math.nan
     effect: str = ''
@@ -68,16 +88,24 @@ class Finding:
     reason: str = ''
     missing: list = field(default_factory=list)
     any_component: bool = False     # the claim needs one component (a disjunction), not all
+    reversal: str = ''              # what goes the other way (when it does)
 
 
 class CaseData:
-    """The per-session measures of every (profile, case) group."""
+    """The per-session measures of every (profile, case) group, with each session's pair key.
+
+    The pair key is (seed, simulated person): the same key in two cases is the same seed and
+    person run under the two cases (the study's paired design).
+    """
 
     def __init__(self, sessions):
         self.groups = {}
+        self.keys = {}
         for session in sessions:
             key = (session.profile, session.case_id)
             self.groups.setdefault(key, []).append(measures(session))
+            self.keys.setdefault(key, []).append((session.seed,
+                                                  session.extra.get('person', -1)))
 
     def profiles(self) -> list:
         """Return the profiles present, the most frequent first (ties: by name)."""
@@ -94,30 +122,95 @@ class CaseData:
         """Return the number of sessions of a case."""
         return len(self.groups.get((profile, case_id), []))
 
+    def pair_keys(self, profile: str, case_id: int) -> list:
+        """Return the (seed, person) of every session of a case, in the order of values()."""
+        return list(self.keys.get((profile, case_id), []))
+
+    def paired(self, profile: str, x_case: int, y_case: int):
+        """Return the pair keys both cases share when every session has its twin, else None.
+
+        Paired means: each case has each key once, the two key sets are equal, >= 2 pairs.
+        """
+        x_keys, y_keys = self.pair_keys(profile, x_case), self.pair_keys(profile, y_case)
+        if len(set(x_keys)) != len(x_keys) or len(set(y_keys)) != len(y_keys) or \
+                set(x_keys) != set(y_keys) or len(x_keys) < MIN_SESSIONS:
+            return None
+        return sorted(x_keys)
+
+    def aligned(self, profile: str, case_id: int, key: str, pairs) -> list:
+        """Return one measure of a case in the order of ``pairs`` (pair keys)."""
+        by_key = dict(zip(self.pair_keys(profile, case_id), self.values(profile, case_id, key)))
+        return [by_key[pair] for pair in pairs]
+
+
+def compare_lower(data: CaseData, profile: str, x_case: int, y_case: int,
+                  key: str) -> TestResult:
+    """Test "case x's measure is lower than case y's": paired when the sessions pair."""
+    pairs = data.paired(profile, x_case, y_case)
+    if pairs is None:
+        return mann_whitney_less(data.values(profile, x_case, key),
+                                 data.values(profile, y_case, key))
+    return wilcoxon_less(data.aligned(profile, x_case, key, pairs),
+                         data.aligned(profile, y_case, key, pairs))
+
+
+def compare_sooner(data: CaseData, profile: str, x_case: int, y_case: int,
+                   time_key: str) -> TestResult:
+    """Test "case x converges after less of ``time_key`` than case y" (censored counts).
+
+    The count is observed when the session converged and right-censored otherwise; stratified
+    by pair when the sessions pair, else the plain log-rank test.
+    """
+    pairs = data.paired(profile, x_case, y_case)
+    if pairs is None:
+        return logrank_faster(data.values(profile, x_case, time_key),
+                              data.values(profile, x_case, 'converged'),
+                              data.values(profile, y_case, time_key),
+                              data.values(profile, y_case, 'converged'))
+    return stratified_logrank_faster(
+        data.aligned(profile, x_case, time_key, pairs),
+        data.aligned(profile, x_case, 'converged', pairs),
+        data.aligned(profile, y_case, time_key, pairs),
+        data.aligned(profile, y_case, 'converged', pairs), pairs, pairs)
+
 
 def _intersection(finding: Finding) -> None:
-    """Set the finding's p-values from its components (intersection-union)."""
+    """Set the finding's p-values from its components.
+
+    Claimed direction: intersection-union, the largest component p. Reversal: the components'
+    reverse p-values Holm-adjusted within the finding, the smallest of them.
+    """
     results = [component.result for component in finding.components]
     finding.p_value = max(result.p_value for result in results)
-    finding.p_reverse = min(result.p_reverse for result in results)
+    for component, adjusted in zip(finding.components,
+                                   holm(result.p_reverse for result in results)):
+        component.p_reverse_holm = adjusted
+    reversed_most = min(finding.components, key=lambda component: component.p_reverse_holm)
+    finding.p_reverse = reversed_most.p_reverse_holm
+    finding.reversal = f'{reversed_most.label} goes the other way ({reversed_most.result.detail})'
     weakest = max(finding.components, key=lambda component: component.result.p_value)
     finding.effect = (f'weakest: {weakest.label}, {weakest.result.effect_name} = '
                       f'{weakest.result.effect:+.2f} ({weakest.result.detail})')
 
 
 def _pairs_test(data: CaseData, profile: str, pairs, key: str, finding: Finding) -> Finding:
-    """Fill ``finding`` with one-sided Mann-Whitney tests 'x lower than y' for (x, y) cases."""
+    """Fill ``finding`` with one-sided tests 'x lower than y' for the (x, y) cases."""
     for x_case, y_case in pairs:
-        result = mann_whitney_less(data.values(profile, x_case, key),
-                                   data.values(profile, y_case, key))
-        finding.components.append(Component(f'case {x_case} vs case {y_case}', result))
+        finding.components.append(Component(f'case {x_case} vs case {y_case}',
+                                            compare_lower(data, profile, x_case, y_case, key)))
     _intersection(finding)
     return finding
 
 
-def _convergence(data: CaseData, profile: str, case_id: int) -> tuple:
-    return (data.values(profile, case_id, 'total_episodes'),
-            data.values(profile, case_id, 'converged'))
+def _sooner_test(data: CaseData, profile: str, pairs, time_key: str,
+                 finding: Finding) -> Finding:
+    """Fill ``finding`` with one-sided survival tests 'x converges sooner than y'."""
+    for x_case, y_case in pairs:
+        finding.components.append(Component(
+            f'case {x_case} vs case {y_case}',
+            compare_sooner(data, profile, x_case, y_case, time_key)))
+    _intersection(finding)
+    return finding
 
 
 def _missing(data: CaseData, profile: str, cases) -> list:
@@ -128,61 +221,62 @@ def finding_a(data: CaseData, profile: str) -> Finding:
     """Test (a): task first gives the best team performance."""
     finding = Finding('a', CLAIMS['a'],
                       'total error (final evaluation): case 1 < 3, 5 and case 2 < 4, 6',
-                      'Mann-Whitney U, one-sided, intersection-union over 4 comparisons')
+                      'Wilcoxon signed-rank by seed and person (Mann-Whitney U when the '
+                      'sessions do not pair), one-sided, intersection-union over 4')
     return _pairs_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)], 'total_error', finding)
 
 
 def finding_b(data: CaseData, profile: str) -> Finding:
-    """Test (b): task first needs the least human involvement."""
+    """Test (b): task first needs the least human involvement (censored counts)."""
     finding = Finding('b', CLAIMS['b'],
-                      'human-involved episodes (training and its evaluation episodes): '
-                      'case 1 < 3, 5 and case 2 < 4, 6',
-                      'Mann-Whitney U, one-sided, intersection-union over 4 comparisons')
-    return _pairs_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)],
-                       'human_involved_episodes', finding)
+                      'human-involved episodes until convergence (training and judging '
+                      'episodes; censored when the session did not converge): case 1 < 3, 5 '
+                      'and case 2 < 4, 6',
+                      'log-rank stratified by seed and person (plain log-rank when the '
+                      'sessions do not pair), one-sided, intersection-union over 4')
+    return _sooner_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)],
+                        'human_involved_episodes', finding)
 
 
 def finding_c(data: CaseData, profile: str) -> Finding:
     """Test (c): human first converges fastest."""
     finding = Finding('c', CLAIMS['c'],
                       'episodes to convergence, censored at the limit: case 3 < 1, 5 and '
-                      'case 4 < 2, 6', 'logrank, one-sided, intersection-union over 4 '
-                      'comparisons')
-    for x_case, y_case in [(3, 1), (3, 5), (4, 2), (4, 6)]:
-        result = logrank_faster(*_convergence(data, profile, x_case),
-                                *_convergence(data, profile, y_case))
-        finding.components.append(Component(f'case {x_case} vs case {y_case}', result))
-    _intersection(finding)
-    return finding
+                      'case 4 < 2, 6', 'log-rank stratified by seed and person (plain '
+                      'log-rank when the sessions do not pair), one-sided, intersection-union '
+                      'over 4')
+    return _sooner_test(data, profile, [(3, 1), (3, 5), (4, 2), (4, 6)], 'total_episodes',
+                        finding)
 
 
-def binomial_fails(successes: int, count: int) -> TestResult:
-    """Test "the case converges in fewer than half of its sessions" (exact binomial)."""
-    fewer = stats.binomtest(successes, count, 0.5, alternative='less').pvalue
-    more = stats.binomtest(successes, count, 0.5, alternative='greater').pvalue
-    return TestResult('exact binomial vs 1/2 (one-sided)', float(fewer), float(more),
-                      0.5 - successes / count, '1/2 - proportion converged',
-                      f'{successes}/{count} converged')
+OTHER_CASES = (1, 2, 3, 4, 6)
 
 
 def finding_d(data: CaseData, profile: str) -> Finding:
-    """Test (d): case 5 fails or is worst."""
-    finding = Finding('d', CLAIMS['d'], 'case 5 converges in < 1/2 of its seeds; or its '
-                      'total error is above cases 1-4 and 6',
-                      'exact binomial (fails) or Mann-Whitney U intersection-union over 5 '
-                      '(worst); Bonferroni over the two')
-    converged = data.values(profile, 5, 'converged')
-    fails = binomial_fails(int(sum(converged)), len(converged))
+    """Test (d): case 5 fails or is worst, contrasted with every other case."""
+    finding = Finding('d', CLAIMS['d'], 'case 5 converges later than each of cases 1-4 and 6; '
+                      'or its total error is above each of theirs',
+                      'fails: stratified log-rank, intersection-union over 5; worst: Wilcoxon '
+                      'signed-rank, intersection-union over 5; Bonferroni over the two')
+    fails = Finding('d-fails', '', '', '')
+    _sooner_test(data, profile, [(other, 5) for other in OTHER_CASES], 'total_episodes', fails)
     worst = Finding('d-worst', '', '', '')
-    _pairs_test(data, profile, [(other, 5) for other in (1, 2, 3, 4, 6)], 'total_error', worst)
-    worst_result = TestResult('Mann-Whitney U', worst.p_value, worst.p_reverse, math.nan, '',
-                              worst.effect)
+    _pairs_test(data, profile, [(other, 5) for other in OTHER_CASES], 'total_error', worst)
+    converged = data.values(profile, 5, 'converged')
     finding.any_component = True
-    finding.components = [Component('case 5 fails', fails),
-                          Component('case 5 worst', worst_result)]
+    finding.components = [
+        Component('case 5 fails (converges later than every other case)',
+                  TestResult('stratified log-rank', fails.p_value, fails.p_reverse, math.nan,
+                             '', f'{int(sum(converged))}/{len(converged)} of case 5 '
+                             f'converged; {fails.effect}')),
+        Component('case 5 worst (total error above every other case)',
+                  TestResult('Wilcoxon signed-rank', worst.p_value, worst.p_reverse, math.nan,
+                             '', worst.effect))]
     finding.p_value = min(1.0, 2 * min(fails.p_value, worst.p_value))
+    # refuting a disjunction needs both branches refuted: the larger of the two reversal ps
     finding.p_reverse = max(fails.p_reverse, worst.p_reverse)
-    finding.effect = (f'fails: {fails.detail}; worst: {worst.effect}')
+    finding.reversal = f'not failing: {fails.reversal}; not worst: {worst.reversal}'
+    finding.effect = (f'fails: {finding.components[0].result.detail}; worst: {worst.effect}')
     return finding
 
 
@@ -253,25 +347,38 @@ def _adjust_and_judge(findings, alpha: float) -> None:
             finding.reason = (f'every comparison significant (Holm p = '
                               f'{finding.p_holm:.3g} < {alpha})')
         elif finding.p_reverse_holm < alpha:
-            reversed_component = min(finding.components,
-                                     key=lambda component: component.result.p_reverse)
             finding.verdict = 'does not hold'
-            finding.reason = (f'{reversed_component.label} goes the other way (Holm p = '
-                              f'{finding.p_reverse_holm:.3g}; {reversed_component.result.detail})')
+            finding.reason = (f'{finding.reversal} (Holm p = {finding.p_reverse_holm:.3g}, '
+                              f'corrected within the finding and across the findings)')
         else:
             finding.verdict = 'inconclusive'
             finding.reason = _inconclusive_reason(finding, alpha)
 
 
-def _inconclusive_reason(finding: Finding, alpha: float) -> str:
-    """Say which comparison keeps the finding from holding."""
-    if finding.p_value < alpha:
-        return (f'significant alone (raw p = {finding.p_value:.3g}) but not after Holm over '
-                f'the findings (p = {finding.p_holm:.3g})')
+def _power_note(finding: Finding) -> str:
+    """Say when the deciding comparison is already at the smallest p its test can give."""
     pick = min if finding.any_component else max
     deciding = pick(finding.components, key=lambda component: component.result.p_value)
-    direction = ('points the claimed way' if deciding.result.p_value
-                 < deciding.result.p_reverse else 'points the other way')
+    floor = deciding.result.floor_p
+    if floor > 0 and deciding.result.p_value <= floor * (1 + 1e-9):
+        return (f'; power: {deciding.label} is at the smallest p its test can give on these '
+                f'sessions ({floor:.3g}; {deciding.result.detail}): more seeds are needed to '
+                f'decide it')
+    return ''
+
+
+def _inconclusive_reason(finding: Finding, alpha: float) -> str:
+    """Say which comparison keeps the finding from holding (and when power is the reason)."""
+    if finding.p_value < alpha:
+        return (f'significant alone (raw p = {finding.p_value:.3g}) but not after Holm over '
+                f'the findings (p = {finding.p_holm:.3g})' + _power_note(finding))
+    pick = min if finding.any_component else max
+    deciding = pick(finding.components, key=lambda component: component.result.p_value)
+    if deciding.result.p_value == deciding.result.p_reverse:
+        direction = 'shows no difference either way'     # e.g. no comparable event at all
+    else:
+        direction = ('points the claimed way' if deciding.result.p_value
+                     < deciding.result.p_reverse else 'points the other way')
     return (f'{deciding.label} {direction} but is not significant (raw p = '
             f'{deciding.result.p_value:.3g}; {deciding.result.detail})')
 
@@ -280,5 +387,9 @@ def significance_note() -> str:
     """Return the rule text for the results document."""
     return (f'alpha = {ALPHA}, Holm-adjusted over the findings; a finding holds when all its '
             'comparisons are significant (intersection-union), does not hold when one is '
-            'significant the other way, else inconclusive.')
+            "significant the other way after Holm's correction over the finding's comparisons "
+            '(and then over the findings), else inconclusive. Comparisons are paired by seed '
+            'and simulated person when the sessions pair (Wilcoxon signed-rank; log-rank '
+            'stratified by pair for censored counts); counts of sessions that did not converge '
+            'are right-censored.')
 

@@ -31,6 +31,21 @@ def person_of(config: dict) -> int:
     return -1
 
 
+def limits_of(config: dict) -> dict:
+    """Return the command limits the session's sim was given {dof: N or N*m} (may be empty).
+
+    Sims started without them use the sim's defaults (hrc_study.sessions.default_limits).
+    """
+    limits = {}
+    for dof, name in (('translation', 'max_force'), ('rotation', 'max_torque')):
+        for path in (('parameters', 'sim', name), ('sim', name)):
+            value = _nested(config, *path)
+            if isinstance(value, (int, float)) and value > 0:
+                limits[dof] = float(value)
+                break
+    return limits
+
+
 def episode_limit_of(config: dict) -> int:
     """Return the session's max training episodes (0 when the config does not say)."""
     for path in (('parameters', 'agent', 'max_training_episodes'),
@@ -51,7 +66,7 @@ def record_from_bag_session(session) -> SessionRecord:
         slider_error=float(summary.slider_error), pendulum_error=float(summary.pendulum_error),
         ball_error=float(summary.ball_error), total_error=float(summary.total_error),
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
-        final_evaluation=_final_flag(summary))
+        final_evaluation=_final_flag(summary), kind=_kind_label(summary))
         for summary in session.summaries]
     strategy, robot_dof = CASES.get(session.case_id, (session.strategy, session.robot_dof))
     try:
@@ -67,7 +82,19 @@ def record_from_bag_session(session) -> SessionRecord:
                          step_count=step_count,
                          episode_limit=episode_limit_of(session.config),
                          path=str(session.path),
-                         extra={'bag_session': session, 'person': person_of(session.config)})
+                         extra={'bag_session': session, 'person': person_of(session.config),
+                                'limits': limits_of(session.config)})
+
+
+def _kind_label(summary) -> str:
+    """Return the summary's kind label, '' when it does not say (bags before the field)."""
+    from hrc_common.contract import EpisodeKind
+
+    try:
+        kind = EpisodeKind(int(getattr(summary, 'kind', 0)))
+    except ValueError:
+        return ''
+    return '' if kind is EpisodeKind.UNKNOWN else kind.label
 
 
 def _final_flag(summary):

@@ -15,7 +15,8 @@ import sys
 from hrc_study.chooser import parse_priorities
 
 DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episodes to '
-               "convergence, the paper's findings with Holm-corrected tests, the strategy "
+               "convergence, the paper's findings with paired, censoring-aware, "
+               'Holm-corrected tests, the strategy '
                'chooser) and its figures from recorded sessions.')
 
 
@@ -30,6 +31,9 @@ def parse_arguments(argv):
                         'a preset: balanced, "performance first", "least human time", '
                         '"fastest training"')
     parser.add_argument('--seed', type=int, default=0, help='bootstrap seed (default 0)')
+    parser.add_argument('--intervals', default='bca', choices=['bca', 'student-t'],
+                        help="Table II intervals: bca (BCa bootstrap within each quantity's "
+                        'physical range, default) or student-t (the tables before issue 23)')
     parser.add_argument('--note', default='',
                         help='a paragraph put under the run description (e.g. the commit)')
     arguments = parser.parse_args(argv)
@@ -66,7 +70,8 @@ def main(argv=None) -> int:
     try:
         result = write_results(sessions, arguments.out, command,
                                read_experiment(arguments.paths), arguments.weights,
-                               arguments.seed, arguments.note)
+                               arguments.seed, arguments.note,
+                               intervals=arguments.intervals)
     except ValueError as error:
         log(str(error))
         return 1

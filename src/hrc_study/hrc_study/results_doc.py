@@ -16,8 +16,9 @@ import numpy
 from hrc_study import figures
 from hrc_study.chooser import choice_markdown, choose, PRESETS
 from hrc_study.findings import evaluate_findings, significance_note
-from hrc_study.sessions import CASES, measures, STRATEGY_SHORT
-from hrc_study.statistics import kaplan_meier, mean_interval
+from hrc_study.sessions import (CASES, EFFORT_UNITS, measures, other_dof_of,
+                                PHYSICAL_EFFORT_KEYS, STRATEGY_SHORT)
+from hrc_study.statistics import bca_interval, kaplan_meier, mean_interval
 
 # The paper's Table II (Tao et al.): human-involved, total episodes, total error, human effort.
 PAPER_TABLE2 = {1: (18, 25, 1.61, 0.0075), 2: (6, 31, 0.82, 0.0020), 3: (19, 19, 2.04, 0.0078),
@@ -28,9 +29,18 @@ COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
            ('slider_error', 'slider (m)', 3),
            ('pendulum_error', 'pendulum (rad)', 3),
            ('ball_error', 'ball (m)', 3),
-           ('total_error', 'total error', 3),
-           ('human_effort', 'human effort', 4),
-           ('robot_effort', 'robot effort', 4)]
+           ('total_error', 'total error (m + rad)', 3),
+           ('human_effort', 'human effort (normalized)', 4),
+           ('robot_effort', 'robot effort (normalized)', 4),
+           ('human_effort_physical', 'human effort (N^2 or (N*m)^2)', 4),
+           ('robot_effort_physical', 'robot effort (N^2 or (N*m)^2)', 4)]
+# Physical range of every column (floor, ceiling): an interval never leaves it.
+RANGES = {'percentage': (0.0, 100.0)}
+DEFAULT_RANGE = (0.0, math.inf)     # counts, errors (absolute values) and variances are >= 0
+INTERVALS = ('bca', 'student-t')    # 'student-t': the tables before issue 23, exactly
+UNITS_CAVEAT = ("units: our effort is the variance of the normalized command (1 = the sim's "
+                'limit; physical units in Table II), our total error sums metres and radians; '
+                'the paper gives neither unit, so only the order of the cases compares')
 TARGET_HUMAN_EPISODES = 20          # issue #13: case 2 median human-involved episodes
 TARGET_CONVERGED = 8                # of 10 seeds, within the episode limit
 TARGET_EFFORT_RATIO = 3.0           # human effort within 3x of the paper's
@@ -52,39 +62,79 @@ def case_measures(sessions, profile: str) -> dict:
             for case_id, members in figures.by_case(sessions, profile).items()}
 
 
-def table2_markdown(rows: dict) -> str:
-    """Return Table II: mean and 95% interval (Student t over seeds) per cell."""
+def column_interval(values, key: str, intervals: str = 'bca', seed: int = 0,
+                    resamples: int = 9999):
+    """Return the mean of one Table II column with its 95% interval.
+
+    'bca': BCa bootstrap (seeded), kept within the column's physical range; 'student-t': the
+    Student-t interval of the tables before issue 23 (may leave the range).
+    """
+    if intervals == 'student-t':
+        return mean_interval(values)
+    floor, ceiling = RANGES.get(key, DEFAULT_RANGE)
+    return bca_interval(values, floor=floor, ceiling=ceiling, seed=seed, resamples=resamples)
+
+
+def _units_of(key: str, case_id: int) -> str:
+    """Return the physical unit of a physical-effort cell of ``case_id``."""
+    robot = CASES.get(case_id, ('', ''))[1]
+    if not robot:
+        return ''
+    dof = robot if key.startswith('robot') else other_dof_of(robot)
+    return ' ' + EFFORT_UNITS[dof]
+
+
+INTERVAL_NOTES = {
+    'bca': ('Intervals: 95% BCa bootstrap over the seeds of a case (scipy.stats.bootstrap, '
+            "seeded), kept within each quantity's physical range (>= 0; percentages <= 100)."),
+    'student-t': 'Intervals: Student t over the seeds of a case.'}
+
+
+def table2_markdown(rows: dict, intervals: str = 'bca', seed: int = 0,
+                    resamples: int = 9999) -> str:
+    """Return Table II: mean and 95% interval over seeds per cell (see column_interval)."""
     header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for case_id, values in rows.items():
         strategy, robot = CASES.get(case_id, ('?', '?'))
         cells = [str(case_id), STRATEGY_SHORT.get(strategy, strategy), robot, str(len(values))]
-        cells += [cell(mean_interval(value[key] for value in values), decimals)
-                  for key, _, decimals in COLUMNS]
+        for key, _, decimals in COLUMNS:
+            text = cell(column_interval([value[key] for value in values], key, intervals, seed,
+                                        resamples), decimals)
+            if key in PHYSICAL_EFFORT_KEYS and text != 'n/a':
+                text += _units_of(key, case_id)
+            cells.append(text)
         lines.append('| ' + ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'
 
 
 def convergence_markdown(rows: dict) -> str:
-    """Return episodes to convergence per case: converged count, KM median, restricted mean."""
+    """Return episodes to convergence per case: converged count, KM median, restricted mean.
+
+    Also the human-involved episodes to convergence (finding (b)'s measure), censored likewise.
+    """
     lines = ['| case | converged | Kaplan-Meier median [95% CI] | restricted mean | '
-             'paper (episodes) |', '|---|---|---|---|---|']
+             'human-involved episodes to convergence, KM median [95% CI] | paper (episodes) |',
+             '|---|---|---|---|---|---|']
     for case_id, values in rows.items():
         times = [value['total_episodes'] for value in values]
         events = [value['converged'] for value in values]
         summary = kaplan_meier(times, events)
+        human = kaplan_meier([value['human_involved_episodes'] for value in values], events)
         paper = PAPER_TABLE2.get(case_id)
         paper_text = (f'{paper[1]}' + (' (failed)' if case_id == 5 else '')) if paper else ''
         lines.append(f'| {case_id} | {sum(events)}/{len(events)} | {summary.describe()} | '
-                     f'{numpy.mean(times):.1f} | {paper_text} |')
+                     f'{numpy.mean(times):.1f} | {human.describe()} | {paper_text} |')
+    lines += ['', 'Paper column: its episodes per case (one person); ours count the judging '
+              'episodes too, so the definitions differ as well as the people.']
     return '\n'.join(lines) + '\n'
 
 
 def paper_markdown(rows: dict) -> str:
     """Return our means beside the paper's Table II values and the effort ratio."""
     lines = ['| case | human-involved (ours / paper) | episodes (ours / paper) | total error '
-             '(ours / paper) | human effort (ours / paper) | effort ratio |',
-             '|---|---|---|---|---|---|']
+             '(ours / paper) | human effort (ours / paper) | effort ratio | units caveat |',
+             '|---|---|---|---|---|---|---|']
     for case_id, values in rows.items():
         paper = PAPER_TABLE2.get(case_id)
         if paper is None:
@@ -96,7 +146,7 @@ def paper_markdown(rows: dict) -> str:
                      f'{ours["total_episodes"]:.1f} / {paper[1]} | '
                      f'{ours["total_error"]:.3f} / {paper[2]} | '
                      f'{ours["human_effort"]:.4f} / {paper[3]} | '
-                     f'{ours["human_effort"] / paper[3]:.2f}x |')
+                     f'{ours["human_effort"] / paper[3]:.2f}x | {UNITS_CAVEAT} |')
     return '\n'.join(lines) + '\n'
 
 
@@ -126,7 +176,7 @@ def targets(rows: dict, experiment: dict) -> list:
     if ratios:
         result.append((f'human effort within {TARGET_EFFORT_RATIO:g}x of the paper per case',
                        ', '.join(f'case {case_id}: {ratio:.2f}x'
-                                 for case_id, ratio in ratios.items()),
+                                 for case_id, ratio in ratios.items()) + f' ({UNITS_CAVEAT})',
                        all(1 / TARGET_EFFORT_RATIO <= ratio <= TARGET_EFFORT_RATIO
                            for ratio in ratios.values())))
     if experiment.get('wall_seconds'):
@@ -197,7 +247,9 @@ def sessions_csv(sessions) -> str:
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     keys = ['human_involved_episodes', 'total_episodes', 'converged',
-            'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]]
+            'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]
+                                      if key not in PHYSICAL_EFFORT_KEYS]
+    keys += list(PHYSICAL_EFFORT_KEYS)   # appended: the columns before keep their places
     writer.writerow(['session_id', 'profile', 'person', 'case_id', 'strategy', 'robot_dof',
                      'seed'] + keys)
     for session in sessions:
@@ -222,7 +274,7 @@ def read_experiment(paths) -> dict:
 
 def write_results(sessions, out_dir, command: str, experiment: dict = None,
                   priorities: dict = None, seed: int = 0, note: str = '',
-                  resamples: int = 2000) -> dict:
+                  resamples: int = 2000, intervals: str = 'bca') -> dict:
     """Write ``out_dir/results.md`` and ``out_dir/results/*``; return {name: path} and more."""
     experiment = experiment or {}
     out_dir = pathlib.Path(out_dir)
@@ -258,7 +310,7 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
     for name in names:
         files[name] = assets / name
     text = document(sessions, profiles, rows, findings, choices, command, experiment,
-                    chooser_problem, note)
+                    chooser_problem, note, intervals=intervals, seed=seed)
     (out_dir / 'results.md').write_text(text)
     files['results.md'] = out_dir / 'results.md'
     return {'files': files, 'findings': findings, 'choices': choices, 'rows': rows,
@@ -274,7 +326,8 @@ def _persons(sessions) -> str:
 
 
 def document(sessions, profiles, rows, findings, choices, command, experiment,
-             chooser_problem: str = '', note: str = '') -> str:
+             chooser_problem: str = '', note: str = '', intervals: str = 'bca',
+             seed: int = 0) -> str:
     """Return the Markdown of docs/results.md."""
     primary = profiles[0]
     seeds = sorted({session.seed for session in sessions})
@@ -302,15 +355,21 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
               f'limit {", ".join(map(str, limits)) or "?"}. Tables and findings below are for '
               f'profile `{primary}` unless named.', '',
               '## Table II: mean [95% confidence interval] over seeds', '',
-              table2_markdown(rows),
+              table2_markdown(rows, intervals, seed),
               'Episodes count every episode until training ended, the evaluation episodes '
               'that judged convergence included; human-involved episodes count those in which '
               "the simulated human acted (the person's time). Errors and efforts: mean over "
               'the final evaluation episodes of the frozen deterministic policy (mean |S_x| m, '
               '|P_z| rad, |B_y| m per episode, their sum; effort = variance of the '
-              'normalized action). Intervals: Student t over the seeds of a case. Sessions '
-              'that hit the episode limit enter the episode means at the limit (a lower '
-              'bound); the next table treats them as censored.', '',
+              "normalized action, 1 = the sim's limit; the physical columns multiply it by the "
+              'limit '
+              "squared: N^2 for the slider's force, (N*m)^2 for the pendulum's torque, "
+              "from the session's recorded sim parameters or the sim's defaults). Total error "
+              "sums metres and radians (mixed units, as the paper's sum). "
+              + (INTERVAL_NOTES[intervals]) + ' Sessions that hit the episode limit enter '
+              'the episode counts at the limit: those columns are restricted means (a lower '
+              'bound of the unrestricted mean); the next table and the findings treat them as '
+              'censored.', '',
               '## Episodes to convergence (censored at the limit)', '',
               convergence_markdown(rows),
               'Kaplan-Meier median with the Brookmeyer-Crowley 95% interval (log-log); "not '
@@ -338,6 +397,12 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
     if chooser_problem:
         parts += [f'Not computed: {chooser_problem}.', '']
     parts += ['## Figures', '', '![Fig. 5](results/fig5_training.png)', '',
+              'Fig. 5: training episodes (top) and the deterministic judging episodes (bottom) '
+              'apart (EpisodeSummary.kind; bags recorded before that field cannot tell them '
+              'apart and show both on top). Line: median over all seeds of the case; band: '
+              'inter-quartile range across the seeds (half of them lie inside); a session '
+              'that converged or hit the limit is carried at its last value (tick: where it '
+              'stopped), so no average is over the survivors only.', '',
               '![Fig. 6](results/fig6_actions.png)', '']
     if choices:
         parts += ['![Fig. 7](results/fig7_three_factor.png)', '']

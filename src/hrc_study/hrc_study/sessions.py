@@ -14,10 +14,17 @@ Definitions (the issue #13 rules, see docs/results.md):
   whenever the human acted in them (the person's time is the burden metric).
 * Episodes to convergence: every episode before the final block; "converged" when an episode
   of the strategy's last training step carries the convergence flag. A session that stopped at
-  the episode limit without it is right-censored at its episode count.
+  the episode limit without it is right-censored at its episode count (and so is its count of
+  human-involved episodes).
+* Episode kinds (``EpisodeSummary.kind``: training, judging, evaluation, practice): when the
+  summaries say, the final block starts at the first evaluation episode and practice episodes
+  count in neither the training totals nor the final block. Bags recorded before the field
+  (kind unknown, ``EpisodeRecord.kind == ''``): the rule above, and every non-evaluation
+  episode reads as training (judging episodes cannot be told apart there).
 """
 
 from dataclasses import dataclass, field
+import functools
 import math
 
 # Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
@@ -31,6 +38,11 @@ CASES = {1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided
          5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation')}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
+# Effort in physical units: the variance of the command in N^2 (translation, the slider's
+# force) or (N*m)^2 (rotation, the pendulum's torque) = variance of the normalized command
+# times the limit squared (the sim's max_force / max_torque: a normalized 1 is the limit).
+PHYSICAL_EFFORT_KEYS = ('human_effort_physical', 'robot_effort_physical')
+EFFORT_UNITS = {'translation': 'N^2', 'rotation': '(N*m)^2'}
 
 
 @dataclass(frozen=True)
@@ -50,6 +62,22 @@ class EpisodeRecord:
     human_effort: float
     robot_effort: float
     final_evaluation: bool = None   # None: unknown, inferred (see final_block)
+    kind: str = ''                  # training | judging | evaluation | practice; '' unknown
+
+
+KINDS = ('training', 'judging', 'evaluation', 'practice')
+
+
+def kind_of(episode: EpisodeRecord) -> str:
+    """Return the episode's kind: its own when known, else evaluation or training (old bags)."""
+    if episode.kind in KINDS:
+        return episode.kind
+    return 'evaluation' if episode.evaluation else 'training'
+
+
+def kinds_known(session) -> bool:
+    """Return whether the session's summaries say their kind (bags with EpisodeSummary.kind)."""
+    return any(episode.kind in KINDS for episode in session.episodes)
 
 
 @dataclass
@@ -74,6 +102,25 @@ class SessionRecord:
         return self.step_count or STEP_COUNTS.get(self.strategy, 1)
 
 
+@functools.lru_cache(maxsize=1)
+def default_limits() -> dict:
+    """Return the sim's default command limits {dof: N or N*m} (hrc_sim_node's PhysicsParams)."""
+    from hrc_sim_node.physics import PhysicsParams
+
+    params = PhysicsParams()
+    return {'translation': float(params.max_force), 'rotation': float(params.max_torque)}
+
+
+def command_limits(session: SessionRecord) -> dict:
+    """Return {dof: limit} of a session: its recorded sim parameters, else the sim's defaults."""
+    return {**default_limits(), **session.extra.get('limits', {})}
+
+
+def other_dof_of(dof: str) -> str:
+    """Return the degree of freedom the other actor drives."""
+    return 'rotation' if dof == 'translation' else 'translation'
+
+
 def final_block_start(session: SessionRecord) -> int:
     """Return the index in ``session.episodes`` where the final evaluation block starts.
 
@@ -82,6 +129,9 @@ def final_block_start(session: SessionRecord) -> int:
     convergence flag (that one judged convergence during training).
     """
     episodes = session.episodes
+    if kinds_known(session):
+        kinds = [kind_of(episode) for episode in episodes]
+        return kinds.index('evaluation') if 'evaluation' in kinds else len(episodes)
     if any(episode.final_evaluation is not None for episode in episodes):
         flags = [bool(episode.final_evaluation) for episode in episodes]
         return flags.index(True) if True in flags else len(episodes)
@@ -98,11 +148,15 @@ def measures(session: SessionRecord) -> dict:
     """Return the per-session values of Table II and the three factors (NaN: no data).
 
     Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
-    training), percentage, converged (bool), the four errors and two
-    efforts (means over the final evaluation block), evaluation_episodes.
+    training, not practice), percentage, converged (bool), the four errors and two
+    efforts (means over the final evaluation block), evaluation_episodes, practice_episodes,
+    the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
+    PHYSICAL_EFFORT_KEYS).
     """
     start = final_block_start(session)
-    training, final = session.episodes[:start], session.episodes[start:]
+    before, final = session.episodes[:start], session.episodes[start:]
+    training = [episode for episode in before if kind_of(episode) != 'practice']
+    final = [episode for episode in final if kind_of(episode) != 'practice']
     involved = sum(1 for episode in training if episode.human_involved)
     last_step = session.steps - 1
     converged = any(episode.converged and episode.training_step == last_step
@@ -113,10 +167,16 @@ def measures(session: SessionRecord) -> dict:
         'percentage': 100.0 * involved / len(training) if training else math.nan,
         'converged': converged,
         'evaluation_episodes': float(len(final)),
+        'practice_episodes': float(len(session.episodes) - len(training) - len(final)),
     }
     for key in ERROR_KEYS + EFFORT_KEYS:
         samples = [getattr(episode, key) for episode in final]
         values[key] = sum(samples) / len(samples) if samples else math.nan
+    limits = command_limits(session)
+    values['robot_effort_physical'] = values['robot_effort'] * limits.get(
+        session.robot_dof, math.nan) ** 2
+    values['human_effort_physical'] = values['human_effort'] * limits.get(
+        other_dof_of(session.robot_dof), math.nan) ** 2
     return values
 
 

@@ -8,13 +8,16 @@ from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
 def make_session(case_id: int, seed: int, total_error: float, episodes: int, converged: bool,
                  human_from: int = 0, profile: str = 'paper', evaluation_every: int = 0,
                  final_evaluations: int = 3, human_effort: float = 0.005,
-                 rng=None) -> SessionRecord:
+                 rng=None, kinds: bool = False, person: int = -1) -> SessionRecord:
     """Return a session of ``episodes`` episodes before a final evaluation block.
 
     The human acts from episode index ``human_from`` on; every ``evaluation_every``-th episode
     of training is an evaluation episode that judges convergence (0: none); the last training
     episode carries the convergence flag when ``converged``. Final evaluation episodes have
-    errors around ``total_error`` (seeded noise of 1%).
+    errors around ``total_error`` (seeded noise of 1%). With ``kinds`` the summaries say their
+    kind (as bags with EpisodeSummary.kind): the evaluation episodes during training are
+    'judging' (return 100, deterministic), the rest 'training' (return = episode index), the
+    final block 'evaluation'; without, the kind is unknown (as older bags).
     """
     rng = rng if rng is not None else numpy.random.default_rng(seed)
     strategy, robot_dof = CASES[case_id]
@@ -28,19 +31,22 @@ def make_session(case_id: int, seed: int, total_error: float, episodes: int, con
         evaluation = bool(evaluation_every) and (index + 1) % evaluation_every == 0
         records.append(EpisodeRecord(
             episode=index, training_step=step, human_involved=index >= human_from,
-            evaluation=evaluation, converged=converged and index == episodes - 1,
-            episode_return=float(index), slider_error=0.1, pendulum_error=0.1, ball_error=0.1,
-            total_error=0.3, human_effort=0.5, robot_effort=0.5))
+            evaluation=evaluation and not kinds, converged=converged and index == episodes - 1,
+            episode_return=100.0 if kinds and evaluation else float(index), slider_error=0.1,
+            pendulum_error=0.1, ball_error=0.1, total_error=0.3, human_effort=0.5,
+            robot_effort=0.5,
+            kind=('judging' if evaluation else 'training') if kinds else ''))
     for offset in range(final_evaluations):
         error = total_error * (1 + 0.01 * rng.standard_normal())
         records.append(EpisodeRecord(
             episode=episodes + offset, training_step=steps - 1, human_involved=True,
             evaluation=True, converged=False, episode_return=0.0, slider_error=error / 3,
             pendulum_error=error / 3, ball_error=error / 3, total_error=error,
-            human_effort=human_effort, robot_effort=0.002))
+            human_effort=human_effort, robot_effort=0.002,
+            kind='evaluation' if kinds else ''))
     return SessionRecord(session_id=f'{profile}-case{case_id}-seed{seed}', case_id=case_id,
                          strategy=strategy, robot_dof=robot_dof, seed=seed, profile=profile,
-                         episodes=records, episode_limit=300)
+                         episodes=records, episode_limit=300, extra={'person': person})
 
 
 def paper_like(seeds: int = 10, profile: str = 'paper', seed: int = 0, flip: bool = False):

@@ -58,7 +58,8 @@ def figure_training_curves(rows, path) -> None:
             axis.text(0.5, 0.5, 'no session of these cases', transform=axis.transAxes,
                       ha='center', va='center', color='gray')
     axes[0].set_ylabel('episode return (robot reward)')
-    figure.suptitle('Fig. 5: training; arrows: the human joins; dashed: the reward changes '
+    figure.suptitle('Fig. 5: training (judging episodes left out); arrows: the human joins; '
+                    'dashed: the reward changes '
                     '(new training step)')
     figure.tight_layout()
     figure.savefig(path, dpi=110)

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import pathlib
 import typing
 
-from hrc_common.contract import (dof_name, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
-                                 SESSION_STATUS_TYPE)
+from hrc_common.contract import (dof_name, episode_kind, EPISODE_SUMMARY_TYPE, EpisodeKind,
+                                 HUMAN_ACTION_TYPE, SESSION_STATUS_TYPE)
 import yaml
 
 from hrc_bag import bag_reader
@@ -45,13 +45,31 @@ class Session:
 
     @property
     def training(self) -> list:
-        """Return the summaries of the training episodes."""
-        return [summary for summary in self.summaries if not summary.evaluation]
+        """Return the summaries of the training episodes (judging episodes included)."""
+        return [summary for summary in self.summaries
+                if kind_of(summary) in (EpisodeKind.TRAINING, EpisodeKind.JUDGING)]
 
     @property
     def evaluation(self) -> list:
         """Return the summaries of the evaluation episodes."""
-        return [summary for summary in self.summaries if summary.evaluation]
+        return [summary for summary in self.summaries
+                if kind_of(summary) is EpisodeKind.EVALUATION]
+
+    @property
+    def practice(self) -> list:
+        """Return the summaries of the practice episodes (in neither list above)."""
+        return [summary for summary in self.summaries
+                if kind_of(summary) is EpisodeKind.PRACTICE]
+
+
+def kind_of(summary) -> EpisodeKind:
+    """Return the kind of a decoded EpisodeSummary (``EpisodeSummary.kind``).
+
+    Bags recorded before the field existed (no ``kind`` attribute) or with KIND_UNKNOWN: the
+    ``evaluation`` flag decides (evaluation, else training), as the report always read them.
+    """
+    return episode_kind(getattr(summary, 'kind', EpisodeKind.UNKNOWN),
+                        evaluation=bool(getattr(summary, 'evaluation', False)))
 
 
 def find_sessions(paths) -> list:

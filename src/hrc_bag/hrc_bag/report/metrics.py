@@ -19,11 +19,11 @@ from dataclasses import dataclass
 import math
 import typing
 
-from hrc_common.contract import AGENT_STEP_TYPE, dof_name, HUMAN_ACTION_TYPE
+from hrc_common.contract import AGENT_STEP_TYPE, dof_name, EpisodeKind, HUMAN_ACTION_TYPE
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.report.loading import Session, topics_of_type
+from hrc_bag.report.loading import kind_of, Session, topics_of_type
 
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 
@@ -115,8 +115,13 @@ def _strategy_rank(strategy: str) -> int:
 
 
 def training_curve(session: Session) -> dict:
-    """Return the Fig. 5 data of a session: returns per training episode and the marks."""
-    training = session.training
+    """Return the Fig. 5 data of a session: returns per training episode and the marks.
+
+    Judging episodes (deterministic, ``EpisodeSummary.kind``) are left out: their returns are
+    not on the training policy's scale. Bags before the field cannot tell them apart.
+    """
+    training = [summary for summary in session.training
+                if kind_of(summary) is EpisodeKind.TRAINING]
     returns = [summary.episode_return for summary in training]
     human_joins, reward_changes = [], []
     for index, summary in enumerate(training):
