@@ -2,6 +2,7 @@
 """Benchmark: lockstep control steps per second of the engines, measured in one run.
 
     python bench/graph_rate.py --episodes 3 --case 2 --repeats 3     # from any directory
+    python bench/graph_rate.py --case 5 --human-period 0.2 0.02       # both human rates
 
 Measures, within episodes (PPO updates between episodes excluded everywhere), in rounds that
 run each variant in turn so that a change of machine load hits them alike:
@@ -16,6 +17,11 @@ run each variant in turn so that a change of machine load hits them alike:
 Prints steps/s (median over episodes) of each, and the ratios of each round (median over the
 rounds): graph / engine, graph / bare, recorder overhead (steps/s and nodes' CPU), engine /
 bare. The parameters are the session's (params/ of this checkout, else the installed ones).
+
+``--human-period`` (s, one or more): the sim's ``human_period`` for the engine and the graph
+(each value measured in turn, in every round). The human acts at that rate only while it is
+involved (case 2's first episodes are the robot's alone: use a case whose human acts from the
+start, 3-6). The bare loop (``offline.run_episode``) always lets the human act once a period.
 """
 
 import argparse
@@ -76,14 +82,16 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
     return statistics.median(rates)
 
 
-def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path) -> float:
+def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
+                human_period: float = None) -> float:
     """Return median steps/s of the in-process engine's episodes (bags written)."""
     from hrc_engine.engine import EngineConfig, run_session
     params_dir = REPOSITORY / 'params'
     result = run_session(EngineConfig(
         case=case, seed=seed, training_episodes=episodes, evaluation_episodes=0,
         session_id=f'engine-{time.time_ns()}', bags_dir=str(work / 'bags'),
-        runs_dir=str(work / 'runs'), params_dir=str(params_dir) if params_dir.is_dir() else ''))
+        runs_dir=str(work / 'runs'), params_dir=str(params_dir) if params_dir.is_dir() else '',
+        overrides={} if human_period is None else {'sim.human_period': human_period}))
     steps = [episode['steps'] for episode in result.episodes]
     return statistics.median(step / seconds
                              for step, seconds in zip(steps, result.episode_seconds))
@@ -142,7 +150,7 @@ class StateTimer:
 
 
 def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int,
-               work: pathlib.Path) -> dict:
+               work: pathlib.Path, human_period: float = None) -> dict:
     """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s}."""
     from hrc_common.executables import executable_path
 
@@ -156,6 +164,8 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
         command += ['--params-dir', str(REPOSITORY / 'params')]
     if not record:
         command.append('--no-record')
+    if human_period is not None:
+        command += ['--set', f'sim.human_period={human_period}']
     before = os.times()
     start = time.perf_counter()
     result = subprocess.run(command, capture_output=True, text=True, cwd=work)
@@ -179,42 +189,52 @@ def main() -> int:
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--domain-id', type=int, default=91)
     parser.add_argument('--repeats', type=int, default=3, help='rounds of the four runs')
+    parser.add_argument('--human-period', type=float, nargs='+', default=[None],
+                        help="the sim's human_period (s) for the engine and the graph; "
+                             'several: each is measured in every round (default: params/)')
     args = parser.parse_args()
 
     load = os.getloadavg()[0]
     print(f'machine: {os.cpu_count()} cores, load {load:.1f}, python {sys.version.split()[0]}; '
           f'case {args.case}, {args.episodes} episodes of 200 steps per measurement, '
           f'{args.repeats} rounds (bare, engine, graph, graph + recorder in turn)', flush=True)
-    rounds = []
+    results = {period: [] for period in args.human_period}
     with tempfile.TemporaryDirectory(prefix='hrc-bench-') as folder:
         work = pathlib.Path(folder)
         for index in range(args.repeats):
             bare = bare_rate(args.case, args.episodes, args.seed)
-            engine = engine_rate(args.case, args.episodes, args.seed, work)
-            graph = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id, work)
-            recorded = graph_rate(args.case, args.episodes, args.seed, True, args.domain_id,
-                                  work)
-            rounds.append((bare, engine, graph, recorded))
-            print(f'round {index + 1}: bare {bare:5.0f} | engine {engine:5.0f} | graph '
-                  f'{graph["rate"]:5.0f} (nodes CPU {graph["cpu"]:.1f} s) | graph + recorder '
-                  f'{recorded["rate"]:5.0f} steps/s (nodes CPU {recorded["cpu"]:.1f} s)',
-                  flush=True)
+            for period in args.human_period:
+                engine = engine_rate(args.case, args.episodes, args.seed, work, period)
+                graph = graph_rate(args.case, args.episodes, args.seed, False, args.domain_id,
+                                   work, period)
+                recorded = graph_rate(args.case, args.episodes, args.seed, True,
+                                      args.domain_id, work, period)
+                results[period].append((bare, engine, graph, recorded))
+                print(f'round {index + 1}, human_period {period or "(params)"}: bare '
+                      f'{bare:5.0f} | engine {engine:5.0f} | graph {graph["rate"]:5.0f} '
+                      f'(nodes CPU {graph["cpu"]:.1f} s) | graph + recorder '
+                      f'{recorded["rate"]:5.0f} steps/s (nodes CPU {recorded["cpu"]:.1f} s)',
+                      flush=True)
     median = statistics.median
-    print(f'median bare physics + policy + human: {median(r[0] for r in rounds):6.0f} steps/s')
-    print(f'median in-process engine (bags)     : {median(r[1] for r in rounds):6.0f} steps/s')
-    print(f'median graph over DDS               : {median(r[2]["rate"] for r in rounds):6.0f} '
-          f'steps/s')
-    print(f'median graph over DDS + recorder    : {median(r[3]["rate"] for r in rounds):6.0f} '
-          f'steps/s')
-    print(f'ratio graph / engine                : '
-          f'{median(r[2]["rate"] / r[1] for r in rounds):.2f}')
-    print(f'ratio graph / bare                  : '
-          f'{median(r[2]["rate"] / r[0] for r in rounds):.2f}')
-    print(f'ratio engine / bare                 : {median(r[1] / r[0] for r in rounds):.2f}')
-    print(f'recorder overhead (steps/s)         : '
-          f'{median(1 - r[3]["rate"] / r[2]["rate"] for r in rounds) * 100:+.1f}%')
-    print(f'recorder overhead (nodes CPU)       : '
-          f'{median(r[3]["cpu"] / r[2]["cpu"] - 1 for r in rounds) * 100:+.1f}%')
+    for period, rounds in results.items():
+        print(f'-- human_period {period or "(params)"} s')
+        print(f'median bare physics + policy + human: {median(r[0] for r in rounds):6.0f} '
+              f'steps/s')
+        print(f'median in-process engine (bags)     : {median(r[1] for r in rounds):6.0f} '
+              f'steps/s')
+        print(f'median graph over DDS               : '
+              f'{median(r[2]["rate"] for r in rounds):6.0f} steps/s')
+        print(f'median graph over DDS + recorder    : '
+              f'{median(r[3]["rate"] for r in rounds):6.0f} steps/s')
+        print(f'ratio graph / engine                : '
+              f'{median(r[2]["rate"] / r[1] for r in rounds):.2f}')
+        print(f'ratio graph / bare                  : '
+              f'{median(r[2]["rate"] / r[0] for r in rounds):.2f}')
+        print(f'ratio engine / bare                 : {median(r[1] / r[0] for r in rounds):.2f}')
+        print(f'recorder overhead (steps/s)         : '
+              f'{median(1 - r[3]["rate"] / r[2]["rate"] for r in rounds) * 100:+.1f}%')
+        print(f'recorder overhead (nodes CPU)       : '
+              f'{median(r[3]["cpu"] / r[2]["cpu"] - 1 for r in rounds) * 100:+.1f}%')
     print(f'load average at the end             : {os.getloadavg()[0]:.1f}')
     return 0
 

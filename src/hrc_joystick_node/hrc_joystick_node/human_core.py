@@ -79,6 +79,11 @@ class HumanParams:
     input_check_period: float = param(0.1, 'interval of the input check: drain the device, '
                                       'watch the /joy deadline, publish the input status (s)',
                                       low=0.01, high=5.0)
+    forward_stick: bool = param(True, 'joystick (device, /joy): send the stick as it moves, '
+                                'at once, answering the newest state (a person acts '
+                                'continuously; the realtime sim applies the newest command '
+                                'at each human slice); false: only when a state arrives, the '
+                                'behaviour before the human had its own rate')
     dof: str = param('rotation', 'degree of freedom of the human until /hrc/session says',
                      choices=DOFS)
     involved: bool = param(True, 'whether the human acts, until /hrc/session says')
@@ -280,6 +285,28 @@ class HumanCore:
                              self.dof, source, detail, engaged, slice=int(slice_index))
         self.last_answer = answer
         self.answered += 1
+        return answer
+
+    def forward(self, sticks: dict) -> typing.Optional[HumanAnswer]:
+        """Answer the newest state again with the stick as it is now; None if nothing to send.
+
+        Only for a person at a joystick (the active input device or /joy, involved, the
+        session not aborted, ``forward_stick``): between two states the stick moves and the
+        realtime sim applies the newest command at its next human slice, so a move reaches
+        the physics within one human period instead of waiting for the next state. Nothing
+        is sent when the command did not change.
+        """
+        last = self.last_answer
+        if (last is None or self.aborted or not self.involved or not self.params.forward_stick
+                or self.selector.active not in (DEVICE, JOY)):
+            return None
+        command, engaged, source, detail = self._decide(
+            last.episode, (last.step, last.slice), last.stamp_ns, None, sticks)
+        if (command, engaged, source) == (last.command, last.engaged, last.source):
+            return None
+        answer = last._replace(command=command, wrench=command * self.limits.full_scale(self.dof),
+                               source=source, detail=detail, engaged=engaged, repeated=False)
+        self.last_answer = answer
         return answer
 
     def abort_answer(self) -> typing.Optional[HumanAnswer]:

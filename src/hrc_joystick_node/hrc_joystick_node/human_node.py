@@ -27,6 +27,8 @@ zero), ``pause_requested`` (true when the joystick is missing or lost and ``on_i
 status. The session pauses on ``pause_requested`` (see the package README).
 """
 
+import select
+import threading
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
@@ -142,6 +144,19 @@ class HumanNode(Node):
             self.joy_subscription = self.create_subscription(Joy, topics.JOY, self.on_joy,
                                                              qos.JOY_QOS)
         self.create_timer(params.input_check_period, self.check_inputs)
+        # A person acts continuously: a stick event is forwarded at once (forward_stick).
+        # A thread waits on the device's file descriptor and wakes the executor through a
+        # guard condition; the device is read and the answer published in the executor's
+        # thread, as everything else.
+        self._stick_moved = self.create_guard_condition(self.on_stick_moved)
+        self._stick_read = threading.Event()
+        self._watching = threading.Event()
+        self._watcher = None
+        if self.device is not None and params.forward_stick:
+            self._watching.set()
+            self._watcher = threading.Thread(target=self._watch_device, daemon=True,
+                                             name='stick watcher')
+            self._watcher.start()
         person = f' person {params.person}' if params.person >= 0 else ''
         self.get_logger().info(
             f'human node: input={params.input}, device={params.device}, axis={params.axis}'
@@ -251,8 +266,46 @@ class HumanNode(Node):
         self.status_publisher.publish(status_message(status, hardware, extra))
 
     def on_joy(self, message: Joy) -> None:
-        """Keep the latest /joy axes and buttons."""
+        """Keep the latest /joy axes and buttons; forward a move of the stick at once."""
         self.joy.on_message(message.axes, message.buttons, time.monotonic())
+        self._forward()
+
+    def _watch_device(self) -> None:
+        """Thread: wake the executor whenever the device has bytes to read (no reading here)."""
+        while self._watching.is_set():
+            descriptor = self.device.fileno() if self.device is not None else -1
+            if descriptor < 0:
+                time.sleep(self.params.input_check_period)
+                continue
+            try:
+                readable, _, _ = select.select([descriptor], [], [], 0.1)
+            except (OSError, ValueError):   # closed under us: look again
+                time.sleep(0.01)
+                continue
+            if readable:
+                self._stick_read.clear()
+                self._stick_moved.trigger()
+                # Until the executor drained it the descriptor stays readable: wait for that
+                # (and at most 1 kHz of wake-ups: a descriptor at end of file stays readable).
+                self._stick_read.wait(0.05)
+                time.sleep(0.001)
+
+    def on_stick_moved(self) -> None:
+        """Drain the device (it has events) and forward the stick's new position."""
+        try:
+            if self.device is not None and self.device.present:
+                self.device.poll()
+            self._forward()
+        finally:
+            self._stick_read.set()
+
+    def _forward(self) -> None:
+        """Send the stick as it is now, answering the newest state (HumanCore.forward)."""
+        if self.core.limits is None:
+            return
+        answer = self.core.forward(self._sticks())
+        if answer is not None:
+            self._publish_wrench(answer)
 
     def _sticks(self) -> dict:
         params, sticks = self.params, {}
@@ -338,8 +391,21 @@ class HumanNode(Node):
         self.wrench_publisher.publish(wrench)
         self._last_messages = (answer, action, wrench)
 
+    def _publish_wrench(self, answer: HumanAnswer) -> None:
+        """Publish only the wrench of a forwarded answer (the stick moved between states)."""
+        wrench = WrenchStamped()
+        wrench.header.stamp.sec, wrench.header.stamp.nanosec = divmod(answer.stamp_ns, NS_PER_S)
+        wrench.header.frame_id = 'world'
+        set_wrench_value(wrench.wrench, answer.dof, answer.wrench)
+        self.wrench_publisher.publish(wrench)
+        if self._last_messages is not None:
+            self._last_messages = (answer, self._last_messages[1], wrench)
+
     def close(self) -> None:
-        """Release the joystick device."""
+        """Stop the stick watcher; release the joystick device."""
+        self._watching.clear()
+        if self._watcher is not None:
+            self._watcher.join(timeout=1.0)
         if self.device is not None:
             self.device.close()
 

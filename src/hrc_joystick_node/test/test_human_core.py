@@ -189,3 +189,40 @@ def test_a_core_from_composed_parameters_as_the_in_process_engine_builds_it():
     assert core.answer(0, 0, 0, State(pendulum_angle=0.3)).source == SIM
     with pytest.raises(ParameterError, match="unknown parameter 'persn'"):
         core_from_parameters({'persn': 2}, LIMITS)
+
+
+def test_a_person_at_the_stick_is_forwarded_between_states_with_the_newest_stamp():
+    params = HumanParams(input='device', device='/dev/input/js0', deadzone=0.0)
+    core = core_of(params)
+    core.on_inputs(True, '/dev/input/js0 open (char)', False, '')
+    at = {DEVICE: StickReading(0.25, None, '/dev/input/js0')}
+    assert core.forward(at) is None                       # nothing answered yet
+    answer = core.answer(0, 4, stamp(0, 4), State(), at, slice_index=3)
+    assert core.forward(at) is None                       # the stick did not move
+    moved = core.forward({DEVICE: StickReading(-0.5, None, '/dev/input/js0')})
+    assert (moved.command, moved.wrench) == (-0.5, -0.5 * LIMITS.max_torque)
+    assert (moved.episode, moved.step, moved.slice, moved.stamp_ns) == (
+        0, 4, 3, answer.stamp_ns)                         # answers the newest state
+    assert core.last_answer == moved                      # a repeat of the state sends it
+    # The behaviour before the human's own rate, and a simulated person: never forwarded.
+    old = core_of(dataclasses.replace(params, forward_stick=False))
+    old.on_inputs(True, 'open', False, '')
+    old.answer(0, 4, stamp(0, 4), State(), at)
+    assert old.forward({DEVICE: StickReading(-0.5, None, '/dev/input/js0')}) is None
+    simulated = core_of(HumanParams(input='sim'))
+    simulated.on_inputs(False, '', False, '')
+    simulated.answer(0, 0, stamp(0, 0), State())
+    assert simulated.forward(at) is None
+
+
+def test_the_simulated_person_acts_at_the_sims_human_period_on_slice_states():
+    core = HumanCore(HumanParams(input='sim', profile='paper', seed=3), PROFILES)
+    core.set_limits(dataclasses.replace(LIMITS, human_period=0.02))
+    core.on_inputs(False, '', False, '')
+    assert core.sim_human.control_period == 0.02
+    first = core.answer(0, 0, stamp(0, 0), State(), slice_index=0)
+    second = core.answer(0, 0, stamp(0, 0) + 20_000_000, State(pendulum_angle=0.1),
+                         slice_index=1)
+    assert not second.repeated and second.slice == 1
+    assert core.answer(0, 0, stamp(0, 0) + 20_000_000, State(), slice_index=1).repeated
+    assert first.slice == 0
