@@ -55,6 +55,17 @@ inertia but makes contact solving part of every step, slower and sensitive to so
 the prismatic ball is exact, deterministic and fast. Its centre sits ``ball_radius`` above the
 beam's axis, as a ball resting on top of the beam.
 
+The human's rate: ``human_period`` (default 0.02 s) splits a control period into slices of
+``substeps_per_slice`` substeps; :meth:`SliderPendulumBall.advance` holds a wrench for one
+slice and :meth:`SliderPendulumBall.finish_period` ends the period (``step`` is both, for one
+wrench held all period). Why 0.02 s (a modelling choice): a person acts continuously, a
+joystick streams its position at 100+ Hz and the ``joy`` node at 20-50 Hz (facts); a 20 ms
+sample-and-hold adds 10 ms of lag on average, a tenth or less of a human operator's effective
+delay of 0.1-0.3 s (McRuer's crossover model), where the robot's 0.2 s period added up to
+200 ms and made the rotation role nearly impossible (the ball's offset doubles every ~0.45 s
+with no torque); 0.02 s is the joy node's highest usual rate and divides the 10 ms substep
+grid. ``human_period = control_period`` is the behaviour before the human had its own rate.
+
 Integration: ``substeps`` = 20 steps of 10 ms per control period. Against a 400-substep
 reference, a 12 s closed-loop run deviates by at most 2 mm (slider), 0.012 rad (pendulum) and
 3 mm (ball) with 20 substeps, twice that with 10, half with 40 (first order); 20 keeps the
