@@ -303,10 +303,15 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
             return
         log = (tmp_path / 'runs' / 'case2' / 'logs' / 'display.log').read_text()
         port = re.search(r'serving the display on http://127\.0\.0\.1:(\d+)/', log).group(1)
+        # As the page does: its origin and the session secret it was served with.
+        with urllib.request.urlopen(f'http://127.0.0.1:{port}/', timeout=10) as page:
+            token = re.search(r'name="hrc-token" content="([^"]+)"',
+                              page.read().decode()).group(1)
         request = urllib.request.Request(
             f'http://127.0.0.1:{port}/tlx', method='POST', data=json.dumps(
                 {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20,
-                 'effort': 50, 'frustration': 15}).encode())
+                 'effort': 50, 'frustration': 15, 'condition': 'case2'}).encode(),
+            headers={'Origin': f'http://127.0.0.1:{port}', 'X-HRC-Token': token})
         with urllib.request.urlopen(request, timeout=10) as reply:
             answered.append(reply.read().decode())
 
