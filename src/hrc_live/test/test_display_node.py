@@ -279,7 +279,7 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     lost.publish(String(data='/dev/input/js0 unplugged'))
     assert wait_for(lambda: 'joystick disconnected' in browser.find_element(
         'id', 'input').text, 20, 0.2)
-    assert status(port)['banner'].startswith('Joystick disconnected')
+    assert status(port)['banner'].startswith('The joystick is disconnected')
     lost.publish(String(data=''))
 
     # Mid-session the questionnaire is not asked and not accepted (even from the own page).
