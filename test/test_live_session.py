@@ -209,6 +209,14 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
                            for record in records.values()), records
     names = [path.name for path in tmp_path.rglob('*')]
     assert not [name for name in names if SUBJECT.lower() in name.lower()]
+    # Issue 25: with a subject id every output is owner-only, checkpoints and folders included.
+    modes = {str(path.relative_to(tmp_path)): path.stat().st_mode & 0o777
+             for root in (tmp_path / 'runs', tmp_path / 'bags')
+             for path in [root, *root.rglob('*')]}
+    assert modes['runs/checkpoints/live/latest.pt'] == 0o600, modes
+    assert modes['runs/live'] == modes['runs/checkpoints/live'] == modes['bags/live'] == 0o700
+    assert not {name: oct(mode) for name, mode in modes.items() if mode & 0o077}, {
+        name: oct(mode) for name, mode in modes.items()}
 
     # Resume from the checkpoint, one more training episode: the counters continue.
     watcher.wait(lambda: False, timeout=1.0)  # take in what is left of the first run
@@ -345,7 +353,7 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     watcher.summaries[:] = [s for s in watcher.summaries if s.session_id == 'case2']
     alone, together = check_clock_switch(
         episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore), watcher.summaries)
-    match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
+    match = re.search(r'the person joins now, at episode (\d+), \d+ s after the start; the robot '
                       r'practised alone: (\d+) episodes in (\d+) s', text)
     assert match, text
     assert int(match.group(1)) == min(together) + 1 and int(match.group(2)) == len(alone)
@@ -436,3 +444,60 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert HumanAction.SOURCE_SIMULATED not in {source for source, _ in sources}, sources
     assert sources[(HumanAction.SOURCE_DEVICE, True)] >= SHORT_STEPS, sources
     assert [s.episode for s in bag['/hrc/episode']] == list(range(len(summaries)))
+    # Each attempt of the interrupted episode is filed as itself (issue 25): the dropped one in
+    # its own file, the complete re-run in <id>_ep<n>_attempt2.mcap, both in metadata.yaml;
+    # the report counts the re-run and says so.
+    from hrc_bag import bag_reader
+    folder = tmp_path / 'bags' / 'case2'
+    dropped = folder / f'case2_ep{first:04d}.mcap'
+    rerun = folder / f'case2_ep{first:04d}_attempt2.mcap'
+
+    def states_of(path):
+        decoder = bag_reader.MessageDecoder()
+        decoded = (decoder.decode(m) for m in bag_reader.scan_file(path, ['/hrc/state']).messages)
+        return [s for s in decoded if s.episode == first]
+    assert 0 < len(states_of(dropped)) < SHORT_STEPS + 1
+    assert [s.step for s in states_of(rerun)] == list(range(SHORT_STEPS + 1))
+    if (folder / 'case2_end.mcap').exists():
+        assert not states_of(folder / 'case2_end.mcap')
+    listed = bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths']
+    assert dropped.name in listed and rerun.name in listed, listed
+    assert bag_reader.scan_file(rerun).metadata['hrc_episode']['attempt'] == '2'
+    from hrc_bag.report.loading import load_session
+    report = load_session(folder)
+    assert report.files_by_episode[first] == [rerun] and report.attempts[first] == [dropped,
+                                                                                    rerun]
+    assert any(f'episode {first} was recorded 2 times' in notice
+               and f'its time and errors are from {rerun.name}' in notice
+               for notice in report.notices), report.notices
+
+
+# --------------------------------------------------------------------------- issue 25
+def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path):
+    result = subprocess.run([str(executable_path('hrc_bringup', 'session')), '--domain-id',
+                             '233', '--runs-dir', str(tmp_path / 'runs'), '--bags-dir',
+                             str(tmp_path / 'bags')], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert ('--domain-id 233 is outside the range of DDS domain ids 0..232' in result.stderr)
+    assert 'Traceback' not in result.stderr and not (tmp_path / 'runs').exists()
+
+
+def test_a_robot_that_does_not_converge_is_said_and_the_pages_addresses_printed(
+        tmp_path, ros_domain_id, watcher):
+    """Case 2 with a cap of 2 episodes: the robot alone never converges (paper tolerances)."""
+    command = [str(executable_path('hrc_bringup', 'session')), '--domain-id',
+               str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'), '--runs-dir',
+               str(tmp_path / 'runs'), '--session-id', 'nc', '--case', '2',
+               '--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',
+               '--episodes', '2', '--eval-episodes', '1', '--no-report', '--display',
+               '--display-port', '0']
+    code, text = run_to_the_end(watcher, command, tmp_path / 'runner.log')
+    assert code == 0, text
+    page = re.search(r"\[session\] the person's page: (http://127\.0\.0\.1:\d+/)   the "
+                     r"experimenter's console: (http://127\.0\.0\.1:\d+/console)", text)
+    assert page and page.group(2) == page.group(1) + 'console', text
+    assert text.index("the person's page") < text.index('training step 1/2'), text
+    assert ('[session] the robot did not converge in 2 episodes (training step 1 of 2, at '
+            'most 2); the person never trained with the robot; the test episodes start'
+            in text), text
