@@ -67,6 +67,7 @@ import typing
 
 from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem, NS_PER_S,
                                  SESSION_STATUS_TYPE, TASK_STATE_TYPE)
+import yaml
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
@@ -74,7 +75,7 @@ from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem,
                             file_mode, plain_values, RawMessage, RecordingError,
                             session_custom_data, SESSION_RECORD, session_record, SessionIndex,
                             TopicDescription, unused_path)
-from hrc_bag.qos_yaml import dump_yaml, load_yaml
+from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recovery import recover_file
 
@@ -308,7 +309,9 @@ class EpisodeRecorder:
                 listed = listed if isinstance(listed, dict) else {}
                 listed.update({number: files for number, files in self._attempt_files.items()
                                if len(files) > 1})
-                self.index.custom_data[ATTEMPTS_KEY] = dump_yaml(dict(sorted(listed.items())))
+                # one line in metadata.yaml: {6: [<id>_ep0006.mcap, <id>_ep0006_attempt2.mcap]}
+                self.index.custom_data[ATTEMPTS_KEY] = yaml.safe_dump(
+                    dict(sorted(listed.items())), default_flow_style=True, width=10**6).strip()
         self._last_flush = self._clock()
         self._info(f'episode {episode if episode is not None else "(none)"}: recording into '
                    f'{path.name}' + (f' (attempt {attempt}; earlier: '
