@@ -377,6 +377,41 @@ def plug_in(fifo, stick=-16384):
     return writer
 
 
+class PageWords:
+    """Polls the person's page's words (status.json) in a thread; keeps each change."""
+
+    def __init__(self):
+        import threading
+        self.seen = []              # (banner, notice, episode label), each change once
+        self._stop = threading.Event()
+        self._thread = None
+
+    def start(self, address: str):
+        import threading
+
+        def poll():
+            while not self._stop.is_set():
+                try:
+                    with urllib.request.urlopen(address + 'status.json', timeout=5) as answer:
+                        words = json.loads(answer.read())
+                    item = (words['banner'], words['notice'], words['episode_label'])
+                    if not self.seen or self.seen[-1] != item:
+                        self.seen.append(item)
+                except OSError:
+                    pass
+                self._stop.wait(0.1)
+        self._thread = threading.Thread(target=poll, daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(10)
+
+    def banners(self) -> list:
+        return [banner for banner, _, _ in self.seen]
+
+
 def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_domain_id,
                                                                   watcher, read_rosbag,
                                                                   rosbags_typestore):
@@ -385,7 +420,8 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     log = open(tmp_path / 'runner.log', 'w+')
     runner = subprocess.Popen(case2_command(
         tmp_path, ros_domain_id, '--episodes', '8', '--human', 'device', '--set',
-        f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--input-wait', '120'),
+        f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--input-wait', '120',
+        '--display', '--display-port', '0', '--set', 'agent.episode_break=2.0'),
         stdout=log, stderr=subprocess.STDOUT, text=True)
 
     def output():
@@ -393,11 +429,18 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         return log.read()
 
     writer = None
+    page_words = PageWords()
     try:
         # Nobody writes to the FIFO yet: the runner waits, says why and how to fix it.
         assert watcher.wait(lambda: 'waiting for the person' in output(), 60), output()
         assert 'no program writes to it' in output() and 'Fix: plug the joystick in' in output()
         assert not watcher.statuses, 'no node may start before the input is there'
+        # Issue 25: the page is served from the start, its address printed.
+        address = re.search(r"the person's page: (http://127\.0\.0\.1:\d+/)", output())
+        assert address and output().index("person's page") < output().index('waiting for'), \
+            output()
+        page_words.start(address.group(1))
+        assert watcher.wait(lambda: page_words.seen, 30)
         writer = plug_in(fifo)
         # The person joins (realtime); unplug in the middle of their first episode.
         assert watcher.wait(lambda: any(s.human_involved for s in watcher.statuses), 120), \
@@ -425,6 +468,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         assert code == 0 and 'resuming' in said, said
         assert watcher.wait(lambda: runner.poll() is not None, timeout=240), output()
     finally:
+        page_words.stop()
         if writer is not None:
             os.close(writer)
         if runner.poll() is None:
@@ -432,6 +476,22 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
+    # What the person read, in order (issue 25): the lost joystick (never "stopped by the
+    # operator", no FIFO detail), then the countdown of the resume, then their turn again.
+    from hrc_live.display_core import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
+    banners = page_words.banners()
+    assert banners[0] == 'Please wait: the session is starting', banners
+    lost = banners.index(INPUT_LOST_BANNER)
+    assert not any('Stopped by the operator' in banner for banner in banners), banners
+    assert all('FIFO' not in notice for _, notice, _ in page_words.seen), page_words.seen
+    assert (INPUT_LOST_BANNER, INPUT_LOST_NOTICE) in {(b, n) for b, n, _ in page_words.seen}
+    after = banners[lost:]
+    countdown = next(i for i, b in enumerate(after) if b.startswith('Get ready: the next '
+                                                                   'episode starts in'))
+    assert any(b.startswith('Your turn') for b in after[countdown:]), after
+    assert all(int(re.search(r'of at most (\d+)', label).group(1)) >= int(
+        re.search(r'Episode (\d+)', label).group(1)) for _, _, label in page_words.seen
+        if label.startswith('Episode ')), page_words.seen
     summaries = watcher.summaries
     check_clock_switch(episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore),
                        summaries)

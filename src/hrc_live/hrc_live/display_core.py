@@ -376,6 +376,9 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         banner, tone = 'Stopped by the operator. Please let go of the joystick.', 'stop'
     elif phase == 'done':
         banner, tone = 'The session is finished. Thank you!', 'info'
+    elif phase == 'paused' and 'joystick disconnected' in session.message.lower():
+        # the runner's pause for a lost input: the joystick is back, the operator resumes
+        banner, tone = 'The joystick is connected again: please wait for the operator', 'wait'
     elif phase == 'paused':
         banner, tone = 'Paused by the operator: please wait', 'wait'
     elif not in_episode:

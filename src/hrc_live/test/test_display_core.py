@@ -213,11 +213,16 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     assert 'FIFO' not in words.notice and 'operator' not in words.banner.split(':')[0]
     assert console_document(model.snapshot(now=4.1))['input']['detail'].endswith(
         'no writer has the FIFO open')              # the technical reason: the console only
-    model.on_session(session(phase='paused'), now=4.5)
+    runner_says = ('joystick disconnected (zero held, session should pause): no writer has '
+                   'the FIFO open: paused; resume after it is back')   # the runner's status
+    model.on_session(session(phase='paused', message=runner_says), now=4.5)
     assert overlay(model.snapshot(now=5.0)).banner == INPUT_LOST_BANNER
-    # Plugged in again and resumed: the agent starts again after a break, counted down,
-    # although the newest state is still the interrupted episode's step 12.
+    # Plugged in again: the operator resumes (not "paused by the operator": it was not).
     model.set_input_lost('')
+    assert overlay(model.snapshot(now=6.0)).banner == (
+        'The joystick is connected again: please wait for the operator')
+    # Resumed: the agent starts again after a break, counted down, although the newest state
+    # is still the interrupted episode's step 12.
     model.on_session(session(phase='training'), now=20.0)
     words = overlay(model.snapshot(now=21.2))
     assert (words.banner, words.countdown, words.notice) == (
