@@ -1,6 +1,12 @@
 # Source this file to use the workspace: the venv (ROS 2 Jazzy prefix) and the colcon install.
 # Works from any directory: `source /path/to/hrc/scripts/env.sh` (bash).
 # shellcheck shell=bash
+# bash only (it finds itself through BASH_SOURCE; the colcon install's setup.bash): any other
+# shell (sh, dash, zsh) is told so instead of failing half-way.
+if [ -z "${BASH_VERSION:-}" ]; then
+  echo "scripts/env.sh needs bash (this shell is not bash): run 'bash', then 'source scripts/env.sh'" >&2
+  return 1 2>/dev/null || exit 1
+fi
 _hrc_top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # shellcheck disable=SC1091
 source "$_hrc_top/.venv/bin/activate"
@@ -18,10 +24,15 @@ if [ "$ROS_AUTOMATIC_DISCOVERY_RANGE" = LOCALHOST ] && [ -z "${FASTRTPS_DEFAULT_
 fi
 # The pip wheels do not ship the ROS 2 CLI: without a real `ros2`, put hrc's shim on PATH
 # (scripts/bin/ros2: `ros2 run` with the same ament-index lookup; it says it is the shim).
-if ! command -v ros2 >/dev/null 2>&1; then
+# Its notice comes once per shell, here, not on every call (HRC_ROS2_SHIM_NOTICE tells the shim).
+if ! command -v ros2 >/dev/null 2>&1 || [ "$(command -v ros2)" = "$_hrc_top/scripts/bin/ros2" ]; then
   case ":$PATH:" in
     *":$_hrc_top/scripts/bin:"*) ;;
     *) export PATH="$_hrc_top/scripts/bin:$PATH" ;;
   esac
+  if [ -z "${HRC_ROS2_SHIM_NOTICE:-}" ]; then
+    python3 "$_hrc_top/scripts/bin/ros2" --notice
+    export HRC_ROS2_SHIM_NOTICE=shown
+  fi
 fi
 unset _hrc_top

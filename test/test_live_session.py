@@ -209,6 +209,14 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
                            for record in records.values()), records
     names = [path.name for path in tmp_path.rglob('*')]
     assert not [name for name in names if SUBJECT.lower() in name.lower()]
+    # Issue 25: with a subject id every output is owner-only, checkpoints and folders included.
+    modes = {str(path.relative_to(tmp_path)): path.stat().st_mode & 0o777
+             for root in (tmp_path / 'runs', tmp_path / 'bags')
+             for path in [root, *root.rglob('*')]}
+    assert modes['runs/checkpoints/live/latest.pt'] == 0o600, modes
+    assert modes['runs/live'] == modes['runs/checkpoints/live'] == modes['bags/live'] == 0o700
+    assert not {name: oct(mode) for name, mode in modes.items() if mode & 0o077}, {
+        name: oct(mode) for name, mode in modes.items()}
 
     # Resume from the checkpoint, one more training episode: the counters continue.
     watcher.wait(lambda: False, timeout=1.0)  # take in what is left of the first run
@@ -303,10 +311,15 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
             return
         log = (tmp_path / 'runs' / 'case2' / 'logs' / 'display.log').read_text()
         port = re.search(r'serving the display on http://127\.0\.0\.1:(\d+)/', log).group(1)
+        # As the page does: its origin and the session secret it was served with.
+        with urllib.request.urlopen(f'http://127.0.0.1:{port}/', timeout=10) as page:
+            token = re.search(r'name="hrc-token" content="([^"]+)"',
+                              page.read().decode()).group(1)
         request = urllib.request.Request(
             f'http://127.0.0.1:{port}/tlx', method='POST', data=json.dumps(
                 {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20,
-                 'effort': 50, 'frustration': 15}).encode())
+                 'effort': 50, 'frustration': 15, 'condition': 'case2'}).encode(),
+            headers={'Origin': f'http://127.0.0.1:{port}', 'X-HRC-Token': token})
         with urllib.request.urlopen(request, timeout=10) as reply:
             answered.append(reply.read().decode())
 
@@ -340,7 +353,7 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     watcher.summaries[:] = [s for s in watcher.summaries if s.session_id == 'case2']
     alone, together = check_clock_switch(
         episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore), watcher.summaries)
-    match = re.search(r'the person joins at episode (\d+), \d+ s after the start; the robot '
+    match = re.search(r'the person joins now, at episode (\d+), \d+ s after the start; the robot '
                       r'practised alone: (\d+) episodes in (\d+) s', text)
     assert match, text
     assert int(match.group(1)) == min(together) + 1 and int(match.group(2)) == len(alone)
@@ -364,6 +377,41 @@ def plug_in(fifo, stick=-16384):
     return writer
 
 
+class PageWords:
+    """Polls the person's page's words (status.json) in a thread; keeps each change."""
+
+    def __init__(self):
+        import threading
+        self.seen = []              # (banner, notice, episode label), each change once
+        self._stop = threading.Event()
+        self._thread = None
+
+    def start(self, address: str):
+        import threading
+
+        def poll():
+            while not self._stop.is_set():
+                try:
+                    with urllib.request.urlopen(address + 'status.json', timeout=5) as answer:
+                        words = json.loads(answer.read())
+                    item = (words['banner'], words['notice'], words['episode_label'])
+                    if not self.seen or self.seen[-1] != item:
+                        self.seen.append(item)
+                except OSError:
+                    pass
+                self._stop.wait(0.1)
+        self._thread = threading.Thread(target=poll, daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(10)
+
+    def banners(self) -> list:
+        return [banner for banner, _, _ in self.seen]
+
+
 def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_domain_id,
                                                                   watcher, read_rosbag,
                                                                   rosbags_typestore):
@@ -372,7 +420,8 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     log = open(tmp_path / 'runner.log', 'w+')
     runner = subprocess.Popen(case2_command(
         tmp_path, ros_domain_id, '--episodes', '8', '--human', 'device', '--set',
-        f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--input-wait', '120'),
+        f'human.device={fifo}', '--set', 'human.reopen_period=0.2', '--input-wait', '120',
+        '--display', '--display-port', '0', '--set', 'agent.episode_break=2.0'),
         stdout=log, stderr=subprocess.STDOUT, text=True)
 
     def output():
@@ -380,11 +429,18 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         return log.read()
 
     writer = None
+    page_words = PageWords()
     try:
         # Nobody writes to the FIFO yet: the runner waits, says why and how to fix it.
         assert watcher.wait(lambda: 'waiting for the person' in output(), 60), output()
         assert 'no program writes to it' in output() and 'Fix: plug the joystick in' in output()
         assert not watcher.statuses, 'no node may start before the input is there'
+        # Issue 25: the page is served from the start, its address printed.
+        address = re.search(r"the person's page: (http://127\.0\.0\.1:\d+/)", output())
+        assert address and output().index("person's page") < output().index('waiting for'), \
+            output()
+        page_words.start(address.group(1))
+        assert watcher.wait(lambda: page_words.seen, 30)
         writer = plug_in(fifo)
         # The person joins (realtime); unplug in the middle of their first episode.
         assert watcher.wait(lambda: any(s.human_involved for s in watcher.statuses), 120), \
@@ -412,6 +468,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         assert code == 0 and 'resuming' in said, said
         assert watcher.wait(lambda: runner.poll() is not None, timeout=240), output()
     finally:
+        page_words.stop()
         if writer is not None:
             os.close(writer)
         if runner.poll() is None:
@@ -419,6 +476,22 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
+    # What the person read, in order (issue 25): the lost joystick (never "stopped by the
+    # operator", no FIFO detail), then the countdown of the resume, then their turn again.
+    from hrc_live.display_core import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
+    banners = page_words.banners()
+    assert banners[0] == 'Please wait: the session is starting', banners
+    lost = banners.index(INPUT_LOST_BANNER)
+    assert not any('Stopped by the operator' in banner for banner in banners), banners
+    assert all('FIFO' not in notice for _, notice, _ in page_words.seen), page_words.seen
+    assert (INPUT_LOST_BANNER, INPUT_LOST_NOTICE) in {(b, n) for b, n, _ in page_words.seen}
+    after = banners[lost:]
+    countdown = next(i for i, b in enumerate(after) if b.startswith('Get ready: the next '
+                                                                   'episode starts in'))
+    assert any(b.startswith('Your turn') for b in after[countdown:]), after
+    assert all(int(re.search(r'of at most (\d+)', label).group(1)) >= int(
+        re.search(r'Episode (\d+)', label).group(1)) for _, _, label in page_words.seen
+        if label.startswith('Episode ')), page_words.seen
     summaries = watcher.summaries
     check_clock_switch(episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore),
                        summaries)
@@ -431,3 +504,60 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert HumanAction.SOURCE_SIMULATED not in {source for source, _ in sources}, sources
     assert sources[(HumanAction.SOURCE_DEVICE, True)] >= SHORT_STEPS, sources
     assert [s.episode for s in bag['/hrc/episode']] == list(range(len(summaries)))
+    # Each attempt of the interrupted episode is filed as itself (issue 25): the dropped one in
+    # its own file, the complete re-run in <id>_ep<n>_attempt2.mcap, both in metadata.yaml;
+    # the report counts the re-run and says so.
+    from hrc_bag import bag_reader
+    folder = tmp_path / 'bags' / 'case2'
+    dropped = folder / f'case2_ep{first:04d}.mcap'
+    rerun = folder / f'case2_ep{first:04d}_attempt2.mcap'
+
+    def states_of(path):
+        decoder = bag_reader.MessageDecoder()
+        decoded = (decoder.decode(m) for m in bag_reader.scan_file(path, ['/hrc/state']).messages)
+        return [s for s in decoded if s.episode == first]
+    assert 0 < len(states_of(dropped)) < SHORT_STEPS + 1
+    assert [s.step for s in states_of(rerun)] == list(range(SHORT_STEPS + 1))
+    if (folder / 'case2_end.mcap').exists():
+        assert not states_of(folder / 'case2_end.mcap')
+    listed = bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths']
+    assert dropped.name in listed and rerun.name in listed, listed
+    assert bag_reader.scan_file(rerun).metadata['hrc_episode']['attempt'] == '2'
+    from hrc_bag.report.loading import load_session
+    report = load_session(folder)
+    assert report.files_by_episode[first] == [rerun] and report.attempts[first] == [dropped,
+                                                                                    rerun]
+    assert any(f'episode {first} was recorded 2 times' in notice
+               and f'its time and errors are from {rerun.name}' in notice
+               for notice in report.notices), report.notices
+
+
+# --------------------------------------------------------------------------- issue 25
+def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path):
+    result = subprocess.run([str(executable_path('hrc_bringup', 'session')), '--domain-id',
+                             '233', '--runs-dir', str(tmp_path / 'runs'), '--bags-dir',
+                             str(tmp_path / 'bags')], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert ('--domain-id 233 is outside the range of DDS domain ids 0..232' in result.stderr)
+    assert 'Traceback' not in result.stderr and not (tmp_path / 'runs').exists()
+
+
+def test_a_robot_that_does_not_converge_is_said_and_the_pages_addresses_printed(
+        tmp_path, ros_domain_id, watcher):
+    """Case 2 with a cap of 2 episodes: the robot alone never converges (paper tolerances)."""
+    command = [str(executable_path('hrc_bringup', 'session')), '--domain-id',
+               str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'), '--runs-dir',
+               str(tmp_path / 'runs'), '--session-id', 'nc', '--case', '2',
+               '--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',
+               '--episodes', '2', '--eval-episodes', '1', '--no-report', '--display',
+               '--display-port', '0']
+    code, text = run_to_the_end(watcher, command, tmp_path / 'runner.log')
+    assert code == 0, text
+    page = re.search(r"\[session\] the person's page: (http://127\.0\.0\.1:\d+/)   the "
+                     r"experimenter's console: (http://127\.0\.0\.1:\d+/console)", text)
+    assert page and page.group(2) == page.group(1) + 'console', text
+    assert text.index("the person's page") < text.index('training step 1/2'), text
+    assert ('[session] the robot did not converge in 2 episodes (training step 1 of 2, at '
+            'most 2); the person never trained with the robot; the test episodes start'
+            in text), text

@@ -50,6 +50,26 @@ def test_env_sh_from_another_directory_gives_ros2_run():
         assert result.stderr.count(SHIM_NOTICE) == 1, result.stderr
 
 
+def test_the_shim_notice_comes_once_per_shell_and_env_sh_says_it_needs_bash():
+    """Issue 25: the notice came on every ``ros2`` call, and env.sh failed under ``sh``."""
+    result = fresh_shell(f'ros2 pkg prefix hrc_live && ros2 pkg prefix hrc_sim_node && '
+                         f'source {shlex.quote(str(ENV_SH))} && ros2 pkg prefix hrc_live && '
+                         f'bash -c "ros2 pkg prefix hrc_live"')
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 4, result.stdout
+    if f'{REPOSITORY}/scripts/bin' in fresh_shell('echo $PATH').stdout:
+        assert result.stderr.count(SHIM_NOTICE) == 1, result.stderr
+    for shell in ('sh', 'dash'):
+        if shutil.which(shell) is None:
+            continue
+        refused = subprocess.run([shell, '-c', f'. {shlex.quote(str(ENV_SH))} || echo refused'],
+                                 capture_output=True, text=True, timeout=60, cwd='/tmp')
+        assert refused.stdout.strip() == 'refused', (shell, refused.stdout, refused.stderr)
+        assert refused.stderr.strip() == (
+            "scripts/env.sh needs bash (this shell is not bash): run 'bash', then "
+            "'source scripts/env.sh'"), (shell, refused.stderr)
+
+
 def test_shim_errors_are_clear():
     result = fresh_shell('ros2 run hrc_nothing some_node; echo "code $?"; '
                          'ros2 run hrc_sim_node some_node; echo "code $?"; '

@@ -123,6 +123,10 @@ class AgentNode(Node):
         self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
         self.pause_requested = False
         self.next_episode_at = 0.0      # monotonic s: realtime break between episodes
+        if self.params.resume_from:
+            # issue 25: a resumed session (after a lost joystick or an abort) gives the person
+            # the same break, and the page its countdown, before the first episode
+            self.next_episode_at = time.monotonic() + self.break_seconds()
         self.newest_state = None        # the newest state of the running episode (for abort)
         self.human_actions = {}         # stamp key -> normalized command
         self.latest_human_action = 0.0

@@ -290,10 +290,11 @@ def session_files(path) -> list:
 def recording_order(path) -> tuple:
     """Return a sort key of episode files: by episode number, the end file last."""
     stem = pathlib.Path(path).stem
-    match = re.search(r'_ep(\d+)(?:_\d+)?$', stem)
+    # <id>_ep0060, <id>_ep0060_attempt2 (a re-run, hrc_bag.recording), <id>_ep0060_2 (a name taken)
+    match = re.search(r'_ep(\d+)(?:_attempt(\d+)|_(\d+))?$', stem)
     if match:
-        return (0, int(match.group(1)), stem)
-    return (2 if stem.endswith(END_FILE_SUFFIX) else 1, 0, stem)
+        return (0, int(match.group(1)), int(match.group(2) or match.group(3) or 1), stem)
+    return (2 if stem.endswith(END_FILE_SUFFIX) else 1, 0, 0, stem)
 
 
 def iter_messages(path, topics=None) -> typing.Iterator[BagMessage]:

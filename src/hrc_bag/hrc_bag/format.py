@@ -480,13 +480,19 @@ class EpisodeFile:
         return FileInfo(self.name, self.start, self.end, self.message_count,
                         dict(self.topic_counts), dict(self.topics))
 
-    def close(self, custom_data: typing.Optional[dict] = None) -> FileInfo:
-        """Finish the file (rosbag2 record, summary, indexes, footer), fsync, return its info."""
+    def close(self, custom_data: typing.Optional[dict] = None,
+              episode_record: typing.Optional[dict] = None) -> FileInfo:
+        """Finish the file (rosbag2 record, summary, indexes, footer), fsync, return its info.
+
+        ``episode_record``: more fields of the ``hrc_episode`` record (the recorder's attempt
+        of the episode: ``attempt``, ``attempt_files``, ``last_step``, ``finished``).
+        """
         info = self.info()
         try:
             self._writer.flush()
             self._writer.add_metadata(EPISODE_RECORD, {
-                'message_count': str(self.message_count), **self.human.record()})
+                'message_count': str(self.message_count), **self.human.record(),
+                **{str(key): str(value) for key, value in (episode_record or {}).items()}})
             own_metadata = bag_metadata([info], topic_entries(info), custom_data or {})
             self._writer.add_metadata(ROSBAG2_RECORD,
                                       {'serialized_metadata': dump_yaml(own_metadata)})

@@ -7,6 +7,7 @@ layer, :mod:`hrc_bag.format`. Layout of a session (``<output_dir>/<session_id>/`
                                   atomically each time an episode file is closed
     <session_id>_ep0000.mcap      everything recorded during episode 0, ...
     <session_id>_ep0001.mcap
+    <session_id>_ep0001_attempt2.mcap   a second attempt of episode 1 (see below)
     <session_id>_end.mcap         messages after the last episode (only if there are any)
 
 Episode boundaries (the rule; the node turns messages into the events used here):
@@ -23,6 +24,17 @@ Episode boundaries (the rule; the node turns messages into the events used here)
   ``summary_timeout`` seconds after its final state (``terminated`` or ``truncated``) if
   nothing else closed it (a sim without an agent); or at shutdown. A message of an episode
   whose file closed already goes to the newest file (with a warning).
+* Every attempt of an episode is filed as itself: an episode that starts again (a state at
+  step 0 of an episode whose file is closed, or whose file has seen later steps: the agent
+  re-runs an episode after a lost joystick and a resume, or a resumed session re-runs the
+  episode it was aborted in) closes the earlier attempt's file at once and opens
+  ``<session_id>_ep<n>_attempt<k>.mcap``. The ``hrc_episode`` record of such a file (and of
+  any file whose EpisodeSummary never came) says which attempt it holds (``attempt``), the
+  files of the episode so far (``attempt_files``), its last step and whether its
+  EpisodeSummary came (``finished``); metadata.yaml's custom data
+  ``hrc.episode_attempts`` lists the files of every episode recorded more than once. The
+  attempts are counted from the files in the folder, so a later recorder of a resumed session
+  continues the count.
 * Messages that arrive while no file is open (between episodes: phase ``updating``, the next
   training step, the human joining; or before the first episode), and messages of an episode
   whose first state has not been handled yet, are kept in memory and written at the start of
@@ -55,13 +67,15 @@ import typing
 
 from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem, NS_PER_S,
                                  SESSION_STATUS_TYPE, TASK_STATE_TYPE)
+import yaml
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
-from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem, file_mode,
-                            plain_values, RawMessage, RecordingError, session_custom_data,
-                            SESSION_RECORD, session_record, SessionIndex, TopicDescription,
-                            unused_path)
+from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem,
+                            file_mode, plain_values, RawMessage, RecordingError,
+                            session_custom_data, SESSION_RECORD, session_record, SessionIndex,
+                            TopicDescription, unused_path)
+from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recovery import recover_file
 
@@ -98,6 +112,14 @@ LAG_LIMIT_NS = 5 * NS_PER_S         # 5 s
 
 # the types whose messages mark episode boundaries (the node deserializes only these)
 BOUNDARY_TYPES = (TASK_STATE_TYPE, EPISODE_SUMMARY_TYPE, SESSION_STATUS_TYPE)
+# metadata.yaml custom data: {episode: [file, ...]} of the episodes recorded more than once
+ATTEMPTS_KEY = 'hrc.episode_attempts'
+
+
+def attempt_stem(session_id: str, episode: int, attempt: int) -> str:
+    """Return the file name (without .mcap) of ``attempt`` (1, 2, ...) of ``episode``."""
+    stem = episode_file_stem(session_id, episode)
+    return stem if attempt <= 1 else f'{stem}_attempt{attempt}'
 
 
 def boundary_event(type_name: str, message):
@@ -120,6 +142,9 @@ class OpenEpisode:
     episode: typing.Optional[int]       # None for the end file
     close_at: typing.Optional[float] = None     # monotonic s
     reason: str = ''
+    attempt: int = 1                    # 1 = the first recording of the episode
+    last_step: int = -1                 # the highest TaskState step written
+    finished: bool = False              # its EpisodeSummary was handled
 
     def schedule_close(self, close_at: float, reason: str) -> None:
         """Close at ``close_at`` unless an earlier close is scheduled already."""
@@ -161,6 +186,7 @@ class EpisodeRecorder:
         self.open_files = {}                # episode -> OpenEpisode
         self.current = None                 # the newest OpenEpisode (gets episode-less messages)
         self._closed_episodes = set()
+        self._attempt_files = {}            # episode -> names of its files, attempt order
         self._late = collections.Counter()  # episode -> messages that came after its file closed
         self._stamp_episodes = collections.OrderedDict()   # state stamp (ns) -> episode
         self._last_flush = clock()
@@ -249,23 +275,50 @@ class EpisodeRecorder:
 
     # -- files ------------------------------------------------------------------------------
 
+    def _earlier_attempts(self, episode: int) -> list:
+        """Return the names of the files of ``episode`` so far (this recorder's or before)."""
+        if episode not in self._attempt_files:
+            stem = episode_file_stem(self.session_id, episode)
+            found = [self.folder / f'{stem}.mcap'] + list(self.folder.glob(f'{stem}_*.mcap'))
+            self._attempt_files[episode] = [path.name for path in sorted(
+                (path for path in found if path.exists()), key=recording_order)]
+        return self._attempt_files[episode]
+
     def _open(self, episode: typing.Optional[int]) -> OpenEpisode:
         if self.folder is None:
             self.session_id = self._resolve_session_id()
             self._open_session()
-        path = unused_path(self.folder, episode_file_stem(self.session_id, episode))
+        attempt = 1
+        stem = episode_file_stem(self.session_id, episode)
+        if episode is not None:
+            attempt = len(self._earlier_attempts(episode)) + 1
+            stem = attempt_stem(self.session_id, episode, attempt)
+        path = unused_path(self.folder, stem)
         try:
             file = EpisodeFile(path, self.params.compression, self.params.chunk_size,
                                {SESSION_RECORD: self._session_record(episode)},
                                mode=self._mode)
         except RecordingError as error:
             raise self._fail(str(error), error)
-        self.current = OpenEpisode(file, episode)
+        self.current = OpenEpisode(file, episode, attempt=attempt)
         self.open_files[episode] = self.current
+        if episode is not None:
+            self._attempt_files[episode].append(path.name)
+            if attempt > 1:
+                listed = load_yaml(self.index.custom_data.get(ATTEMPTS_KEY) or '') or {}
+                listed = listed if isinstance(listed, dict) else {}
+                listed.update({number: files for number, files in self._attempt_files.items()
+                               if len(files) > 1})
+                # one line in metadata.yaml: {6: [<id>_ep0006.mcap, <id>_ep0006_attempt2.mcap]}
+                self.index.custom_data[ATTEMPTS_KEY] = yaml.safe_dump(
+                    dict(sorted(listed.items())), default_flow_style=True, width=10**6).strip()
         self._last_flush = self._clock()
         self._info(f'episode {episode if episode is not None else "(none)"}: recording into '
-                   f'{path.name}' + (f' ({len(self._pending)} messages from before it)'
-                                     if self._pending else ''))
+                   f'{path.name}' + (f' (attempt {attempt}; earlier: '
+                                     f'{", ".join(self._attempt_files[episode][:-1])})'
+                                     if attempt > 1 else '')
+                   + (f' ({len(self._pending)} messages from before it)'
+                      if self._pending else ''))
         while self._pending:
             self._write(self.current, self._pending.popleft())
         return self.current
@@ -276,8 +329,15 @@ class EpisodeRecorder:
             self.current = None
         if episode.episode is not None:
             self._closed_episodes.add(episode.episode)
+        record = None
+        if episode.episode is not None and (episode.attempt > 1 or not episode.finished):
+            # an attempt of an episode recorded more than once, or one cut short: say which
+            # (a plain finished episode's record stays as hrc_bag.session_writer writes it)
+            record = {'attempt': episode.attempt, 'last_step': episode.last_step,
+                      'finished': 'true' if episode.finished else 'false',
+                      'attempt_files': ','.join(self._attempt_files.get(episode.episode, []))}
         try:
-            info = episode.file.close(self.index.custom_data)
+            info = episode.file.close(self.index.custom_data, record)
             self.index.add(info)
         except RecordingError as error:
             raise self._fail(str(error), error)
@@ -388,6 +448,14 @@ class EpisodeRecorder:
         if isinstance(event, StateSeen):
             self._remember_stamp(message, event.episode)
         target = self.open_files.get(number) if number is not None else self.current
+        if isinstance(event, StateSeen) and event.step == 0 and (
+                number in self._closed_episodes
+                or (target is not None and target.last_step > 0)):
+            # the episode starts again (a re-run after a resume): a new attempt, a new file
+            if target is not None:
+                self._close(target, f'episode {number} started again')
+            self._closed_episodes.discard(number)
+            target = None
         if (target is None and isinstance(event, StateSeen)
                 and number not in self._closed_episodes):
             # a new episode starts: the files before it close after the grace (their late
@@ -403,8 +471,12 @@ class EpisodeRecorder:
                            f'file closed: recorded in the newest file instead')
         if target is not None:
             self._write(target, message)
+            if isinstance(event, StateSeen) and target.episode == number:
+                target.last_step = max(target.last_step, event.step)
         else:
             self._buffer(message)
+        if isinstance(event, SummarySeen) and number in self.open_files:
+            self.open_files[number].finished = True
         if isinstance(event, StateSeen) and event.final and number in self.open_files:
             self.open_files[number].schedule_close(now + self.params.summary_timeout,
                                                    'no EpisodeSummary after the final state')

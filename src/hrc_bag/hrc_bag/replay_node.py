@@ -4,6 +4,11 @@ Publishes the recorded CDR bytes unchanged (no deserialization) with the QoS the
 publishers offered, at the recorded relative times scaled by ``rate``; optionally loops,
 selects topics, skips ``start_offset`` seconds, and publishes ``/clock`` with the recording
 time. None of the original publishers need to run. Exits 0 at the end (unless ``loop``).
+
+An input that cannot be replayed is refused before anything is published, with every reason
+and exit code 2 (:func:`replay_problems`): a path that is no bag, a file that is not MCAP or
+is corrupt (the MCAP magic followed by nothing readable), a folder without an MCAP file (its
+metadata.yaml unusable or listing nothing), a bag that holds no message.
 """
 
 import pathlib
@@ -13,7 +18,7 @@ import time
 
 from hrc_common.contract import NS_PER_S
 from hrc_common.nodes import run_node
-from hrc_common.params import declare_parameters
+from hrc_common.params import declare_parameters, ParameterError
 from hrc_common.topics import CLOCK
 from rclpy.duration import Duration
 from rclpy.node import Node
@@ -51,6 +56,37 @@ def qos_profile(recorded) -> QoSProfile:
     return profile
 
 
+def replay_problems(path) -> list:
+    """Return every reason why ``path`` cannot be replayed ([] = it can).
+
+    Beyond :func:`hrc_bag.bag_reader.bag_problems` (exists, regular files, MCAP magic): each
+    file is read record by record; one of which nothing at all can be read is corrupt (a file
+    cut by a killed recorder is not: it is read up to its last chunk). A folder must hold an
+    MCAP file, and the bag at least one message.
+    """
+    path = pathlib.Path(path)
+    problems = bag_reader.bag_problems(path)
+    if problems:
+        return problems
+    files = bag_reader.session_files(path)
+    if not files:
+        _, unusable = bag_reader.bag_metadata_yaml(path)
+        why = unusable.replace(f'{path / bag_reader.METADATA_FILE}', '').replace(
+            ': using the MCAP files of the folder', '').strip(' :')
+        return [f'{path}: holds no MCAP file to replay'
+                + (f' (and its metadata.yaml {why})' if unusable else '')]
+    messages = 0
+    for file in files:
+        schemas, channels, records, metadata, error = bag_reader.scan_records(file)
+        if error and not (schemas or channels or records or metadata):
+            problems.append(f'{file}: is corrupt: nothing after the MCAP magic can be read '
+                            f'({error})')
+        messages += len(records)
+    if not problems and messages == 0:
+        problems.append(f'{path}: holds no messages: nothing to replay')
+    return problems
+
+
 class ReplayNode(Node):
 
     def __init__(self):
@@ -58,6 +94,10 @@ class ReplayNode(Node):
         self.params = declare_parameters(self, ReplayParams)
         self._publishers_by_topic = {}
         self._skip = set()
+        problems = replay_problems(self.params.path)
+        if problems:
+            raise ParameterError('ReplayParams rejected: path: ' + '; '.join(problems),
+                                 [f'path: {problem}' for problem in problems])
         if pathlib.Path(self.params.path).is_dir():
             _, problem = bag_reader.bag_metadata_yaml(self.params.path)
             if problem:

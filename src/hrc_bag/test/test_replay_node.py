@@ -219,3 +219,47 @@ def test_a_session_with_an_unusable_metadata_yaml_is_played_from_its_files(tmp_p
     played = list(playlist(folder, ReplayParams(path=str(folder))))
     assert [message.data for message in played] == [message.data for message in expected]
     assert played
+
+
+def test_corrupt_empty_and_file_less_inputs_are_refused_with_the_reason(tmp_path):
+    """Issue 25: these passed the magic check and replayed nothing with exit 0."""
+    import io
+    import os
+
+    from mcap.writer import Writer
+
+    from hrc_bag.bag_reader import MCAP_MAGIC
+    from hrc_bag.replay_node import replay_problems
+    garbage = tmp_path / 'garbage.mcap'
+    garbage.write_bytes(MCAP_MAGIC + bytes(range(256)) * 2)
+    folder = tmp_path / 'no-files'
+    folder.mkdir()
+    (folder / 'metadata.yaml').write_text('rosbag2_bagfile_information: [unclosed\n')
+    stream = io.BytesIO()
+    writer = Writer(stream)
+    writer.start()
+    writer.finish()
+    no_messages = tmp_path / 'no-messages.mcap'
+    no_messages.write_bytes(stream.getvalue())
+    for path, reason in (
+            (garbage, f'{garbage}: is corrupt: nothing after the MCAP magic can be read'),
+            (folder, f'{folder}: holds no MCAP file to replay (and its metadata.yaml is not '
+                     f'YAML'),
+            (no_messages, f'{no_messages}: holds no messages: nothing to replay')):
+        problems = replay_problems(path)
+        assert len(problems) == 1 and problems[0].startswith(reason), (path, problems)
+    # A file cut by a killed recorder is still replayed up to its last chunk.
+    plan = strategy_plan('learn_together', 1, 0, 0)
+    record_in_process(tmp_path, 'cut', 5, 'learn_together', 3, plan, steps=4)
+    first = sorted((tmp_path / 'cut').glob('*_ep0000.mcap'))[0]
+    os.truncate(first, first.stat().st_size * 2 // 3)
+    assert replay_problems(first) == []
+
+
+def test_a_corrupt_file_is_refused_by_the_node_with_exit_2(start_node, tmp_path):
+    from hrc_bag.bag_reader import MCAP_MAGIC
+    garbage = tmp_path / 'garbage.mcap'
+    garbage.write_bytes(MCAP_MAGIC + b'\xff' * 64)
+    replay = start_node('hrc_bag', 'replay_node', parameters={'path': str(garbage)})
+    assert replay.wait(timeout=60) == 2, replay.output
+    assert 'is corrupt' in replay.output and 'Traceback' not in replay.output

@@ -57,6 +57,11 @@ from hrc_bringup.supervisor import describe_exit, Supervisor
 
 # Seconds given to DDS discovery after every practice node is seen, before the sim starts.
 DISCOVERY_SETTLE_S = 1.0
+# issue 25: the largest ROS_DOMAIN_ID: the RTPS port of domain d is 7400 + 250 d + offsets, and
+# 232 is the last id whose ports fit in 16 bits (ROS 2 docs, "The ROS_DOMAIN_ID").
+MAX_DOMAIN_ID = 232
+# issue 25: seconds the runner waits for the display's address in its log before going on.
+DISPLAY_ADDRESS_WAIT_S = 15.0
 # Seconds the runner keeps serving the operator services after a resume it answered.
 SERVICE_RETIRE_S = 1.0
 # Link watchdog: a gap between states longer than this (s) is a break or a pause, not a loss;
@@ -187,6 +192,10 @@ def parse_args(argv=None):
         reasons.append('the session id must not contain the subject id (it names files)')
     if options.tlx and not options.display:
         reasons.append('--tlx needs --display (the questionnaire is on the page)')
+    # issue 25: an id outside DDS's range is refused before anything starts
+    if options.domain_id is not None and not 0 <= options.domain_id <= MAX_DOMAIN_ID:
+        reasons.append(f'--domain-id {options.domain_id} is outside the range of DDS domain '
+                       f'ids 0..{MAX_DOMAIN_ID} (higher ids give UDP ports above 65535)')
     if options.input_wait < 0:
         reasons.append('--input-wait must be >= 0')
     if not options.link_timeout > 0:
@@ -287,6 +296,11 @@ class Progress:
                     phase if phase not in ('training', 'updating') else 'training')
 
         changed = self.status is None or milestone(status) != milestone(self.status)
+        if (changed and status.strategy != 'practice'
+                and phase_label(status.phase, '') in ('evaluation', 'done')
+                and (self.status is None or phase_label(self.status.phase, '') in (
+                    'training', 'updating', 'paused'))):
+            self._say_if_not_converged(status)    # issue 25
         self.status = status
         self._track_person_time(status)
         if changed:
@@ -296,6 +310,21 @@ class Progress:
                         f'{"involved" if status.human_involved else "not involved"}, robot '
                         f'subtasks {list(status.robot_subtasks)}, human subtasks '
                         f'{list(status.human_subtasks)}', permanent=True)
+
+    def _say_if_not_converged(self, status):
+        """Say when training ended without the robot converging (issue 25), with the numbers."""
+        training = [summary for summary in self.episodes if not summary.evaluation]
+        if training and training[-1].converged:
+            return
+        cap = getattr(self, 'max_training_episodes', None)
+        current = training[-1].training_step if training else status.training_step
+        step = f'training step {current + 1} of {max(status.training_step_count, 1)}'
+        never = ('; the person never trained with the robot' if status.human_subtasks
+                 and self.person_joined is None else '')
+        self._print(f'[session] the robot did not converge in {status.total_episodes} '
+                    f'episodes ({step}' + (f', at most {cap}' if cap else '') + ')' + never
+                    + ('; the test episodes start' if phase_label(status.phase, '')
+                       == 'evaluation' else ''), permanent=True)
 
     def _on_action(self, action):
         """Say which input drives the person's side whenever it changes (never silently)."""
@@ -338,8 +367,9 @@ class Progress:
                 alone = (f'; the robot practised alone: '
                          f'{status.total_episodes - status.human_involved_episodes} episodes '
                          f'in {now - self.alone_since[0]:.0f} s')
-            self._print(f'[session] the person joins at episode {status.total_episodes + 1}, '
-                        f'{now - self.started:.0f} s after the start{alone}', permanent=True)
+            self._print(f'[session] the person joins now, at episode '
+                        f'{status.total_episodes + 1}, {now - self.started:.0f} s after the '
+                        f'start{alone}', permanent=True)
 
     def _on_episode(self, summary):
         if any(seen.episode == summary.episode for seen in self.episodes):
@@ -621,6 +651,10 @@ def run_session(settings: SessionSettings, options) -> int:
         print(f'session: {error}', file=sys.stderr)
         return 2
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
+    if settings.subject_id:
+        # issue 25: with a subject id everything the session writes is owner-only (files
+        # 0600, folders 0700): the nodes inherit the mask (checkpoints, run and bag folders)
+        os.umask(0o077)
     if settings.record:
         parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
     live_input = person_input(settings, options)
@@ -656,6 +690,7 @@ def run_session(settings: SessionSettings, options) -> int:
     rclpy.init(context=context, domain_id=options.domain_id,
                signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     progress = Progress(context, sys.stdout.isatty())
+    progress.max_training_episodes = parameters['agent'].get('max_training_episodes')  # issue 25
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(progress.node)
     guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''),
@@ -666,16 +701,15 @@ def run_session(settings: SessionSettings, options) -> int:
     started = time.strftime('%Y-%m-%dT%H:%M:%S')
     restarts = 0
     try:
+        if options.display:
+            # issue 25: served from the start (the waiting-for-the-joystick screen included)
+            supervisor.start('display', display_command(options, params_dir, run_dir))
+            print_display_address(supervisor.processes['display'], executor, stop_reason)
         if live_input and not wait_for_input(
                 guard or InputGuard(progress.node, live_input,
                                     parameters['human'].get('device', '')),
                 executor, options.input_wait, stop_reason):
             return 2
-        if options.display:
-            supervisor.start('display', display_command(options, params_dir, run_dir))
-            print(f'[session] display: see {run_dir / logs / "display.log"} for its address '
-                  f'(http://127.0.0.1:<port>/ for the person, /console for the experimenter)',
-                  flush=True)
         if options.practice:
             practice_started = time.strftime('%Y-%m-%dT%H:%M:%S')
             practice_code = run_practice(settings, options, params_dir, env, progress,
@@ -777,7 +811,34 @@ def run_session(settings: SessionSettings, options) -> int:
     if settings.record and options.report and (code == 0 or progress.episodes):
         report(settings, run_dir)
     index_session(settings, options, 'condition', started, code)
+    if settings.subject_id:
+        owner_only(settings, parameters)    # issue 25
     return code
+
+
+def owner_only(settings: SessionSettings, parameters: dict) -> None:
+    """Make every output of a session with a subject id owner-only (issue 25).
+
+    The umask set at the start makes new files 0600 and folders 0700; a few writers set their
+    mode themselves (hrc_common.contract.atomic_write: 0644 by default, e.g. the checkpoints),
+    so the session's folders (run, bags, checkpoints; the practice's too) are gone over once
+    more at the end: files 0600, folders 0700.
+    """
+    roots = []
+    for session_id in (settings.session_id, settings.session_id + '-practice'):
+        roots += [pathlib.Path(settings.runs_dir) / session_id,
+                  pathlib.Path(settings.bags_dir) / session_id,
+                  pathlib.Path(parameters['agent']['checkpoint_dir']) / session_id]
+    for root in roots:
+        if not root.is_dir() or root.is_symlink():
+            continue
+        for path in [root, *root.rglob('*')]:
+            if path.is_symlink():
+                continue
+            try:
+                path.chmod(0o700 if path.is_dir() else 0o600)
+            except OSError as error:
+                print(f'[session] could not make {path} owner-only: {error}', file=sys.stderr)
 
 
 def index_session(settings: SessionSettings, options, kind: str, started: str,
@@ -959,6 +1020,27 @@ def wait_for_tlx(path: pathlib.Path, session_id: str, executor, timeout: float,
     stop_reason.clear()  # Ctrl-C here only skips the questionnaire
     print('[session] no NASA-TLX answer: the session ends without it', flush=True)
     return False
+
+
+def print_display_address(display, executor, stop_reason: list) -> None:
+    """Print the addresses of the person's page and the console once the display serves.
+
+    (issue 25) Read from the display's log line; its port may be chosen by the system (0).
+    """
+    import re
+
+    deadline = time.monotonic() + DISPLAY_ADDRESS_WAIT_S
+    while time.monotonic() < deadline and not stop_reason:
+        found = re.search(r'serving the display on (http://\S+?/) ', display.tail(lines=50))
+        if found:
+            print(f"[session] the person's page: {found.group(1)}   the experimenter's "
+                  f'console: {found.group(1)}console', flush=True)
+            return
+        if display.returncode is not None:
+            break
+        executor.spin_once(timeout_sec=0.1)
+    print(f'[session] the display did not say its address within {DISPLAY_ADDRESS_WAIT_S:.0f} '
+          f's: see {display.log_path}', file=sys.stderr, flush=True)
 
 
 def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) -> list:

@@ -20,6 +20,7 @@ Non-finite numbers never reach JSON: a state with one is replaced by a notice
 
 from dataclasses import dataclass, replace
 import math
+import re
 import threading
 import typing
 
@@ -43,6 +44,10 @@ CONTROL_WORDS = {'translation': 'You move the slider up and down (stick up = up)
 STALE_COMMAND_S = 1.0
 INVALID_STATE_NOTICE = ('The simulation sent an invalid state (not a finite number): the '
                         'picture is frozen. Operator: see the sim log.')
+# What the person reads when their joystick is lost (the technical reason is on the console).
+INPUT_LOST_BANNER = 'The joystick is disconnected: paused. Please wait for the operator.'
+INPUT_LOST_NOTICE = ('The joystick is disconnected. Please let go of it and wait: the operator '
+                     'will reconnect it and resume.')
 
 
 @dataclass(frozen=True)
@@ -123,19 +128,44 @@ class AgentPlan:
 
 @dataclass(frozen=True)
 class AloneRun:
-    """The robot practising alone before the person joins (lockstep, no wall time waited)."""
+    """The robot practising alone before the person joins (lockstep, no wall time waited).
+
+    Its episodes are the session's training episodes without the person (the agent's own
+    counters, so a pause or a restarted agent does not start the count again); its time leaves
+    out the pauses.
+    """
 
     started: float              # monotonic s of the first status without the human
-    first_episode: int          # training episodes done when it started
+    first_episode: int          # training episodes done when it started (kept for the rate)
     ended: typing.Optional[float] = None   # monotonic s the human joined
     episodes: int = 0           # training episodes practised alone
+    paused_since: typing.Optional[float] = None    # monotonic s a pause began (None: running)
+    paused_total: float = 0.0   # s paused so far
+
+    def seconds(self, now: float) -> float:
+        """Return the seconds practised alone (pauses left out)."""
+        end = self.ended if self.ended is not None else now
+        paused = self.paused_total + (end - self.paused_since if self.paused_since is not None
+                                      else 0.0)
+        return max(0.0, end - self.started - paused)
 
     def words(self, now: float) -> str:
         """Return "the robot practised alone: N episodes in T s"."""
-        seconds = (self.ended if self.ended is not None else now) - self.started
         verb = 'practised' if self.ended is not None else 'is practising'
         return (f'The robot {verb} alone: {self.episodes} episode'
-                f'{"s" if self.episodes != 1 else ""} in {seconds:.0f} s.')
+                f'{"s" if self.episodes != 1 else ""} in {self.seconds(now):.0f} s.')
+
+    def wait_estimate(self, now: float, cap: typing.Optional[int],
+                      done: int) -> typing.Optional[float]:
+        """Return at most how many more seconds the robot practises alone (None: unknown).
+
+        An upper bound: the rate so far times the training episodes left under the cap
+        (``max_training_episodes``); it may converge, and the person join, sooner.
+        """
+        practised = done - self.first_episode
+        if cap is None or practised <= 0 or self.ended is not None or done >= cap:
+            return None
+        return (cap - done) * self.seconds(now) / practised
 
 
 @dataclass(frozen=True)
@@ -192,6 +222,10 @@ class Snapshot:
     evaluation_done: int = 0                        # evaluation episodes finished
     session_started: typing.Optional[float] = None  # monotonic s of the first status
     input_lost: str = ''        # why the person's input is lost ('' = it is not)
+    last_training_converged: typing.Optional[bool] = None   # of the newest training result
+    # the running episode was stopped (pause, abort, lost input): it does not run again until
+    # a new first state (step 0) comes, so the countdown of the resume shows meanwhile
+    interrupted: bool = False
 
 
 @dataclass(frozen=True)
@@ -222,14 +256,28 @@ def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str
     evaluation episode, whose index is the number of training episodes. The result box uses
     the same numbers (:func:`result_number`).
     """
+    if session.strategy == 'practice':
+        # the runner's practice: "practice: episode k of n, ..." in its message
+        planned = re.search(r'episode \d+ of (\d+)', session.message)
+        count = int(planned.group(1)) if planned else None
+        number = session.total_episodes + 1 if count is None else min(
+            session.total_episodes + 1, count)
+        if count is not None and session.total_episodes >= count:
+            return f'Practice: {count} episodes done'
+        return f'Practice episode {number}' + (f' of {count}' if count else '')
     if session.phase == 'done':
         return f'{session.total_episodes} training episodes done'
     if is_evaluating(session, plan):
         index = session.episode - session.total_episodes + 1
+        if plan is not None:    # never "3 of 2": a counter stays within its maximum
+            index = min(index, plan.evaluation_episodes)
         total = f' of {plan.evaluation_episodes}' if plan is not None else ''
         return f'Test episode {max(index, 1)}{total}'
+    number = session.total_episodes + 1
+    if plan is not None:
+        number = min(number, plan.max_training_episodes)
     total = f' of at most {plan.max_training_episodes}' if plan is not None else ''
-    return f'Episode {session.total_episodes + 1}{total}'
+    return f'Episode {number}{total}'
 
 
 def result_number(result: ResultView, session: typing.Optional[SessionView]) -> str:
@@ -281,11 +329,7 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     session, state, now = snapshot.session, snapshot.state, snapshot.now
     notice = INVALID_STATE_NOTICE if snapshot.invalid_state else ''
     if snapshot.input_lost:
-        reason = snapshot.input_lost
-        if not reason.lower().startswith('joystick disconnected'):
-            reason = f'joystick disconnected: {reason}'
-        notice = (f'{reason[0].upper()}{reason[1:]}. The session is paused: please wait for '
-                  f'the operator.')
+        notice = INPUT_LOST_NOTICE      # the person needs no device path or FIFO detail
     if session is None:
         return Overlay('Please wait: the session is starting', 'info',
                        ('Waiting for the robot to announce the session.',), notice=notice)
@@ -294,7 +338,8 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     if session.training_step_count > 1:
         lines.append(f'Training step {session.training_step + 1} of '
                      f'{session.training_step_count}')
-    in_episode = state is not None and not state.final and state.episode >= session.episode
+    in_episode = (state is not None and not state.final and state.episode >= session.episode
+                  and not snapshot.interrupted)
     if session.human_involved:
         lines.append(CONTROL_WORDS.get(session.human_dof, ''))
         tasks = [SUBTASK_WORDS.get(subtask, subtask) for subtask in session.human_subtasks]
@@ -303,6 +348,10 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         lines.append('The robot works alone in this step.')
     if snapshot.alone is not None and (snapshot.alone.episodes or snapshot.alone.ended is None):
         lines.append(snapshot.alone.words(now))
+        wait = alone_wait(snapshot)
+        if wait is not None:
+            lines.append(f'You join in at most about {wait_words(wait)} (the robot may be '
+                         f'ready sooner).')
     if in_episode and session.human_involved:   # lonely episodes run faster than the clock
         steps_left = max(0, snapshot.physics.steps_per_episode - state.step)
         lines.append(f'Time left: {steps_left * snapshot.physics.control_period:.0f} s')
@@ -321,23 +370,29 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     countdown = countdown_of(snapshot, in_episode)
     phase = session.phase
     first_with_person = session.human_involved and episodes_with_person(snapshot) == 0
-    if phase == 'aborted':
+    if snapshot.input_lost:     # first: the runner stops the agent (phase aborted) for it
+        banner, tone = INPUT_LOST_BANNER, 'stop'
+    elif phase == 'aborted':
         banner, tone = 'Stopped by the operator. Please let go of the joystick.', 'stop'
-    elif snapshot.input_lost:
-        banner, tone = 'Joystick disconnected: paused. Please wait for the operator.', 'stop'
     elif phase == 'done':
         banner, tone = 'The session is finished. Thank you!', 'info'
+    elif phase == 'paused' and 'joystick disconnected' in session.message.lower():
+        # the runner's pause for a lost input: the joystick is back, the operator resumes
+        banner, tone = 'The joystick is connected again: please wait for the operator', 'wait'
     elif phase == 'paused':
-        banner, tone = 'Paused: please wait for the operator', 'wait'
+        banner, tone = 'Paused by the operator: please wait', 'wait'
     elif not in_episode:
         if not session.human_involved:
             banner = 'The robot is learning alone, please wait'
+            wait = alone_wait(snapshot)
+            if wait is not None:
+                banner += f' (at most about {wait_words(wait)})'
         elif phase == 'updating':
             banner = 'The robot is learning from the last episode: please wait'
         elif first_with_person and countdown:
             banner = f'Get ready: your first episode starts in {countdown} s'
         elif countdown:
-            banner = f'Next episode in {countdown} s'
+            banner = f'Get ready: the next episode starts in {countdown} s'
         else:
             banner = 'The next episode is starting'
         tone = 'wait'
@@ -349,6 +404,48 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         tone = 'act'
     return Overlay(banner, tone, tuple(line for line in lines if line), result, countdown,
                    label, notice)
+
+
+def alone_wait(snapshot: Snapshot) -> typing.Optional[float]:
+    """Return at most how many more seconds the robot practises alone (None: unknown)."""
+    alone, session, plan = snapshot.alone, snapshot.session, snapshot.plan
+    if alone is None or alone.ended is not None or session is None or plan is None:
+        return None
+    return alone.wait_estimate(snapshot.now, plan.max_training_episodes,
+                               session.total_episodes)
+
+
+def wait_words(seconds: float) -> str:
+    """Return a wait for a person: "40 s", "3 min" (rounded up)."""
+    if seconds < 90:
+        return f'{max(5, 5 * math.ceil(seconds / 5)):.0f} s'
+    return f'{math.ceil(seconds / 60)} min'
+
+
+def milestone(snapshot: Snapshot) -> str:
+    """Return what the experimenter must know about the team now (the console's line).
+
+    The robot alone (with the wait), "the person joins now" (the first 60 s after), or "the
+    robot did not converge in N episodes" once training ended without it.
+    """
+    session, alone, now = snapshot.session, snapshot.alone, snapshot.now
+    if session is None or session.strategy == 'practice':
+        return ''
+    cap = snapshot.plan.max_training_episodes if snapshot.plan is not None else None
+    if session.phase in ('evaluation', 'done') and snapshot.last_training_converged is False:
+        return (f'the robot did not converge in {session.total_episodes} episodes'
+                + (f' (at most {cap})' if cap else '')
+                + ('; the person never trained with it' if session.human_involved_episodes == 0
+                   and session.human_subtasks else ''))
+    if alone is not None and alone.ended is None:
+        wait = alone_wait(snapshot)
+        return (alone.words(now).rstrip('.') + (f'; the person joins in at most about '
+                                                f'{wait_words(wait)}' if wait is not None
+                                                else ''))
+    if alone is not None and alone.ended is not None and now - alone.ended < 60.0:
+        return (f'the person joins now, at episode {alone.first_episode + alone.episodes + 1} '
+                f'({alone.words(now).rstrip(".").lower()})')
+    return ''
 
 
 class DisplayModel:
@@ -382,6 +479,8 @@ class DisplayModel:
                        'errors': self._snapshot.errors.add(state)}
             if state.step == 0 or previous is None or previous.episode != state.episode:
                 changes['episode_started'] = now
+            if state.step == 0:
+                changes['interrupted'] = False
             if state.final and not (previous is not None and previous.final
                                     and previous.episode == state.episode):
                 changes['break_started'] = now
@@ -401,15 +500,25 @@ class DisplayModel:
                 changes['session_started'] = now
             if previous is not None and previous.phase == 'paused' and session.phase != 'paused':
                 changes['break_started'] = now
+            if session.phase in ('paused', 'aborted'):
+                changes['interrupted'] = True
             alone = current.alone
+            # the robot's own episodes: every training episode so far without the person (the
+            # agent's counters: a pause or a restarted agent does not start the count again)
+            robot_own = session.total_episodes - session.human_involved_episodes
             if not session.human_involved and session.phase in ('training', 'updating'):
                 if alone is None or alone.ended is not None:
                     alone = AloneRun(started=now, first_episode=session.total_episodes)
-                changes['alone'] = replace(
-                    alone, episodes=session.total_episodes - alone.first_episode)
+                if alone.paused_since is not None:
+                    alone = replace(alone, paused_total=alone.paused_total + now
+                                    - alone.paused_since, paused_since=None)
+                changes['alone'] = replace(alone, episodes=robot_own)
             elif alone is not None and alone.ended is None:
-                changes['alone'] = replace(
-                    alone, ended=now, episodes=session.total_episodes - alone.first_episode)
+                if session.phase in ('paused', 'aborted') and not session.human_involved:
+                    if alone.paused_since is None:     # a pause: the run goes on after it
+                        changes['alone'] = replace(alone, paused_since=now)
+                else:
+                    changes['alone'] = replace(alone, ended=now, episodes=robot_own)
             self._update(**changes)
 
     def on_result(self, result: ResultView, now: float) -> None:
@@ -419,6 +528,8 @@ class DisplayModel:
             if current is not None and current.episode == result.episode:
                 return
             changes = {'result': result, 'previous_result': current, 'result_time': now}
+            if not result.evaluation:
+                changes['last_training_converged'] = result.converged
             if result.evaluation:
                 changes['evaluation_done'] = self._snapshot.evaluation_done + 1
                 if result.human_involved:
@@ -435,7 +546,8 @@ class DisplayModel:
         """Set (or clear, with '') the reason the person's input is lost."""
         with self._lock:
             if reason != self._snapshot.input_lost:
-                self._update(input_lost=reason)
+                self._update(input_lost=reason,
+                             interrupted=self._snapshot.interrupted or bool(reason))
 
     def set_plan(self, plan: typing.Optional[AgentPlan]) -> None:
         """Set what the agent's parameters say (episodes, break)."""
@@ -583,6 +695,8 @@ def console_document(snapshot: Snapshot) -> dict:
                     'robot_missing': errors.robot_missing},
         'totals': totals,
         'alone': (snapshot.alone.words(now) if snapshot.alone is not None else ''),
+        'practice': session is not None and session.strategy == 'practice',
+        'milestone': milestone(snapshot),
         'invalid_state': snapshot.invalid_state,
     }
 

@@ -15,6 +15,13 @@ on ``http://127.0.0.1:<port>/`` (localhost only; from another machine use ``ssh 
 * ``POST /control/<pause|resume|abort>``: the agent's operator services (as ``operator``);
 * ``POST /tlx``: the raw NASA-TLX of the condition just finished, appended to ``tlx_file``.
 
+Only the lab's own pages may act (``RequestGuard``): every request must name a loopback host or
+the served address in ``Host`` (a DNS-rebinding site cannot even read ``/status.json``); every
+``POST`` must come from the server's own origin (``Origin``) and carry the session's secret in
+the ``X-HRC-Token`` header, a random token written into the pages when they are served (never
+in a URL, so never in a log). Anything else is refused with 403 and logged. A malformed
+request (a bad ``Content-Length``) is answered 400; a body over ``MAX_BODY`` bytes 413.
+
 The geometry and timing come from the sim's own parameters and the episode counts and break
 from the agent's, asked through their parameter services (``sim_node``, ``agent_node``), so
 nothing is configured twice. A lost input of the person (``input_lost_topic``, set by the
@@ -28,6 +35,8 @@ import json
 import os
 import pathlib
 import queue
+import secrets
+import sys
 import threading
 import time
 
@@ -50,7 +59,7 @@ from hrc_live.display_core import (AgentPlan, console_document, DisplayModel, Hu
                                    status_document)
 from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
-from hrc_live.tlx import check_tlx, raw_tlx
+from hrc_live.tlx import check_tlx, raw_tlx, TLX_STEP
 
 SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the person's page "
            '(scene drawn in the browser from a pushed state stream) and /console for the '
@@ -67,6 +76,53 @@ SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limi
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
 # Events kept per client before the oldest are dropped (a stalled browser must not grow memory).
 CLIENT_QUEUE = 200
+# Largest request body accepted (bytes): a TLX answer is ~150.
+MAX_BODY = 10_000
+# Host names every request may name besides the served address (loopback only).
+LOOPBACK_NAMES = ('127.0.0.1', 'localhost', '[::1]')
+# The header that carries the session's secret, and the placeholder the pages hold for it.
+TOKEN_HEADER = 'X-HRC-Token'
+TOKEN_PLACEHOLDER = b'__HRC_SESSION_TOKEN__'
+
+
+def host_name(host_header: str) -> str:
+    """Return the host name of a ``Host`` header without the port, lower case."""
+    host = host_header.strip().lower()
+    if host.startswith('['):                    # [::1]:8765
+        return host[:host.find(']') + 1] if ']' in host else host
+    return host.rsplit(':', 1)[0] if ':' in host else host
+
+
+class RequestGuard:
+    """Decides whether a request comes from the lab's own page (pure: headers in, reason out).
+
+    ``address`` and ``port`` are where the pages are served; ``token`` the session's secret.
+    """
+
+    def __init__(self, address: str, port: int, token: str):
+        self.port = port
+        self.token = token
+        self.hosts = {name.lower() for name in LOOPBACK_NAMES + (address,)}
+        self.origins = {f'http://{host}:{port}' for host in self.hosts}
+
+    def refusal(self, method: str, headers) -> str:
+        """Return why the request must be refused ('' = it may go on)."""
+        host = headers.get('Host')
+        if not host:
+            return 'no Host header'
+        if host_name(host) not in self.hosts:
+            return f'foreign Host {host!r}'
+        if method == 'GET':
+            return ''
+        origin = headers.get('Origin')
+        if not origin:
+            return 'no Origin header on a state-changing request'
+        if origin.lower() not in self.origins:
+            return f'foreign Origin {origin!r}'
+        offered = headers.get(TOKEN_HEADER) or ''
+        if not secrets.compare_digest(offered.encode(), self.token.encode()):
+            return f'missing or wrong {TOKEN_HEADER} (the session secret of the served page)'
+        return ''
 
 
 def state_view(message: TaskState) -> StateView:
@@ -176,12 +232,27 @@ class PageServer:
             def do_POST(self):  # noqa: N802
                 server.post(self)
 
+            def do_PUT(self):  # noqa: N802 (any other method: 405, after the guard)
+                server.other(self)
+
+            do_DELETE = do_PATCH = do_OPTIONS = do_PUT  # noqa: N815
+
             def log_message(self, format, *args):  # noqa: A002
                 pass  # one line per request would flood the log
 
-        self.httpd = http.server.ThreadingHTTPServer(('127.0.0.1', port), Handler)
+        class Server(http.server.ThreadingHTTPServer):
+            def handle_error(self, request, client_address):
+                # One line, never a traceback in the display's log (the request is dropped).
+                error = sys.exc_info()[1]
+                server.node.get_logger().warning(
+                    f'request from {client_address[0]} dropped: {type(error).__name__}: '
+                    f'{error}', throttle_duration_sec=5.0)
+
+        self.httpd = Server(('127.0.0.1', port), Handler)
         self.httpd.daemon_threads = True
-        self.port = self.httpd.server_address[1]
+        self.address, self.port = self.httpd.server_address[:2]
+        self.token = secrets.token_urlsafe(24)
+        self.guard = RequestGuard(self.address, self.port, self.token)
         self.thread = threading.Thread(target=self.httpd.serve_forever, name='display-http',
                                        daemon=True)
         self.thread.start()
@@ -196,13 +267,36 @@ class PageServer:
         request.end_headers()
         request.wfile.write(body)
 
+    def refused(self, request, method: str) -> bool:
+        """Answer 403 and log it when the request is not from the lab's page; say if so."""
+        reason = self.guard.refusal(method, request.headers)
+        if not reason:
+            return False
+        path = request.path.split('?', 1)[0]
+        self.node.get_logger().warning(
+            f'refused {method} {path[:80]} from {request.client_address[0]}: {reason}')
+        try:
+            self.answer(request, 403, f'refused: {reason}'.encode(), 'text/plain; charset=utf-8')
+        except OSError:
+            pass
+        return True
+
+    def other(self, request) -> None:
+        """Answer a method the server does not offer (after the guard)."""
+        if not self.refused(request, request.command):
+            self.answer(request, 405, b'GET or POST only', 'text/plain; charset=utf-8')
+
     def get(self, request) -> None:
         """Answer one GET request."""
         path = request.path.split('?', 1)[0]
+        if self.refused(request, 'GET'):
+            return
         try:
             if path in FILES:
                 name, content_type = FILES[path]
-                self.answer(request, 200, (WEB / name).read_bytes(), content_type)
+                body = (WEB / name).read_bytes().replace(TOKEN_PLACEHOLDER,
+                                                         self.token.encode())
+                self.answer(request, 200, body, content_type)
             elif path == '/events':
                 self.stream(request)
             elif path == '/status.json':
@@ -246,18 +340,41 @@ class PageServer:
     def post(self, request) -> None:
         """Answer one POST request: a control button or the TLX form."""
         path = request.path.split('?', 1)[0]
-        length = min(int(request.headers.get('Content-Length') or 0), 10_000)
-        body = request.rfile.read(length) if length else b''
+        text_plain = 'text/plain; charset=utf-8'
         try:
+            length = int(request.headers.get('Content-Length') or 0)
+        except ValueError:
+            length = -1
+        try:
+            if length < 0:
+                request.close_connection = True
+                self.answer(request, 400, b'bad Content-Length', text_plain)
+                return
+            if length > MAX_BODY:
+                request.close_connection = True
+                self.answer(request, 413, f'body over {MAX_BODY} bytes'.encode(), text_plain)
+                return
+            if self.refused(request, 'POST'):
+                request.close_connection = True
+                return
+            body = request.rfile.read(length) if length else b''
             if path.startswith('/control/') and path[len('/control/'):] in OPERATOR_SERVICES:
                 code, text = self.node.control(path[len('/control/'):])
             elif path == '/tlx':
                 code, text = self.node.store_tlx(body)
             else:
                 code, text = 404, 'not here: POST /control/<pause|resume|abort> or /tlx'
-            self.answer(request, code, text.encode(), 'text/plain; charset=utf-8')
+            self.answer(request, code, text.encode(), text_plain)
         except (BrokenPipeError, ConnectionResetError):
             pass
+        except Exception as error:  # a bug must not kill the server thread; say it plainly
+            self.node.get_logger().error(f'POST {path} failed: {type(error).__name__}: {error}',
+                                         throttle_duration_sec=5.0)
+            try:
+                self.answer(request, 503, f'the display could not answer: {error}'.encode(),
+                            text_plain)
+            except OSError:
+                pass
 
     def close(self) -> None:
         """Stop serving and release the port."""
@@ -349,6 +466,8 @@ class DisplayNode(Node):
                 self.agent_query.restart()
                 self.sim_query.restart()
             self.session_id = message.session_id
+            if self.params.tlx_file:     # answered before this display started: not asked again
+                self.tlx_stored |= {item.get('session_id') for item in self.tlx_answers()}
             self.get_logger().info(f'showing session {message.session_id!r} (case '
                                    f'{message.case_id}, {message.strategy})')
         self.model.on_session(session_view(message), time.monotonic())
@@ -409,34 +528,59 @@ class DisplayNode(Node):
             return 409, f'{command} refused: {response.message}'
         return 200, f'{command}: {response.message}'
 
+    def tlx_answers(self) -> list:
+        """Return the answers stored in ``tlx_file`` ([] when none or unreadable)."""
+        path = pathlib.Path(self.params.tlx_file)
+        try:
+            document = yaml.safe_load(path.read_text()) if path.is_file() else []
+        except (OSError, yaml.YAMLError, UnicodeDecodeError):
+            return []
+        return [item for item in document or [] if isinstance(item, dict)]
+
     def store_tlx(self, body: bytes):
-        """Check and append one raw NASA-TLX answer; return (HTTP code, answer)."""
+        """Check and append one raw NASA-TLX answer; return (HTTP code, answer).
+
+        Accepted only for the condition the page asks about now (its session is done and
+        the page showed the form), on the form's grid, every scale answered; a second answer
+        for the same condition only when it says ``"correction": true`` (stored as one).
+        """
         if not self.params.tlx_file:
             return 404, 'no questionnaire in this session (tlx_file is empty)'
         try:
             answer = json.loads(body or b'{}')
-        except ValueError:
+        except (ValueError, UnicodeDecodeError):
             return 400, 'not JSON'
-        scores, reasons = check_tlx(answer)
+        scores, reasons = check_tlx(answer, step=TLX_STEP)
         if reasons:
             return 400, 'rejected: ' + '; '.join(reasons)
-        snapshot = self.model.snapshot(time.monotonic())
-        session = snapshot.session
-        record = {'session_id': session.session_id if session else '',
-                  'case': session.case_id if session else 0,
+        session = self.model.snapshot(time.monotonic()).session
+        if session is None or session.phase != 'done':
+            phase = session.phase if session else 'no session yet'
+            return 409, (f'rejected: the questionnaire is asked at the end of the condition '
+                         f'(now: {phase})')
+        if answer.get('condition') != session.session_id:
+            return 409, (f'rejected: the page asked about {session.session_id!r}, not '
+                         f'{answer.get("condition")!r}')
+        existing = self.tlx_answers()
+        earlier = [item for item in existing if item.get('session_id') == session.session_id]
+        correction = answer.get('correction') is True
+        if earlier and not correction:
+            return 409, (f'rejected: this condition was answered at '
+                         f'{earlier[-1].get("answered")}; a second answer must be sent as a '
+                         f'correction ("correction": true)')
+        record = {'session_id': session.session_id, 'case': session.case_id,
                   'answered': datetime.datetime.now().isoformat(timespec='seconds'),
-                  'scales': scores,
-                  'raw_tlx': round(raw_tlx(scores), 2)}
+                  'scales': scores, 'raw_tlx': round(raw_tlx(scores), 2)}
+        if earlier:
+            record.update(correction=True, corrects=earlier[-1].get('answered'))
         path = pathlib.Path(self.params.tlx_file)
-        existing = []
-        if path.is_file():
-            existing = yaml.safe_load(path.read_text()) or []
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, yaml.safe_dump(existing + [record], sort_keys=False),
                      mode=PERSONAL_FILE_MODE)
         os.chmod(path, PERSONAL_FILE_MODE)
         self.tlx_stored.add(record['session_id'])
-        self.get_logger().info(f'NASA-TLX stored in {path}: raw TLX {record["raw_tlx"]}')
+        self.get_logger().info(f'NASA-TLX {"correction " if earlier else ""}stored in {path}: '
+                               f'raw TLX {record["raw_tlx"]}')
         self.push_words()
         return 200, f'Thank you. Stored (raw TLX {record["raw_tlx"]}).'
 

@@ -17,7 +17,8 @@ import shlex
 import sys
 
 from hrc_live.study import (assign_orders, by_subject, consent_problem, load_index,
-                            load_registry, PAPER_CASES, register, save_registry, StudyError)
+                            load_registry, PAPER_CASES, register, save_registry,
+                            STUDY_AGENT_SETTINGS, StudyError)
 
 
 def parse_args(argv=None):
@@ -39,12 +40,21 @@ def parse_args(argv=None):
     plan.add_argument('--practice', type=int, default=3,
                       help='practice episodes before each condition (default 3; 0 = none)')
     plan.add_argument('--human', default='device', choices=('device', 'joy'))
+    plan.add_argument('--agent-defaults', action='store_true',
+                      help="leave the agent's own defaults (params/agent.yaml: paper preset, "
+                      'at most 60 episodes) instead of the study settings (tuned preset, at '
+                      'most 300 episodes, judged on judging episodes): the earlier commands')
     commands.add_parser('index', help='list the sessions per subject')
     return parser.parse_args(argv)
 
 
-def plan_commands(subject, study_dir: str, practice: int, human: str) -> list:
-    """Return the session command lines of ``subject``'s conditions, in order."""
+def plan_commands(subject, study_dir: str, practice: int, human: str,
+                  agent_defaults: bool = False) -> list:
+    """Return the session command lines of ``subject``'s conditions, in order.
+
+    Each carries the study's agent settings (``STUDY_AGENT_SETTINGS``) unless
+    ``agent_defaults`` (the earlier commands, the agent's own defaults).
+    """
     lines = []
     for position, case in enumerate(subject.order, start=1):
         command = ['ros2', 'run', 'hrc_bringup', 'session', '--case', str(case), '--mode',
@@ -52,6 +62,9 @@ def plan_commands(subject, study_dir: str, practice: int, human: str) -> list:
                    subject.id, '--study-dir', study_dir]
         if practice:
             command += ['--practice', str(practice)]
+        if not agent_defaults:
+            for name, value in STUDY_AGENT_SETTINGS:
+                command += ['--set', f'{name}={value}']
         lines.append(f'# condition {position} of {len(subject.order)}: case {case}')
         lines.append(shlex.join(command))
     return lines
@@ -83,7 +96,7 @@ def main(argv=None) -> int:
             if not subject.order:
                 raise StudyError(f'{subject.id} has no case order yet: run "study assign"')
             print('\n'.join(plan_commands(subject, options.study_dir, options.practice,
-                                          options.human)))
+                                          options.human, options.agent_defaults)))
         else:
             for subject_id, entries in by_subject(load_index(options.study_dir)).items():
                 print(f'{subject_id}:')

@@ -8,8 +8,9 @@ import json
 import math
 
 from hrc_live.display_core import (AgentPlan, configuration_points, console_document,
-                                   DisplayModel, HumanView, overlay, ResultView, scene_bounds,
-                                   SessionView, state_document, StateView, status_document)
+                                   DisplayModel, HumanView, INPUT_LOST_BANNER, INPUT_LOST_NOTICE,
+                                   overlay, ResultView, scene_bounds, SessionView,
+                                   state_document, StateView, status_document)
 from hrc_sim_node.physics import PhysicsParams
 import pytest
 
@@ -65,7 +66,7 @@ def test_after_an_episode_the_result_and_a_countdown_to_the_next_one():
     model.on_session(session(episode=7, total_episodes=7, human_involved_episodes=3), now=10.2)
     words = overlay(model.snapshot(now=11.5))
     assert words.countdown == 3  # the break of 4 s began at 10.0
-    assert words.banner == 'Next episode in 3 s'
+    assert words.banner == 'Get ready: the next episode starts in 3 s'
     assert words.lines[0] == 'Episode 8 of at most 30'
     assert words.result[0] == 'Episode 7 done'
     assert words.result[1] == 'ball off centre: 3.0 cm on average'
@@ -87,7 +88,7 @@ def test_updating_paused_aborted_done_and_evaluation_words():
     model.on_session(session(phase='paused', total_episodes=7), now=11.0)
     words = overlay(model.snapshot(now=30.0))
     assert (words.banner, words.tone, words.countdown) == (
-        'Paused: please wait for the operator', 'wait', None)
+        'Paused by the operator: please wait', 'wait', None)
     # Resumed: the agent waits a whole break again before the next episode.
     model.on_session(session(phase='training', total_episodes=7), now=40.0)
     assert overlay(model.snapshot(now=40.5)).countdown == 4
@@ -196,4 +197,116 @@ def test_console_reports_input_health_errors_and_totals():
     snapshot = model.snapshot(now=3.5)
     assert not console_document(snapshot)['input']['healthy']
     words = overlay(snapshot)
-    assert words.tone == 'stop' and words.banner.startswith('Joystick disconnected')
+    assert words.tone == 'stop' and words.banner.startswith('The joystick is disconnected')
+
+
+# --------------------------------------------------------------------------- issue 25
+def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_each():
+    model = model_in_episode()                        # episode 6 at step 12, the person acts
+    # The runner stops the agent for the lost joystick: the agent says "aborted" first.
+    model.set_input_lost('joystick disconnected (zero held, session should pause): no writer '
+                         'has the FIFO open')
+    model.on_session(session(phase='aborted'), now=4.0)
+    words = overlay(model.snapshot(now=4.1))
+    assert (words.banner, words.tone, words.notice) == (INPUT_LOST_BANNER, 'stop',
+                                                        INPUT_LOST_NOTICE)
+    assert 'FIFO' not in words.notice and 'operator' not in words.banner.split(':')[0]
+    assert console_document(model.snapshot(now=4.1))['input']['detail'].endswith(
+        'no writer has the FIFO open')              # the technical reason: the console only
+    runner_says = ('joystick disconnected (zero held, session should pause): no writer has '
+                   'the FIFO open: paused; resume after it is back')   # the runner's status
+    model.on_session(session(phase='paused', message=runner_says), now=4.5)
+    assert overlay(model.snapshot(now=5.0)).banner == INPUT_LOST_BANNER
+    # Plugged in again: the operator resumes (not "paused by the operator": it was not).
+    model.set_input_lost('')
+    assert overlay(model.snapshot(now=6.0)).banner == (
+        'The joystick is connected again: please wait for the operator')
+    # Resumed: the agent starts again after a break, counted down, although the newest state
+    # is still the interrupted episode's step 12.
+    model.on_session(session(phase='training'), now=20.0)
+    words = overlay(model.snapshot(now=21.2))
+    assert (words.banner, words.countdown, words.notice) == (
+        'Get ready: the next episode starts in 3 s', 3, '')
+    assert not any(line.startswith('Time left') for line in words.lines)
+    model.on_state(StateView(6, 0, 0.0, 0.0, 0.0, False), now=24.0)   # the re-run starts
+    assert overlay(model.snapshot(now=24.1)).banner.startswith('Your turn')
+
+
+def test_every_resume_counts_down_the_next_episode():
+    model = model_in_episode()
+    model.on_state(StateView(6, 200, 0.0, 0.0, 0.0, True), now=10.0)
+    for pause, resume in ((11.0, 30.0), (40.0, 50.0)):
+        model.on_session(session(phase='paused', total_episodes=7, episode=7), now=pause)
+        model.on_session(session(phase='training', total_episodes=7, episode=7), now=resume)
+        words = overlay(model.snapshot(now=resume + 0.5))
+        assert words.banner == 'Get ready: the next episode starts in 4 s', resume
+
+
+def test_episode_counters_never_exceed_their_maximum():
+    model = DisplayModel()
+    model.set_plan(PLAN)                            # at most 30 training, 2 test episodes
+    model.on_session(session(phase='aborted', episode=30, total_episodes=30), now=0.0)
+    assert overlay(model.snapshot(now=0.1)).episode_label == 'Episode 30 of at most 30'
+    model.on_session(session(phase='evaluation', episode=33, total_episodes=30), now=1.0)
+    assert overlay(model.snapshot(now=1.1)).episode_label == 'Test episode 2 of 2'
+
+
+def alone_status(done, phase='training'):
+    return session(human_involved=False, human_subtasks=(), training_step=0, episode=done,
+                   total_episodes=done, human_involved_episodes=0, phase=phase)
+
+
+def test_the_robots_lonely_count_survives_a_pause_and_the_wait_is_estimated():
+    model = DisplayModel()
+    model.set_plan(AgentPlan(max_training_episodes=100, evaluation_episodes=2,
+                             episode_break=4.0))
+    model.on_session(alone_status(0), now=0.0)
+    model.on_session(alone_status(20), now=10.0)
+    model.on_session(alone_status(20, 'paused'), now=10.0)           # 20 s of pause
+    model.on_session(alone_status(20), now=30.0)
+    model.on_session(alone_status(40), now=40.0)
+    words = overlay(model.snapshot(now=40.0))
+    # 40 episodes in 20 s of practice (not 20 episodes: the count goes on after the pause);
+    # 60 episodes left under the cap at 0.5 s each: at most about 30 s.
+    assert 'The robot is practising alone: 40 episodes in 20 s.' in words.lines
+    assert 'You join in at most about 30 s (the robot may be ready sooner).' in words.lines
+    assert words.banner == 'The robot is learning alone, please wait (at most about 30 s)'
+    console = console_document(model.snapshot(now=40.0))
+    assert console['milestone'] == ('The robot is practising alone: 40 episodes in 20 s; the '
+                                    'person joins in at most about 30 s')
+    # The person joins: the console says so, with the numbers.
+    model.on_session(session(episode=41, total_episodes=41, human_involved_episodes=0),
+                     now=41.0)
+    assert console_document(model.snapshot(now=42.0))['milestone'] == (
+        'the person joins now, at episode 42 (the robot practised alone: 41 episodes in 21 s)')
+
+
+def test_the_console_says_when_the_robot_did_not_converge():
+    model = DisplayModel()
+    model.set_plan(AgentPlan(max_training_episodes=60, evaluation_episodes=5,
+                             episode_break=4.0))
+    model.on_session(alone_status(59), now=0.0)
+    model.on_result(ResultView(59, False, False, 0.05, 0.3, 0.1, 0.45, False), now=1.0)
+    model.on_session(session(phase='evaluation', episode=60, total_episodes=60,
+                             human_involved_episodes=0, human_subtasks=('slider', 'ball')),
+                     now=1.1)
+    assert console_document(model.snapshot(now=1.2))['milestone'] == (
+        'the robot did not converge in 60 episodes (at most 60); the person never trained '
+        'with it')
+
+
+def test_practice_is_labelled_as_practice_on_the_page_and_the_console():
+    model = DisplayModel()
+    model.set_plan(PLAN)
+    model.on_session(session(strategy='practice', training_step=0, training_step_count=1,
+                             episode=1, total_episodes=1, human_involved_episodes=1,
+                             message='practice: episode 2 of 3, the person alone (the robot '
+                                     'does not act)'), now=0.0)
+    snapshot = model.snapshot(now=0.5)
+    assert overlay(snapshot).episode_label == 'Practice episode 2 of 3'
+    console = console_document(snapshot)
+    assert console['practice'] is True and console['milestone'] == '' and console['alone'] == ''
+    model.on_session(session(strategy='practice', training_step=0, training_step_count=1,
+                             episode=3, total_episodes=3, human_involved_episodes=3,
+                             message='practice: episode 3 of 3, the person alone'), now=1.0)
+    assert overlay(model.snapshot(now=1.1)).episode_label == 'Practice: 3 episodes done'

@@ -13,11 +13,15 @@ import json
 import math
 import os
 import pathlib
+import functools
+import http.client
+import http.server
 import re
 import socket
 import sys
 import threading
 import time
+import urllib.error
 import urllib.request
 
 from hrc_common import qos, topics
@@ -275,8 +279,13 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     lost.publish(String(data='/dev/input/js0 unplugged'))
     assert wait_for(lambda: 'joystick disconnected' in browser.find_element(
         'id', 'input').text, 20, 0.2)
-    assert status(port)['banner'].startswith('Joystick disconnected')
+    assert status(port)['banner'].startswith('The joystick is disconnected')
     lost.publish(String(data=''))
+
+    # Mid-session the questionnaire is not asked and not accepted (even from the own page).
+    code, text = post(port, '/tlx', json.dumps({**ANSWER, 'condition': 'display-test'}),
+                      page_token(port))
+    assert code == 409 and 'at the end of the condition' in text, (code, text)
 
     # After the condition the person's page asks the raw NASA-TLX; it is stored 0600.
     browser.get(f'http://127.0.0.1:{port}/')
@@ -284,14 +293,181 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     form = browser.find_element('id', 'tlx')
     assert wait_for(lambda: form.is_displayed(), 30, 0.2)
     assert 'the part you played' in form.text
-    slider = browser.find_element('name', 'effort')
-    browser.execute_script('arguments[0].value = 80; '
-                           "arguments[0].dispatchEvent(new Event('input'))", slider)
-    form.find_element('tag name', 'button').click()
+    send = browser.find_element('id', 'tlx-send')
+    # Nothing is pre-set: no mark ticked, Send stays disabled until every scale is ticked.
+    assert browser.execute_script(
+        "return document.querySelectorAll('#tlx input:checked').length") == 0
+    assert not send.is_enabled()
+    answer = {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20,
+              'effort': 80, 'frustration': 15}
+    for scale, value in answer.items():
+        assert not send.is_enabled(), scale
+        browser.find_element('css selector', f'input[name="{scale}"][value="{value}"]').click()
+    assert wait_for(send.is_enabled, 5, 0.1)
+    send.click()
     assert wait_for(lambda: not form.is_displayed(), 20, 0.2)
     stored = tmp_path / 'tlx.yaml'
     records = yaml.safe_load(stored.read_text())
-    assert records[0]['session_id'] == 'display-test'
-    assert records[0]['scales']['effort'] == 80 and records[0]['scales']['mental'] == 50
-    assert records[0]['raw_tlx'] == pytest.approx((5 * 50 + 80) / 6, abs=0.01)
+    assert len(records) == 1 and records[0]['session_id'] == 'display-test'
+    assert records[0]['scales'] == {scale: float(value) for scale, value in answer.items()}
+    assert records[0]['raw_tlx'] == pytest.approx(sum(answer.values()) / 6, abs=0.01)
     assert stored.stat().st_mode & 0o777 == 0o600
+
+    # The server checks on its own: off the grid, another condition, a second answer.
+    token = page_token(port)
+    code, text = post(port, '/tlx', json.dumps({**ANSWER, 'mental': 7.3,
+                                                'condition': 'display-test'}), token)
+    assert code == 400 and "not on the form's grid" in text, text
+    code, text = post(port, '/tlx', json.dumps({**ANSWER, 'condition': 'other'}), token)
+    assert code == 409 and "asked about 'display-test'" in text, text
+    code, text = post(port, '/tlx', json.dumps({**ANSWER, 'condition': 'display-test'}), token)
+    assert code == 409 and 'must be sent as a correction' in text, text
+    assert len(yaml.safe_load(stored.read_text())) == 1
+    code, text = post(port, '/tlx', json.dumps({**ANSWER, 'condition': 'display-test',
+                                                'correction': True}), token)
+    assert code == 200, text
+    records = yaml.safe_load(stored.read_text())
+    assert [record.get('correction', False) for record in records] == [False, True]
+    assert records[1]['corrects'] == records[0]['answered']
+
+
+ANSWER = {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20, 'effort': 50,
+          'frustration': 15}
+
+
+def page_token(port) -> str:
+    """Return the session secret the served page holds (as the page's script reads it)."""
+    page = fetch(port, '/')[1].decode()
+    return re.search(r'<meta name="hrc-token" content="([^"]+)">', page).group(1)
+
+
+def post(port, path, body='', token=None, origin=None, host=None):
+    """POST as the own page would (Origin, secret); return (code, text) even for errors."""
+    connection = http.client.HTTPConnection('127.0.0.1', port, timeout=10)
+    headers = {'Origin': origin or f'http://127.0.0.1:{port}'}
+    if token is not None:
+        headers['X-HRC-Token'] = token
+    if host is not None:
+        headers['Host'] = host
+    connection.request('POST', path, body=body.encode(), headers=headers)
+    reply = connection.getresponse()
+    answer = reply.status, reply.read().decode()
+    connection.close()
+    return answer
+
+
+def raw_request(port, data: bytes) -> bytes:
+    """Send raw bytes; return everything the server answers before it closes."""
+    with socket.create_connection(('127.0.0.1', port), timeout=10) as connection:
+        connection.sendall(data)
+        connection.shutdown(socket.SHUT_WR)
+        chunks = []
+        while True:
+            chunk = connection.recv(65536)
+            if not chunk:
+                return b''.join(chunks)
+            chunks.append(chunk)
+
+
+FOREIGN_PAGE = """<!DOCTYPE html><html><body>
+<iframe name="sink" style="display:none"></iframe>
+<form id="tlx" method="POST" action="TARGET/tlx" enctype="text/plain" target="sink">
+<input name='{"mental":50,"physical":50,"temporal":50,"performance":50,"effort":50,
+"frustration":50,"condition":"display-test","x":"' value='"}'>
+</form>
+<script>
+const target = 'TARGET', results = {};
+async function attempt(name, path, options) {
+  try {
+    const reply = await fetch(target + path, options);
+    results[name] = reply.type + ' ' + reply.status;
+  }
+  catch (error) { results[name] = 'failed: ' + error; }
+}
+const tlx = JSON.stringify({mental: 50, physical: 50, temporal: 50, performance: 50, effort: 50,
+                            frustration: 50, condition: 'display-test'});
+(async () => {
+  for (const command of ['pause', 'resume', 'abort']) {
+    // A "simple" request: no preflight, the browser sends it (only the answer is hidden).
+    await attempt(command + ' no-cors', '/control/' + command, {method: 'POST', mode: 'no-cors'});
+    await attempt(command + ' text/plain', '/control/' + command,
+                  {method: 'POST', mode: 'no-cors', headers: {'Content-Type': 'text/plain'}});
+    // With a guessed secret: the header forces a preflight the server does not grant.
+    await attempt(command + ' guessed secret', '/control/' + command,
+                  {method: 'POST', headers: {'X-HRC-Token': 'guess'}});
+    navigator.sendBeacon(target + '/control/' + command, 'x');
+  }
+  await attempt('tlx no-cors', '/tlx', {method: 'POST', mode: 'no-cors', body: tlx,
+                                        headers: {'Content-Type': 'text/plain'}});
+  navigator.sendBeacon(target + '/tlx', tlx);
+  await attempt('read the page (for its secret)', '/', {});
+  await attempt('read status', '/status.json', {});
+  document.getElementById('tlx').submit();
+  await new Promise((done) => setTimeout(done, 1500));
+  window.foreignDone = results;
+})();
+</script></body></html>"""
+
+
+def test_a_foreign_page_in_the_browser_changes_nothing(graph, tmp_path):
+    """A page of another origin tries every control and the TLX form: every try is refused."""
+    agent, port, browser, display = graph
+    agent.session.publish(session_status(phase=SessionStatus.PHASE_DONE))  # the TLX is asked
+    assert wait_for(lambda: status(port)['session']['phase'] == 'done', 20, 0.2)
+    site = tmp_path / 'site'
+    site.mkdir()
+    (site / 'evil.html').write_text(FOREIGN_PAGE.replace('TARGET', f'http://127.0.0.1:{port}'))
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(site))
+    foreign = http.server.ThreadingHTTPServer(('127.0.0.1', 0), handler)
+    threading.Thread(target=foreign.serve_forever, daemon=True).start()
+    try:
+        browser.get(f'http://127.0.0.1:{foreign.server_address[1]}/evil.html')
+        assert wait_for(lambda: browser.execute_script('return window.foreignDone'), 30, 0.2)
+        results = browser.execute_script('return window.foreignDone')
+    finally:
+        foreign.shutdown()
+        foreign.server_close()
+    # Reading the page or the status across origins fails (no CORS grant): no secret leaks.
+    assert results['read the page (for its secret)'].startswith('failed'), results
+    assert results['read status'].startswith('failed'), results
+    assert results['pause guessed secret'].startswith('failed'), results
+    time.sleep(1.0)  # let a request that got through reach the agent
+    assert agent.calls == [], (agent.calls, results)
+    assert not (tmp_path / 'tlx.yaml').exists()
+    # The requests did arrive and were refused, each logged with its reason.
+    def refusals():
+        return re.findall(r"refused POST (/\S+) from 127\.0\.0\.1: foreign Origin "
+                          r"'http://127\.0\.0\.1:\d+'", display.output)
+    assert wait_for(lambda: len(refusals()) >= 3 * 2 + 2, 10, 0.2), display.output
+    assert {'/control/pause', '/control/resume', '/control/abort', '/tlx'} <= set(refusals())
+    # The own page still acts (its secret, its origin).
+    code, text = post(port, '/control/pause', token=page_token(port))
+    assert code == 200 and agent.calls == ['pause'], (code, text)
+
+
+def test_a_rebinding_host_reads_nothing_and_malformed_requests_get_400(graph):
+    agent, port, browser, display = graph
+    # A DNS-rebinding site: its name resolves to 127.0.0.1, the browser sends its Host.
+    for path in ('/status.json', '/', '/console', '/events'):
+        request = urllib.request.Request(f'http://127.0.0.1:{port}{path}',
+                                         headers={'Host': f'rebind.example:{port}'})
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(request, timeout=10)
+        assert refused.value.code == 403, path
+        assert b'foreign Host' in refused.value.read()
+    code, _ = post(port, '/control/pause', token=page_token(port), host=f'rebind.example:{port}',
+                   origin=f'http://rebind.example:{port}')
+    assert code == 403 and agent.calls == []
+    # The own origin without the secret (a local tool forging Origin): refused too.
+    code, text = post(port, '/control/abort')
+    assert code == 403 and 'X-HRC-Token' in text and agent.calls == []
+    assert 'refused GET /status.json from 127.0.0.1: foreign Host' in display.output
+    # Malformed: a negative, a non-numeric and a huge Content-Length.
+    for length, expected in ((b'-5', b'400'), (b'abc', b'400'), (b'99999999', b'413')):
+        answer = raw_request(port, b'POST /control/pause HTTP/1.1\r\nHost: 127.0.0.1\r\n'
+                             b'Content-Length: ' + length + b'\r\n\r\nxx')
+        assert answer.startswith(b'HTTP/1.1 ' + expected), (length, answer[:200])
+    assert b'400 - Bad request syntax' in raw_request(port, b'GARBAGE\r\n\r\n')
+    assert status(port)['session'] is not None     # the server still answers
+    assert agent.calls == []
+    assert 'Traceback' not in display.output

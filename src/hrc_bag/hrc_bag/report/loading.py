@@ -2,7 +2,7 @@
 
 :func:`load_sessions` (or :func:`load_session` for one) turns session folders written by the
 recorder (or by :class:`hrc_bag.session_writer.SessionWriter`) into :class:`Session` objects:
-per episode the decoded EpisodeSummary (``summaries``, by episode), the file(s) it was
+per episode the decoded EpisodeSummary (``summaries``, by episode), the file it was
 recorded in (``files_by_episode``) and the input that drove the human (``human_inputs``: the
 ``hrc_episode`` record of its file), plus the session's SessionStatus messages, its
 configuration (the ``hrc_session`` record), case, strategy, robot DOF and seed. Topics are
@@ -42,6 +42,10 @@ class Session:
     # episode -> the hrc_episode record of its file (which input drove the human, steps)
     human_inputs: dict = field(default_factory=dict)
     notices: list = field(default_factory=list)             # what the reader had to work around
+    # episode -> every file of it, in attempt order, when it was recorded more than once (a
+    # dropped attempt and its re-run); files_by_episode, human_inputs and the summary are
+    # then all the attempt that finished (its EpisodeSummary), else the last one
+    attempts: dict = field(default_factory=dict)
 
     @property
     def training(self) -> list:
@@ -122,6 +126,15 @@ def _human_inputs_of_file(file, metadata: dict, human_topics: list) -> dict:
     return tally.record()
 
 
+def _steps_of(record: dict) -> str:
+    """Return "N steps" of a file's hrc_episode record (its last step + 1, if recorded)."""
+    last = record.get('last_step', '')
+    if str(last).lstrip('-').isdigit():
+        return f'{int(last) + 1} steps' + (', finished' if record.get('finished') == 'true'
+                                           else ', dropped')
+    return f'{record.get("message_count", "?")} messages'
+
+
 def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = None) -> Session:
     """Read the summaries, statuses, configuration and human inputs of one session.
 
@@ -142,6 +155,7 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
     config, record = {}, {}
     complete = True
     files_by_episode, human_inputs = {}, {}
+    episode_files = {}          # episode -> [(file, its hrc_episode record, its summary)]
     topics = bag_reader.bag_topics(path)
     episode_topics = topics_of_type(topics, EPISODE_SUMMARY_TYPE)
     human_topics = topics_of_type(topics, HUMAN_ACTION_TYPE)
@@ -153,17 +167,34 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
             record = scan.metadata[SESSION_RECORD]
             config = _config_of(scan.metadata)
         episode = scan.metadata.get(SESSION_RECORD, {}).get('episode', '')
-        if episode != '':
-            files_by_episode.setdefault(int(episode), []).append(file)
-            human_inputs[int(episode)] = _human_inputs_of_file(file, scan.metadata,
-                                                               human_topics)
+        own_summary = None
         for message in scan.messages:
             decoded = decoder.decode(message)
             if message.topic in episode_topics:
                 # a late recorder gets earlier summaries again (transient local): keep one
-                summaries[decoded.episode] = decoded
+                summaries.setdefault(decoded.episode, decoded)
+                if episode != '' and decoded.episode == int(episode):
+                    own_summary = decoded
             else:
                 statuses.append(decoded)
+        if episode != '':
+            episode_files.setdefault(int(episode), []).append(
+                (file, _human_inputs_of_file(file, scan.metadata, human_topics), own_summary))
+    attempts = {}
+    for episode, group in episode_files.items():
+        finished = [item for item in group if item[2] is not None]
+        used = finished[-1] if finished else group[-1]
+        files_by_episode[episode] = [used[0]]
+        human_inputs[episode] = used[1]
+        if used[2] is not None:
+            summaries[episode] = used[2]   # the errors of the attempt whose time is counted
+        if len(group) > 1:
+            attempts[episode] = [item[0] for item in group]
+            notices.append(
+                f'episode {episode} was recorded {len(group)} times ('
+                + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
+                + f'): its time and errors are from {used[0].name} ('
+                + ('the attempt that finished)' if finished else 'none finished: the last)'))
     if not complete:
         notices.append('a file was not closed (recorder killed?): read up to its last chunk')
     last = statuses[-1] if statuses else None
@@ -182,7 +213,7 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
                    seed=_seed_of(config, session_id), config=config,
                    summaries=[summaries[key] for key in sorted(summaries)], statuses=statuses,
                    complete=complete, files_by_episode=files_by_episode,
-                   human_inputs=human_inputs, notices=notices)
+                   human_inputs=human_inputs, notices=notices, attempts=attempts)
 
 
 def load_sessions(paths, log=print,
