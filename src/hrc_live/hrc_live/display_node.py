@@ -392,6 +392,10 @@ class DisplayNode(Node):
         self.model = DisplayModel()
         self.hub = EventHub()
         self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS)
+        # At the human's rate the sim also publishes the states within each period: the
+        # page's picture follows them (the session's counters and errors use /hrc/state).
+        self.create_subscription(TaskState, topics.SLICE_STATE, self.on_slice_state,
+                                 qos.STATE_QOS)
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS)
         self.create_subscription(EpisodeSummary, topics.EPISODE, self.on_episode,
@@ -458,6 +462,12 @@ class DisplayNode(Node):
         state = state_view(message)
         self.model.on_state(state, time.monotonic())
         self.hub.publish('state', state_document(state, time.time() * 1000.0))
+
+    def on_slice_state(self, message: TaskState):
+        """Push a state within a period (the human's rate) to the pages' picture only."""
+        state = state_view(message)
+        if state.finite():
+            self.hub.publish('state', state_document(state, time.time() * 1000.0))
 
     def on_session(self, message: SessionStatus):
         """Take a new session status; a new session id means a new agent: ask it again."""

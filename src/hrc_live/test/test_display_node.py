@@ -122,6 +122,8 @@ class FakeAgent:
         self.session = self.node.create_publisher(SessionStatus, topics.SESSION,
                                                   qos.SESSION_QOS)
         self.state = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
+        self.slice_state = self.node.create_publisher(TaskState, topics.SLICE_STATE,
+                                                      qos.STATE_QOS)
         self.episode = self.node.create_publisher(EpisodeSummary, topics.EPISODE,
                                                   qos.EPISODE_QOS)
         self.human = self.node.create_publisher(HumanAction, topics.HUMAN_ACTION,
@@ -252,6 +254,17 @@ def test_the_page_draws_the_state_at_full_hd_and_phone_size(graph, tmp_path):
     assert code == 200 and json.loads(body)['invalid_state'] is True
     agent.state.publish(task_state(3, 31, 0.0, 0.0, 0.0))
     assert wait_for(lambda: not notice.is_displayed(), 20, 0.2)
+
+    # At the human's rate the picture follows the states within a period too (slice > 0),
+    # while the session's own view (status.json: counters, errors) keeps the period's state.
+    within = task_state(3, 32, 0.04, -0.1, 0.05)
+    within.slice = 4
+
+    def drawn_within():
+        agent.slice_state.publish(within)
+        return browser.execute_script('return window.hrcStats(1)')['lastDrawnStep'] == 32
+    assert wait_for(drawn_within, 30, 0.2)
+    assert json.loads(fetch(port, '/status.json')[1])['state']['step'] == 31
 
 
 def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, tmp_path):
