@@ -104,6 +104,7 @@ of magnitude (marked per module), not fitted to data of this task.
 """
 
 from dataclasses import dataclass
+import collections
 import math
 import pathlib
 import typing
@@ -127,8 +128,14 @@ SUBTASK_ALIASES = {'T2_1': SLIDER, 'T2_2': PENDULUM, 'T1_1': BALL}
 # Time over which a person integrates motion to judge a speed (s): the velocity noise floor is
 # the position noise per this time.
 MOTION_INTEGRATION_TIME = 0.5
-# Percepts kept for the delay line (control steps): 64 * 0.2 s, far beyond any reaction delay.
-HISTORY_LENGTH = 64
+# Percepts kept for the delay line (s): far beyond any reaction delay (64 calls at 0.2 s).
+HISTORY_SECONDS = 12.8
+# A ball this far from the middle of the beam (m) is at or near an end stop (the default
+# beam's stops are at +-0.25 m): resting there it says nothing about the tilt, so the ball
+# cue is not updated (a choice).
+BALL_CUE_RANGE = 0.2
+# Perception channels with their own noise process, in the order of _Percept.
+PERCEPT_CHANNELS = 6
 
 
 @dataclass
@@ -140,21 +147,34 @@ class HumanProfile:
     """
 
     description: str = param('', 'who this profile models')
-    # perception
-    slider_noise: float = param(0.0015, 'std of the perceived slider height, per step (m)',
+    # perception (noises are the standard deviations of a process correlated over
+    # perception_noise_time; biases are drawn once per episode)
+    slider_noise: float = param(0.0015, 'std of the perceived slider height (m)',
                                 low=0.0, high=0.1)
-    pendulum_noise: float = param(0.02, 'std of the perceived beam angle, per step (rad)',
+    pendulum_noise: float = param(0.015, 'std of the perceived beam angle (rad)',
                                   low=0.0, high=1.0)
-    ball_noise: float = param(0.004, 'std of the perceived ball position, per step (m)',
+    ball_noise: float = param(0.004, 'std of the perceived ball position (m)',
                               low=0.0, high=0.25)
     slider_bias: float = param(0.0015, 'std of the per-episode misjudged middle of the rod (m)',
                                low=0.0, high=0.1)
-    pendulum_bias: float = param(0.015, 'std of the per-episode misjudged horizontal (rad)',
+    pendulum_bias: float = param(0.01, 'std of the per-episode misjudged horizontal (rad)',
                                  low=0.0, high=1.0)
     ball_bias: float = param(0.003, 'std of the per-episode misjudged middle of the beam (m)',
                              low=0.0, high=0.25)
     velocity_noise: float = param(0.12, 'Weber fraction of perceived speeds (relative std)',
                                   low=0.0, high=2.0)
+    perception_noise_time: float = param(
+        0.5, 'correlation time of the perception noise (s): a first-order (Ornstein-Uhlenbeck) '
+        'process advanced by the call period; 0 = a fresh sample at every call (profile '
+        'version 1)', low=0.0, high=100.0)
+    ball_cue_time: float = param(
+        2.0, 'time constant (s) over which the rolling ball corrects the judged beam angle '
+        '(a ball that keeps rolling east means the east end is low); 0 = no ball cue '
+        '(profile version 1)', low=0.0, high=1000.0)
+    ball_speed_tilt: float = param(
+        0.2, 'beam angle (rad) the person reads from a rolling speed of 1 m/s of the ball '
+        '(a learned internal model; default physics: m_b * g / ball_damping = 4.9 m/s per '
+        'rad)', low=0.0, high=100.0)
     # timing
     reaction_delay: float = param(0.22, 'delay from seeing to acting (s)', low=0.0, high=2.0)
     prediction: float = param(0.5, 'share of the delay compensated by extrapolation',
@@ -185,8 +205,14 @@ class HumanProfile:
                                high=2.0)
     motor_noise_floor: float = param(0.01, 'motor noise std at rest (normalized command)',
                                      low=0.0, high=1.0)
-    lapse_probability: float = param(0.01, 'chance per step that the stick is held unchanged',
-                                     low=0.0, high=1.0)
+    motor_noise_time: float = param(
+        0.1, 'correlation time of the motor noise (s), advanced by the call period; 0 = a '
+        'fresh sample at every call (profile version 1)', low=0.0, high=10.0)
+    lapse_probability: float = param(0.01, 'share of the time the stick is held unchanged '
+                                     '(attention lapses; with lapse_duration 0: the chance '
+                                     'per call)', low=0.0, high=1.0)
+    lapse_duration: float = param(0.2, 'length of one lapse of attention (s); 0 = one call '
+                                  '(profile version 1)', low=0.0, high=10.0)
     # learning curve
     untrained_factor: float = param(1.2, 'noises, biases and lapses of the first episode, '
                                     'relative to the trained person', low=1.0, high=20.0)
@@ -320,6 +346,24 @@ class _Percept(typing.NamedTuple):
     ball_velocity: float
 
 
+def _memory(period: float, time_constant: float) -> float:
+    """Return the share of a first-order process kept over ``period`` (0 for tau = 0)."""
+    return math.exp(-period / time_constant) if time_constant > 0.0 else 0.0
+
+
+def _advance(value: typing.Optional[float], memory: float, rng) -> float:
+    """Advance a unit-variance first-order (Ornstein-Uhlenbeck) process by one call.
+
+    Exact discretization: x' = m * x + sqrt(1 - m^2) * N(0, 1) keeps the variance at 1 for any
+    call period; ``memory`` 0 (or no value yet: the stationary draw) is a fresh N(0, 1)
+    sample, one draw either way, as the version-1 person drew per call.
+    """
+    draw = rng.standard_normal()
+    if value is None or memory == 0.0:
+        return float(draw)
+    return memory * value + math.sqrt(1.0 - memory * memory) * float(draw)
+
+
 def _interpolate(older: _Percept, newer: _Percept, weight_newer: float) -> _Percept:
     return _Percept(*(o + weight_newer * (n - o) for o, n in zip(older, newer)))
 
@@ -339,6 +383,21 @@ class SimulatedHuman:
         self.dof = check_dof(dof)
         self.seed = int(seed)
         self.control_period = float(control_period)
+        # Calls of the delay line kept: HISTORY_SECONDS at this call rate (64 at 0.2 s).
+        self._history_length = max(2, int(math.ceil(HISTORY_SECONDS / self.control_period
+                                                    - 1e-9)))
+        # One call advances every process of the person by control_period seconds: the
+        # factor of a first-order process of time constant tau is exp(-period / tau).
+        self._perception_memory = _memory(self.control_period, profile.perception_noise_time)
+        self._motor_memory = _memory(self.control_period, profile.motor_noise_time)
+        self._ball_cue_gain = (1.0 - _memory(self.control_period, profile.ball_cue_time)
+                               if profile.ball_cue_time > 0.0 else 0.0)
+        if profile.lapse_duration > 0.0:
+            # Lapses start as a Poisson process whose rate makes them fill the share
+            # lapse_probability of the time (for small shares): rate = share / duration.
+            self._lapse_calls = profile.lapse_duration / self.control_period
+        else:
+            self._lapse_calls = 0.0
         self.practiced_episodes = int(practiced_episodes)
         self.steps_on_task = 0  # steps acted in the whole session
         self.fatigue = Fatigue(profile.fatigue_onset_minutes * 60.0,
@@ -381,7 +440,13 @@ class SimulatedHuman:
             pendulum_velocity=0.0,
             ball=profile.ball_offset + self._rng.normal(0.0, profile.ball_bias * practice),
             ball_velocity=0.0)
-        self._history: typing.List[_Percept] = []
+        self._history: typing.Deque[_Percept] = collections.deque(maxlen=self._history_length)
+        # Unit-variance noise states (perception channels, motor), None until the first
+        # call of the episode draws them from their stationary distribution.
+        self._perception_state: typing.Optional[typing.List[float]] = None
+        self._motor_state: typing.Optional[float] = None
+        self._ball_cue = 0.0  # correction of the judged beam angle from the ball's rolling (rad)
+        self._lapse_left = 0.0  # calls of the current lapse still to come
         self._stick = 0.0  # where the stick is (normalized), before motor noise
         self._intent = 0.0  # where the arm is heading (after the rate limit)
         self._hold_integral = 0.0  # integral part of the level-2 hold (normalized command)
@@ -449,7 +514,6 @@ class SimulatedHuman:
         self.steps_on_task += 1
 
         self._history.append(self._perceive(state, practice))
-        del self._history[:-HISTORY_LENGTH]
         delay = profile.reaction_delay * fatigue.delay_factor
         seen = self._delayed(delay / self.control_period)
         # Extrapolate the delayed percept over the compensated share of the delay; a novice
@@ -480,7 +544,7 @@ class SimulatedHuman:
         intent = max(-1.0, min(1.0, intent))
 
         lapse = profile.lapse_probability * practice * fatigue.lapse_factor
-        if rng.random() >= lapse:
+        if not self._lapsed(lapse, rng.random()):
             # Bandwidth: a slew-rate limit, then the neuromuscular lag toward that point.
             step_limit = profile.max_rate * self.control_period
             self._intent += max(-step_limit, min(step_limit, intent - self._intent))
@@ -491,8 +555,28 @@ class SimulatedHuman:
             self._stick += follow * (self._intent - self._stick)
         noise_std = (profile.motor_noise * abs(self._stick)
                      + profile.motor_noise_floor) * practice * fatigue.noise_factor
-        command = self._stick + rng.normal(0.0, noise_std)
+        self._motor_state = _advance(self._motor_state, self._motor_memory, rng)
+        command = self._stick + noise_std * self._motor_state
         return max(-1.0, min(1.0, float(command)))
+
+    def _lapsed(self, share: float, draw: float) -> bool:
+        """Return whether attention lapses at this call (``draw``: uniform in [0, 1)).
+
+        Profile version 1 (``lapse_duration`` 0): a lapse is one call, with chance ``share``.
+        Otherwise a lapse lasts ``lapse_duration`` s (rounded to calls) and lapses start at
+        the rate ``share / lapse_duration`` per s, so they fill the share ``share`` of the time
+        at any call period (for small shares).
+        """
+        if self._lapse_calls <= 0.0:
+            return draw < share
+        if self._lapse_left > 0.0:
+            self._lapse_left -= 1.0
+            return True
+        start_chance = 1.0 - math.exp(-share / self._lapse_calls) if share < 1.0 else 1.0
+        if draw < start_chance:
+            self._lapse_left = max(0.0, round(self._lapse_calls) - 1.0)
+            return True
+        return False
 
     def _hold(self, error: float, rate: float, lead: float, full_scale: float) -> float:
         """Return the normalized push against ``error`` of the level-2 hold (PID in effect).
@@ -513,20 +597,44 @@ class SimulatedHuman:
         return push + self.adaptation.compensation
 
     def _perceive(self, state, practice: float) -> _Percept:
+        """Return what the person sees now: biased, noisy values (noise correlated in time)."""
         profile, rng, bias = self.profile, self._rng, self._bias
+        noise_state = self._perception_state or [None] * PERCEPT_CHANNELS
+        memory = self._perception_memory
         values = []
-        for position, velocity, noise, offset in (
+        for channel, (position, velocity, noise, offset) in enumerate((
                 (state.slider_position, state.slider_velocity, profile.slider_noise,
                  bias.slider),
                 (state.pendulum_angle, state.pendulum_angular_velocity, profile.pendulum_noise,
                  bias.pendulum),
-                (state.ball_position, state.ball_velocity, profile.ball_noise, bias.ball)):
+                (state.ball_position, state.ball_velocity, profile.ball_noise, bias.ball))):
             noise *= practice
-            values.append(position - offset + rng.normal(0.0, noise))
+            position_noise = _advance(noise_state[2 * channel], memory, rng)
+            velocity_noise = _advance(noise_state[2 * channel + 1], memory, rng)
+            noise_state[2 * channel:2 * channel + 2] = position_noise, velocity_noise
+            values.append(position - offset + noise * position_noise)
             velocity_std = (profile.velocity_noise * practice * abs(velocity)
                             + noise / MOTION_INTEGRATION_TIME)
-            values.append(velocity + rng.normal(0.0, velocity_std))
-        return _Percept(*values)
+            values.append(velocity + velocity_std * velocity_noise)
+        self._perception_state = noise_state
+        percept = _Percept(*values)
+        if self._ball_cue_gain > 0.0:
+            percept = self._with_ball_cue(percept)
+        return percept
+
+    def _with_ball_cue(self, percept: _Percept) -> _Percept:
+        """Correct the judged beam angle slowly toward the tilt the rolling ball shows.
+
+        A complementary filter: the eye's angle for fast changes, the ball's rolling speed
+        (``-ball_speed_tilt * speed``: rolling east means the east end is low) for the slow
+        part, so a misjudged horizontal fades over ``ball_cue_time`` while the ball rolls
+        freely. A ball at or near an end stop shows nothing and leaves the correction as is.
+        """
+        if abs(percept.ball) < BALL_CUE_RANGE:
+            tilt_from_ball = -self.profile.ball_speed_tilt * percept.ball_velocity
+            self._ball_cue += self._ball_cue_gain * (tilt_from_ball - percept.pendulum
+                                                     - self._ball_cue)
+        return percept._replace(pendulum=percept.pendulum + self._ball_cue)
 
     def _delayed(self, lag_steps: float) -> _Percept:
         """Return the percept of ``lag_steps`` control steps ago (interpolated)."""
