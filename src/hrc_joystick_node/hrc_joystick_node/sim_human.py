@@ -164,7 +164,7 @@ class HumanProfile:
     velocity_noise: float = param(0.12, 'Weber fraction of perceived speeds (relative std)',
                                   low=0.0, high=2.0)
     perception_noise_time: float = param(
-        0.5, 'correlation time of the perception noise (s): a first-order (Ornstein-Uhlenbeck) '
+        0.05, 'correlation time of the perception noise (s): a first-order (Ornstein-Uhlenbeck) '
         'process advanced by the call period; 0 = a fresh sample at every call (profile '
         'version 1)', low=0.0, high=100.0)
     ball_cue_time: float = param(
