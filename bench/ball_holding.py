@@ -4,6 +4,7 @@
     python bench/ball_holding.py            # paper, paper_symmetric, skilled at 0.2 s
     python bench/ball_holding.py --profiles paper paper_v1 --seeds 10 --human-period 0.2 0.02
     python bench/ball_holding.py --profiles paper --ablations
+    python bench/ball_holding.py --profiles paper --practiced 15   # after 15 episodes
 
 Cases 1, 3 and 5 give the human the rotation and ask it to hold the ball; the robot drives the
 slider, which can barely move the ball. Their last training step converges only when the
@@ -91,7 +92,7 @@ def partner_every(human_period: float) -> int:
     return calls
 
 
-def run_role(profile, role: str, seeds: int, human_period: float) -> dict:
+def run_role(profile, role: str, seeds: int, human_period: float, practiced: int = 0) -> dict:
     """Return the mean errors and effort of ``profile`` on ``role`` beside its ideal partner.
 
     ``role``: 'rotation' (subtasks pendulum and ball, ideal slider partner) or 'translation'
@@ -108,7 +109,8 @@ def run_role(profile, role: str, seeds: int, human_period: float) -> dict:
     balls, angles, efforts = [], [], []
     with SliderPendulumBall(params) as sim:
         for seed in range(seeds):
-            human = SimulatedHuman(profile, role, seed=seed, control_period=human_period)
+            human = SimulatedHuman(profile, role, seed=seed, control_period=human_period,
+                                   practiced_episodes=practiced)
             human.reset(0)
             state = sim.reset(seed)
             ball, angle, commands = [], [], []
@@ -132,9 +134,10 @@ def run_role(profile, role: str, seeds: int, human_period: float) -> dict:
             'effort': float(np.mean(efforts))}
 
 
-def hold_ball(profile, seeds: int, human_period: float = ROBOT_PERIOD) -> dict:
+def hold_ball(profile, seeds: int, human_period: float = ROBOT_PERIOD,
+              practiced: int = 0) -> dict:
     """Return the mean errors of ``profile`` on the rotation beside the ideal slider."""
-    return run_role(profile, 'rotation', seeds, human_period)
+    return run_role(profile, 'rotation', seeds, human_period, practiced)
 
 
 def ball_tolerance() -> float:
@@ -156,10 +159,15 @@ def main(argv=None) -> int:
     parser.add_argument('--human-period', type=float, nargs='+', default=[ROBOT_PERIOD],
                         help='how often the person acts (s), a divisor of 0.2 s and a '
                         'multiple of 0.01 s; several values give several rows')
+    parser.add_argument('--practiced', type=int, default=0,
+                        help='episodes the person has practiced before (learning curve; 0: '
+                        'the first episode of a new person, the hardest case)')
     parser.add_argument('--ablations', action='store_true',
                         help='also run the rotation role with parts of the person removed')
     args = parser.parse_args(argv)
     problems = [] if args.seeds >= 1 else ['--seeds must be >= 1']
+    if args.practiced < 0:
+        problems.append('--practiced must be >= 0')
     for period in args.human_period:
         try:
             physics_params_at(period)
@@ -169,14 +177,14 @@ def main(argv=None) -> int:
     if problems:
         parser.error('; '.join(problems))
     print(f'ball tolerance {ball_tolerance()} m; {args.seeds} episodes per row; the partner '
-          f'acts every {ROBOT_PERIOD} s')
+          f'acts every {ROBOT_PERIOD} s; the person practiced {args.practiced} episodes before')
     print(f'{"profile":20s} {"period s":>8s} {"|B_y| m":>8s} {"|P_z| rad":>9s} {"within":>7s} '
           f'{"effort rot":>10s} {"effort tr":>9s} {"rot/tr":>6s}')
     for name in args.profiles:
         profile = load_profile(name)
         for period in args.human_period:
-            rotation = run_role(profile, 'rotation', args.seeds, period)
-            translation = run_role(profile, 'translation', args.seeds, period)
+            rotation = run_role(profile, 'rotation', args.seeds, period, args.practiced)
+            translation = run_role(profile, 'translation', args.seeds, period, args.practiced)
             ratio = rotation['effort'] / translation['effort'] if translation['effort'] else 0.0
             print(f'{name:20s} {period:8.3f} {rotation["ball"]:8.3f} '
                   f'{rotation["pendulum"]:9.3f} '
@@ -190,7 +198,8 @@ def main(argv=None) -> int:
             profile = load_profile(name)
             for period in args.human_period:
                 for ablation, changes in ABLATIONS.items():
-                    row = hold_ball(dataclasses.replace(profile, **changes), args.seeds, period)
+                    row = hold_ball(dataclasses.replace(profile, **changes), args.seeds, period,
+                                    args.practiced)
                     print(f'{name:20s} {period:8.3f} {ablation:52s} {row["ball"]:8.3f} '
                           f'{row["pendulum"]:9.3f} {row["satisfied"]:3d}/{row["episodes"]:<3d}',
                           flush=True)

@@ -3,24 +3,43 @@
 Pure Python and numpy (no rclpy): the human node, the experiment runner and the benchmarks all
 use :class:`SimulatedHuman` in the same way::
 
-    human = SimulatedHuman(load_profile('skilled'), dof='rotation', seed=3)
+    human = SimulatedHuman(load_profile('skilled'), dof='rotation', seed=3,
+                           control_period=0.02)
     human.reset(episode=0)
-    command = human.act(state, ['pendulum'])   # float in [-1, 1] for every control step
+    command = human.act(state, ['pendulum'])   # float in [-1, 1], once per control_period
 
 ``state`` is anything with the attributes of ``hrc_sim_node.physics.PhysicsState`` (``step``,
 ``slider_position``, ``slider_velocity``, ``pendulum_angle``, ``pendulum_angular_velocity``,
 ``ball_position``, ``ball_velocity``); ``subtasks`` are the ids the session assigns to the
 human: ``slider`` (keep S_x at 0), ``pendulum`` (keep P_z at 0), ``ball`` (keep B_y at 0).
 
-The model, step by step (one call of :meth:`SimulatedHuman.act` per control period T)
-------------------------------------------------------------------------------------------
+The model, step by step (one call of :meth:`SimulatedHuman.act` per ``control_period`` T)
+-------------------------------------------------------------------------------------------
+The person is called every ``control_period`` s (the caller's contract: 0.2 s, the robot's
+period, in the protocol before issue 21; e.g. 0.02 s when the person acts at its own rate).
+Every delay, time constant, rate and probability of the model is in seconds and converted
+with T, so the same profile is the same person at any call period: noises are first-order
+(Ornstein-Uhlenbeck) processes advanced by T with the exact factor exp(-T / tau), lapses
+last seconds, the stick moves at most ``max_rate`` per second, the delay line keeps
+``HISTORY_SECONDS``.
+
 1. **Perception.** The person sees the slider height, the beam angle and the ball position on a
    monitor. Each percept is the true value plus a per-episode misjudgement of the zero (a bias,
-   drawn at reset: "where is the middle", "what is horizontal") plus a fresh noise sample per
-   step. Velocities are perceived with a relative (Weber) error plus a floor. The noise and the
-   bias are per watched quantity, and the beam angle is perceived worse than the slider height:
-   the paper (Sec. V.B) reports that its subjects judged translation better than rotation and
-   "struggled to identify if the pendulum was in the horizontal direction".
+   drawn at reset: "where is the middle", "what is horizontal") plus a noise that wanders in
+   time: a unit Ornstein-Uhlenbeck process per percept (correlation time
+   ``perception_noise_time``) scaled by the profile's standard deviation. Velocities are
+   perceived with a relative (Weber) error plus a floor, as processes of the same kind. The
+   noise and the bias are per watched quantity, and the beam angle is perceived worse than the
+   slider height: the paper (Sec. V.B) reports that its subjects judged translation better
+   than rotation and "struggled to identify if the pendulum was in the horizontal direction".
+   **The ball as a cue to the tilt**: people also see the ball roll, which tells them the beam
+   is not level. A complementary filter takes the beam angle from the eye for fast changes and
+   pulls it, with time constant ``ball_cue_time``, toward the tilt the ball's rolling speed
+   shows (``-ball_speed_tilt * speed``: a ball rolling east means the east end is low; the
+   person's learned internal model, 0.2 rad per m/s, the default physics' m_b g / c_b = 4.9
+   m/s per rad); a ball at or near an end stop (``BALL_CUE_RANGE``) shows nothing. So a
+   misjudged horizontal fades while the ball rolls freely, as a person corrects a beam that
+   looks level when the ball keeps rolling.
 2. **Reaction delay.** The person acts on what they perceived ``reaction_delay`` s ago (a
    buffer of percepts, linearly interpolated between control steps). A ``prediction`` share of
    the delay is compensated by extrapolating with the perceived velocity, as trained operators
@@ -30,8 +49,10 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    the way, and how far ahead (``lead_time``) they look; a practiced person also pushes harder
    against a steady load (an integral term, ``integral_time``), e.g. the ball resting at an
    end stop and weighing the beam down. Both plants are velocity-like (heavy damping), so the
-   gains follow the crossover model: a crossover of about 2 rad/s, which the 0.2 s period and
-   the delay still leave stable; a novice's higher gain on the beam overshoots.
+   gains follow the crossover model: a crossover of about 2.5-3.5 rad/s for ``skilled`` and
+   ``paper`` (measured by ``bench/crossover.py``), with a lead that cancels the plants' lags;
+   ``novice`` and the ``*_v1`` profiles about 2 rad/s and less; a novice's higher gain on the
+   beam overshoots.
    Holding the ball (subtask ``ball``) is a cascade: the ball's offset sets a target beam
    angle (``ball_tilt``, ``ball_lead``, at most ``max_tilt``; the ball rolls toward the low
    end, so a ball east of the middle asks for the east end up), which the rotation actor
@@ -45,8 +66,11 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
 4. **Motor execution.** Limited bandwidth: the stick moves at most ``max_rate`` per second and
    follows the intent with a first-order neuromuscular lag (``neuromuscular_time``). Motor
    noise is signal-dependent (standard deviation ``motor_noise * |command|`` plus a floor
-   ``motor_noise_floor``). With probability ``lapse_probability`` per step attention lapses and
-   the stick is held where it was.
+   ``motor_noise_floor``) and correlated over ``motor_noise_time`` (a unit Ornstein-Uhlenbeck
+   process: the arm low-passes the noise of the motor command, as it does the intent).
+   Attention lapses fill the share ``lapse_probability`` of the time, each ``lapse_duration``
+   s long (a Poisson process of starts at the rate share / duration); during a lapse the stick
+   is held where it was.
 5. **Learning curve.** Noise, biases, motor noise and lapses start ``untrained_factor`` times
    larger and fall exponentially with the episodes the person has practiced (involved in at
    least one step), time constant ``learning_episodes``; the lead time and the prediction grow
@@ -76,6 +100,17 @@ each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the e
 the person's state so far (``practiced_episodes``, the fatigue and the adaptation, see
 :meth:`SimulatedHuman.snapshot`) and the sequence of states (and stamps).
 
+Version 1 (before issue 21)
+---------------------------
+The profiles ``novice_v1``, ``skilled_v1``, ``paper_v1`` and ``paper_symmetric_v1`` keep the
+numbers of the model before issue 21 and its per-call behaviour: ``perception_noise_time``,
+``motor_noise_time`` and ``lapse_duration`` 0 (a fresh noise sample and a lapse chance at every
+call, as before) and ``ball_cue_time`` 0 (no ball cue). With them every command is bit for bit
+the old one (test_sim_human.py pins digests of seeded episodes): the same number of random
+draws per call in the same order. They were fresh white noise per call: at a shorter call
+period their effect on the plant shrank (averaged out), so the old person looked better at a
+higher rate for a reason no person has; the processes in seconds remove that.
+
 Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 --------------------------------------------------------------------------
 * Visual reaction time to a display ~0.2-0.3 s; the effective delay of a human operator in
@@ -83,8 +118,27 @@ Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 * Bisecting a line (finding "the middle") is precise to ~1-3 % of its length with a small
   constant bias (Jewell & McCourt 2000, pseudoneglect): on the 0.2 m rod, a few mm.
 * Orientation judgments are best near horizontal/vertical (~1-2 degrees, Appelle 1972, the
-  oblique effect) in ideal conditions; judging a moving beam on a monitor is worse, and the
-  paper's subjects found the rotation hard: several degrees here.
+  oblique effect). The subjective visual vertical (SVV) of healthy adults lies within ~2
+  degrees of the true vertical (the clinical normal range, e.g. Friedmann 1970; Dieterich &
+  Brandt 1993), with a within-person standard deviation of ~1 degree from setting to setting.
+  Used here (choice within those facts): the beam-angle noise is 0.9-1.7 degrees (``skilled``
+  0.86, ``paper`` 1.15, ``novice`` 1.7; the paper's subjects judged the rotation worse than
+  the translation, so ``paper`` sits at the upper end), the per-episode bias 0.5-1.15
+  degrees, and the population's constant offset (:mod:`hrc_joystick_node.population`) has the
+  per-episode bias's standard deviation, so bias and offset together are within ~1.6
+  degrees (SD). ``paper_v1`` had 4 degrees of fresh noise per step and ~5 degrees of bias.
+* The noise's correlation time ``perception_noise_time`` = 0.05 s is a choice of the order of
+  the visual system's temporal integration (tens of ms to ~0.1 s, Bloch's law); what the
+  plant feels is its low-frequency power (std^2 * tau), which the crossover bench validates
+  through the remnant. Motor noise is correlated over ``motor_noise_time`` = 0.1 s, the arm's
+  neuromuscular time constant (the optimal-control model of the human operator filters its
+  motor noise through the same lag; Kleinman, Baron & Levison 1970).
+* Manual control of a velocity-like plant (K/s near the crossover) is described by McRuer's
+  crossover model: open loop ~ w_c e^(-s tau_e) / s near w_c, with w_c ~2-5 rad/s and an
+  effective delay tau_e ~0.1-0.3 s (McRuer & Jex 1967). The ``paper`` person's delay (0.2 s),
+  lead (0.2 s, cancelling the plants' 0.09-0.16 s lags, the model's lead equalization) and
+  gains (``*_full_scale``) are chosen so that ``bench/crossover.py`` fits it within those
+  ranges on both degrees of freedom (measured there, not fitted to data of this task).
 * Velocity discrimination has a Weber fraction of ~0.1-0.2 (McKee 1981).
 * Motor noise grows with the command (signal-dependent noise, Harris & Wolpert 1998; Schmidt
   et al. 1979); a person moves a joystick through its range in ~0.2-0.4 s (bandwidth).
@@ -100,7 +154,10 @@ Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 What is fact and what is a modelling choice: the structure (delay, PD(+I) control in crossover
 terms, signal-dependent noise, exponential practice, saturating fatigue, two-rate adaptation)
 follows the sources above; every number is a profile parameter chosen to match their orders
-of magnitude (marked per module), not fitted to data of this task.
+of magnitude (marked per module), not fitted to data of this task. Choices without a direct
+source: first-order (Ornstein-Uhlenbeck) noise processes and their correlation times, the
+ball cue as a complementary filter with its time constant (2 s: the person needs to see the
+ball roll for a while) and its end-stop range, lapses as a Poisson process of fixed length.
 """
 
 from dataclasses import dataclass
@@ -176,15 +233,15 @@ class HumanProfile:
         '(a learned internal model; default physics: m_b * g / ball_damping = 4.9 m/s per '
         'rad)', low=0.0, high=100.0)
     # timing
-    reaction_delay: float = param(0.22, 'delay from seeing to acting (s)', low=0.0, high=2.0)
+    reaction_delay: float = param(0.18, 'delay from seeing to acting (s)', low=0.0, high=2.0)
     prediction: float = param(0.5, 'share of the delay compensated by extrapolation',
                               low=0.0, high=1.0)
     # control
-    slider_full_scale: float = param(0.1, 'slider error at which the stick is pushed fully (m)',
+    slider_full_scale: float = param(0.08, 'slider error at which the stick is pushed fully (m)',
                                      low=1e-4, high=1.0)
-    pendulum_full_scale: float = param(0.5, 'beam angle error at which the stick is pushed '
+    pendulum_full_scale: float = param(0.32, 'beam angle error at which the stick is pushed '
                                        'fully (rad)', low=1e-3, high=10.0)
-    lead_time: float = param(0.1, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
+    lead_time: float = param(0.2, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
     integral_time: float = param(
         1.5, 'integral time of the level-2 hold (s): a person who sees the slider or the beam '
         'stay off pushes harder against a steady load; 0 = no integral', low=0.0, high=1000.0)
