@@ -629,7 +629,10 @@ class SimulatedHuman:
         if self._lapse_left > 0.0:
             self._lapse_left -= 1.0
             return True
-        start_chance = 1.0 - math.exp(-share / self._lapse_calls) if share < 1.0 else 1.0
+        # A lapse cannot be shorter than a call: with calls longer than a lapse, each call
+        # lapses with about the chance ``share``, which keeps the share of the time.
+        calls = max(1.0, self._lapse_calls)
+        start_chance = 1.0 - math.exp(-share / calls) if share < 1.0 else 1.0
         if draw < start_chance:
             self._lapse_left = max(0.0, round(self._lapse_calls) - 1.0)
             return True
