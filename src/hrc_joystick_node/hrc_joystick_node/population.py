@@ -29,8 +29,12 @@ fast/slow_learning_rate     0.4    Choice: adaptation rates differ widely betwee
                                    (Wu et al. 2014).
 learning_episodes           0.3    Choice: individual practice curves (Heathcote et al. 2000).
 slider/pendulum/ball_offset normal Fact: a person's misjudgement of the middle is a stable
-                                   individual bias (pseudoneglect, Jewell & McCourt 2000);
-                                   its size here: the profile's per-episode bias std (choice).
+                                   individual bias (pseudoneglect, Jewell & McCourt 2000), and
+                                   so is the horizontal (the subjective visual vertical of
+                                   healthy adults lies within ~2 deg of the true one); its
+                                   size here: the profile's per-episode bias std (choice), so
+                                   offset and per-episode bias together are sqrt(2) times it
+                                   (``paper``: 0.8 deg each, 1.1 deg together).
 ==========================  =====  ===========================================================
 
 Everything else (physics-like constants of the person's strategy, retentions, fatigue) is

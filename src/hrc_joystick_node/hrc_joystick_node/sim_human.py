@@ -3,24 +3,43 @@
 Pure Python and numpy (no rclpy): the human node, the experiment runner and the benchmarks all
 use :class:`SimulatedHuman` in the same way::
 
-    human = SimulatedHuman(load_profile('skilled'), dof='rotation', seed=3)
+    human = SimulatedHuman(load_profile('skilled'), dof='rotation', seed=3,
+                           control_period=0.02)
     human.reset(episode=0)
-    command = human.act(state, ['pendulum'])   # float in [-1, 1] for every control step
+    command = human.act(state, ['pendulum'])   # float in [-1, 1], once per control_period
 
 ``state`` is anything with the attributes of ``hrc_sim_node.physics.PhysicsState`` (``step``,
 ``slider_position``, ``slider_velocity``, ``pendulum_angle``, ``pendulum_angular_velocity``,
 ``ball_position``, ``ball_velocity``); ``subtasks`` are the ids the session assigns to the
 human: ``slider`` (keep S_x at 0), ``pendulum`` (keep P_z at 0), ``ball`` (keep B_y at 0).
 
-The model, step by step (one call of :meth:`SimulatedHuman.act` per control period T)
-------------------------------------------------------------------------------------------
+The model, step by step (one call of :meth:`SimulatedHuman.act` per ``control_period`` T)
+-------------------------------------------------------------------------------------------
+The person is called every ``control_period`` s (the caller's contract: 0.2 s, the robot's
+period, in the protocol before issue 21; e.g. 0.02 s when the person acts at its own rate).
+Every delay, time constant, rate and probability of the model is in seconds and converted
+with T, so the same profile is the same person at any call period: noises are first-order
+(Ornstein-Uhlenbeck) processes advanced by T with the exact factor exp(-T / tau), lapses
+last seconds, the stick moves at most ``max_rate`` per second, the delay line keeps
+``HISTORY_SECONDS``.
+
 1. **Perception.** The person sees the slider height, the beam angle and the ball position on a
    monitor. Each percept is the true value plus a per-episode misjudgement of the zero (a bias,
-   drawn at reset: "where is the middle", "what is horizontal") plus a fresh noise sample per
-   step. Velocities are perceived with a relative (Weber) error plus a floor. The noise and the
-   bias are per watched quantity, and the beam angle is perceived worse than the slider height:
-   the paper (Sec. V.B) reports that its subjects judged translation better than rotation and
-   "struggled to identify if the pendulum was in the horizontal direction".
+   drawn at reset: "where is the middle", "what is horizontal") plus a noise that wanders in
+   time: a unit Ornstein-Uhlenbeck process per percept (correlation time
+   ``perception_noise_time``) scaled by the profile's standard deviation. Velocities are
+   perceived with a relative (Weber) error plus a floor, as processes of the same kind. The
+   noise and the bias are per watched quantity, and the beam angle is perceived worse than the
+   slider height: the paper (Sec. V.B) reports that its subjects judged translation better
+   than rotation and "struggled to identify if the pendulum was in the horizontal direction".
+   **The ball as a cue to the tilt**: people also see the ball roll, which tells them the beam
+   is not level. A complementary filter takes the beam angle from the eye for fast changes and
+   pulls it, with time constant ``ball_cue_time``, toward the tilt the ball's rolling speed
+   shows (``-ball_speed_tilt * speed``: a ball rolling east means the east end is low; the
+   person's learned internal model, 0.2 rad per m/s, the default physics' m_b g / c_b = 4.9
+   m/s per rad); a ball at or near an end stop (``BALL_CUE_RANGE``) shows nothing. So a
+   misjudged horizontal fades while the ball rolls freely, as a person corrects a beam that
+   looks level when the ball keeps rolling.
 2. **Reaction delay.** The person acts on what they perceived ``reaction_delay`` s ago (a
    buffer of percepts, linearly interpolated between control steps). A ``prediction`` share of
    the delay is compensated by extrapolating with the perceived velocity, as trained operators
@@ -30,8 +49,10 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
    the way, and how far ahead (``lead_time``) they look; a practiced person also pushes harder
    against a steady load (an integral term, ``integral_time``), e.g. the ball resting at an
    end stop and weighing the beam down. Both plants are velocity-like (heavy damping), so the
-   gains follow the crossover model: a crossover of about 2 rad/s, which the 0.2 s period and
-   the delay still leave stable; a novice's higher gain on the beam overshoots.
+   gains follow the crossover model: a crossover of about 2.5-3.5 rad/s for ``skilled`` and
+   ``paper`` (measured by ``bench/crossover.py``), with a lead that cancels the plants' lags;
+   ``novice`` and the ``*_v1`` profiles about 2 rad/s and less; a novice's higher gain on the
+   beam overshoots.
    Holding the ball (subtask ``ball``) is a cascade: the ball's offset sets a target beam
    angle (``ball_tilt``, ``ball_lead``, at most ``max_tilt``; the ball rolls toward the low
    end, so a ball east of the middle asks for the east end up), which the rotation actor
@@ -45,8 +66,11 @@ The model, step by step (one call of :meth:`SimulatedHuman.act` per control peri
 4. **Motor execution.** Limited bandwidth: the stick moves at most ``max_rate`` per second and
    follows the intent with a first-order neuromuscular lag (``neuromuscular_time``). Motor
    noise is signal-dependent (standard deviation ``motor_noise * |command|`` plus a floor
-   ``motor_noise_floor``). With probability ``lapse_probability`` per step attention lapses and
-   the stick is held where it was.
+   ``motor_noise_floor``) and correlated over ``motor_noise_time`` (a unit Ornstein-Uhlenbeck
+   process: the arm low-passes the noise of the motor command, as it does the intent).
+   Attention lapses fill the share ``lapse_probability`` of the time, each ``lapse_duration``
+   s long (a Poisson process of starts at the rate share / duration); during a lapse the stick
+   is held where it was.
 5. **Learning curve.** Noise, biases, motor noise and lapses start ``untrained_factor`` times
    larger and fall exponentially with the episodes the person has practiced (involved in at
    least one step), time constant ``learning_episodes``; the lead time and the prediction grow
@@ -76,6 +100,17 @@ each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the e
 the person's state so far (``practiced_episodes``, the fatigue and the adaptation, see
 :meth:`SimulatedHuman.snapshot`) and the sequence of states (and stamps).
 
+Version 1 (before issue 21)
+---------------------------
+The profiles ``novice_v1``, ``skilled_v1``, ``paper_v1`` and ``paper_symmetric_v1`` keep the
+numbers of the model before issue 21 and its per-call behaviour: ``perception_noise_time``,
+``motor_noise_time`` and ``lapse_duration`` 0 (a fresh noise sample and a lapse chance at every
+call, as before) and ``ball_cue_time`` 0 (no ball cue). With them every command is bit for bit
+the old one (test_sim_human.py pins digests of seeded episodes): the same number of random
+draws per call in the same order. They were fresh white noise per call: at a shorter call
+period their effect on the plant shrank (averaged out), so the old person looked better at a
+higher rate for a reason no person has; the processes in seconds remove that.
+
 Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 --------------------------------------------------------------------------
 * Visual reaction time to a display ~0.2-0.3 s; the effective delay of a human operator in
@@ -83,8 +118,27 @@ Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 * Bisecting a line (finding "the middle") is precise to ~1-3 % of its length with a small
   constant bias (Jewell & McCourt 2000, pseudoneglect): on the 0.2 m rod, a few mm.
 * Orientation judgments are best near horizontal/vertical (~1-2 degrees, Appelle 1972, the
-  oblique effect) in ideal conditions; judging a moving beam on a monitor is worse, and the
-  paper's subjects found the rotation hard: several degrees here.
+  oblique effect). The subjective visual vertical (SVV) of healthy adults lies within ~2
+  degrees of the true vertical (the clinical normal range, e.g. Friedmann 1970; Dieterich &
+  Brandt 1993), with a within-person standard deviation of ~1 degree from setting to setting.
+  Used here (choice within those facts): the beam-angle noise is 0.9-1.7 degrees (``skilled``
+  0.86, ``paper`` 1.15, ``novice`` 1.7; the paper's subjects judged the rotation worse than
+  the translation, so ``paper`` sits at the upper end), the per-episode bias 0.5-1.15
+  degrees, and the population's constant offset (:mod:`hrc_joystick_node.population`) has the
+  per-episode bias's standard deviation, so bias and offset together are within ~1.6
+  degrees (SD). ``paper_v1`` had 4 degrees of fresh noise per step and ~5 degrees of bias.
+* The noise's correlation time ``perception_noise_time`` = 0.05 s is a choice of the order of
+  the visual system's temporal integration (tens of ms to ~0.1 s, Bloch's law); what the
+  plant feels is its low-frequency power (std^2 * tau), which the crossover bench validates
+  through the remnant. Motor noise is correlated over ``motor_noise_time`` = 0.1 s, the arm's
+  neuromuscular time constant (the optimal-control model of the human operator filters its
+  motor noise through the same lag; Kleinman, Baron & Levison 1970).
+* Manual control of a velocity-like plant (K/s near the crossover) is described by McRuer's
+  crossover model: open loop ~ w_c e^(-s tau_e) / s near w_c, with w_c ~2-5 rad/s and an
+  effective delay tau_e ~0.1-0.3 s (McRuer & Jex 1967). The ``paper`` person's delay (0.2 s),
+  lead (0.2 s, cancelling the plants' 0.09-0.16 s lags, the model's lead equalization) and
+  gains (``*_full_scale``) are chosen so that ``bench/crossover.py`` fits it within those
+  ranges on both degrees of freedom (measured there, not fitted to data of this task).
 * Velocity discrimination has a Weber fraction of ~0.1-0.2 (McKee 1981).
 * Motor noise grows with the command (signal-dependent noise, Harris & Wolpert 1998; Schmidt
   et al. 1979); a person moves a joystick through its range in ~0.2-0.4 s (bandwidth).
@@ -100,10 +154,14 @@ Facts the numbers rest on (documented defaults in ``params/sim_human.yaml``)
 What is fact and what is a modelling choice: the structure (delay, PD(+I) control in crossover
 terms, signal-dependent noise, exponential practice, saturating fatigue, two-rate adaptation)
 follows the sources above; every number is a profile parameter chosen to match their orders
-of magnitude (marked per module), not fitted to data of this task.
+of magnitude (marked per module), not fitted to data of this task. Choices without a direct
+source: first-order (Ornstein-Uhlenbeck) noise processes and their correlation times, the
+ball cue as a complementary filter with its time constant (2 s: the person needs to see the
+ball roll for a while) and its end-stop range, lapses as a Poisson process of fixed length.
 """
 
 from dataclasses import dataclass
+import collections
 import math
 import pathlib
 import typing
@@ -127,8 +185,14 @@ SUBTASK_ALIASES = {'T2_1': SLIDER, 'T2_2': PENDULUM, 'T1_1': BALL}
 # Time over which a person integrates motion to judge a speed (s): the velocity noise floor is
 # the position noise per this time.
 MOTION_INTEGRATION_TIME = 0.5
-# Percepts kept for the delay line (control steps): 64 * 0.2 s, far beyond any reaction delay.
-HISTORY_LENGTH = 64
+# Percepts kept for the delay line (s): far beyond any reaction delay (64 calls at 0.2 s).
+HISTORY_SECONDS = 12.8
+# A ball this far from the middle of the beam (m) is at or near an end stop (the default
+# beam's stops are at +-0.25 m): resting there it says nothing about the tilt, so the ball
+# cue is not updated (a choice).
+BALL_CUE_RANGE = 0.2
+# Perception channels with their own noise process, in the order of _Percept.
+PERCEPT_CHANNELS = 6
 
 
 @dataclass
@@ -140,31 +204,44 @@ class HumanProfile:
     """
 
     description: str = param('', 'who this profile models')
-    # perception
-    slider_noise: float = param(0.0015, 'std of the perceived slider height, per step (m)',
+    # perception (noises are the standard deviations of a process correlated over
+    # perception_noise_time; biases are drawn once per episode)
+    slider_noise: float = param(0.0015, 'std of the perceived slider height (m)',
                                 low=0.0, high=0.1)
-    pendulum_noise: float = param(0.02, 'std of the perceived beam angle, per step (rad)',
+    pendulum_noise: float = param(0.015, 'std of the perceived beam angle (rad)',
                                   low=0.0, high=1.0)
-    ball_noise: float = param(0.004, 'std of the perceived ball position, per step (m)',
+    ball_noise: float = param(0.004, 'std of the perceived ball position (m)',
                               low=0.0, high=0.25)
     slider_bias: float = param(0.0015, 'std of the per-episode misjudged middle of the rod (m)',
                                low=0.0, high=0.1)
-    pendulum_bias: float = param(0.015, 'std of the per-episode misjudged horizontal (rad)',
+    pendulum_bias: float = param(0.01, 'std of the per-episode misjudged horizontal (rad)',
                                  low=0.0, high=1.0)
     ball_bias: float = param(0.003, 'std of the per-episode misjudged middle of the beam (m)',
                              low=0.0, high=0.25)
     velocity_noise: float = param(0.12, 'Weber fraction of perceived speeds (relative std)',
                                   low=0.0, high=2.0)
+    perception_noise_time: float = param(
+        0.05, 'correlation time of the perception noise (s): a first-order (Ornstein-Uhlenbeck) '
+        'process advanced by the call period; 0 = a fresh sample at every call (profile '
+        'version 1)', low=0.0, high=100.0)
+    ball_cue_time: float = param(
+        2.0, 'time constant (s) over which the rolling ball corrects the judged beam angle '
+        '(a ball that keeps rolling east means the east end is low); 0 = no ball cue '
+        '(profile version 1)', low=0.0, high=1000.0)
+    ball_speed_tilt: float = param(
+        0.2, 'beam angle (rad) the person reads from a rolling speed of 1 m/s of the ball '
+        '(a learned internal model; default physics: m_b * g / ball_damping = 4.9 m/s per '
+        'rad)', low=0.0, high=100.0)
     # timing
-    reaction_delay: float = param(0.22, 'delay from seeing to acting (s)', low=0.0, high=2.0)
+    reaction_delay: float = param(0.18, 'delay from seeing to acting (s)', low=0.0, high=2.0)
     prediction: float = param(0.5, 'share of the delay compensated by extrapolation',
                               low=0.0, high=1.0)
     # control
-    slider_full_scale: float = param(0.1, 'slider error at which the stick is pushed fully (m)',
+    slider_full_scale: float = param(0.08, 'slider error at which the stick is pushed fully (m)',
                                      low=1e-4, high=1.0)
-    pendulum_full_scale: float = param(0.5, 'beam angle error at which the stick is pushed '
+    pendulum_full_scale: float = param(0.32, 'beam angle error at which the stick is pushed '
                                        'fully (rad)', low=1e-3, high=10.0)
-    lead_time: float = param(0.1, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
+    lead_time: float = param(0.2, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
     integral_time: float = param(
         1.5, 'integral time of the level-2 hold (s): a person who sees the slider or the beam '
         'stay off pushes harder against a steady load; 0 = no integral', low=0.0, high=1000.0)
@@ -185,8 +262,14 @@ class HumanProfile:
                                high=2.0)
     motor_noise_floor: float = param(0.01, 'motor noise std at rest (normalized command)',
                                      low=0.0, high=1.0)
-    lapse_probability: float = param(0.01, 'chance per step that the stick is held unchanged',
-                                     low=0.0, high=1.0)
+    motor_noise_time: float = param(
+        0.1, 'correlation time of the motor noise (s), advanced by the call period; 0 = a '
+        'fresh sample at every call (profile version 1)', low=0.0, high=10.0)
+    lapse_probability: float = param(0.01, 'share of the time the stick is held unchanged '
+                                     '(attention lapses; with lapse_duration 0: the chance '
+                                     'per call)', low=0.0, high=1.0)
+    lapse_duration: float = param(0.2, 'length of one lapse of attention (s); 0 = one call '
+                                  '(profile version 1)', low=0.0, high=10.0)
     # learning curve
     untrained_factor: float = param(1.2, 'noises, biases and lapses of the first episode, '
                                     'relative to the trained person', low=1.0, high=20.0)
@@ -320,6 +403,24 @@ class _Percept(typing.NamedTuple):
     ball_velocity: float
 
 
+def _memory(period: float, time_constant: float) -> float:
+    """Return the share of a first-order process kept over ``period`` (0 for tau = 0)."""
+    return math.exp(-period / time_constant) if time_constant > 0.0 else 0.0
+
+
+def _advance(value: typing.Optional[float], memory: float, rng) -> float:
+    """Advance a unit-variance first-order (Ornstein-Uhlenbeck) process by one call.
+
+    Exact discretization: x' = m * x + sqrt(1 - m^2) * N(0, 1) keeps the variance at 1 for any
+    call period; ``memory`` 0 (or no value yet: the stationary draw) is a fresh N(0, 1)
+    sample, one draw either way, as the version-1 person drew per call.
+    """
+    draw = rng.standard_normal()
+    if value is None or memory == 0.0:
+        return float(draw)
+    return memory * value + math.sqrt(1.0 - memory * memory) * float(draw)
+
+
 def _interpolate(older: _Percept, newer: _Percept, weight_newer: float) -> _Percept:
     return _Percept(*(o + weight_newer * (n - o) for o, n in zip(older, newer)))
 
@@ -339,6 +440,21 @@ class SimulatedHuman:
         self.dof = check_dof(dof)
         self.seed = int(seed)
         self.control_period = float(control_period)
+        # Calls of the delay line kept: HISTORY_SECONDS at this call rate (64 at 0.2 s).
+        self._history_length = max(2, int(math.ceil(HISTORY_SECONDS / self.control_period
+                                                    - 1e-9)))
+        # One call advances every process of the person by control_period seconds: the
+        # factor of a first-order process of time constant tau is exp(-period / tau).
+        self._perception_memory = _memory(self.control_period, profile.perception_noise_time)
+        self._motor_memory = _memory(self.control_period, profile.motor_noise_time)
+        self._ball_cue_gain = (1.0 - _memory(self.control_period, profile.ball_cue_time)
+                               if profile.ball_cue_time > 0.0 else 0.0)
+        if profile.lapse_duration > 0.0:
+            # Lapses start as a Poisson process whose rate makes them fill the share
+            # lapse_probability of the time (for small shares): rate = share / duration.
+            self._lapse_calls = profile.lapse_duration / self.control_period
+        else:
+            self._lapse_calls = 0.0
         self.practiced_episodes = int(practiced_episodes)
         self.steps_on_task = 0  # steps acted in the whole session
         self.fatigue = Fatigue(profile.fatigue_onset_minutes * 60.0,
@@ -381,7 +497,13 @@ class SimulatedHuman:
             pendulum_velocity=0.0,
             ball=profile.ball_offset + self._rng.normal(0.0, profile.ball_bias * practice),
             ball_velocity=0.0)
-        self._history: typing.List[_Percept] = []
+        self._history: typing.Deque[_Percept] = collections.deque(maxlen=self._history_length)
+        # Unit-variance noise states (perception channels, motor), None until the first
+        # call of the episode draws them from their stationary distribution.
+        self._perception_state: typing.Optional[typing.List[float]] = None
+        self._motor_state: typing.Optional[float] = None
+        self._ball_cue = 0.0  # correction of the judged beam angle from the ball's rolling (rad)
+        self._lapse_left = 0.0  # calls of the current lapse still to come
         self._stick = 0.0  # where the stick is (normalized), before motor noise
         self._intent = 0.0  # where the arm is heading (after the rate limit)
         self._hold_integral = 0.0  # integral part of the level-2 hold (normalized command)
@@ -449,7 +571,6 @@ class SimulatedHuman:
         self.steps_on_task += 1
 
         self._history.append(self._perceive(state, practice))
-        del self._history[:-HISTORY_LENGTH]
         delay = profile.reaction_delay * fatigue.delay_factor
         seen = self._delayed(delay / self.control_period)
         # Extrapolate the delayed percept over the compensated share of the delay; a novice
@@ -480,7 +601,7 @@ class SimulatedHuman:
         intent = max(-1.0, min(1.0, intent))
 
         lapse = profile.lapse_probability * practice * fatigue.lapse_factor
-        if rng.random() >= lapse:
+        if not self._lapsed(lapse, rng.random()):
             # Bandwidth: a slew-rate limit, then the neuromuscular lag toward that point.
             step_limit = profile.max_rate * self.control_period
             self._intent += max(-step_limit, min(step_limit, intent - self._intent))
@@ -491,8 +612,31 @@ class SimulatedHuman:
             self._stick += follow * (self._intent - self._stick)
         noise_std = (profile.motor_noise * abs(self._stick)
                      + profile.motor_noise_floor) * practice * fatigue.noise_factor
-        command = self._stick + rng.normal(0.0, noise_std)
+        self._motor_state = _advance(self._motor_state, self._motor_memory, rng)
+        command = self._stick + noise_std * self._motor_state
         return max(-1.0, min(1.0, float(command)))
+
+    def _lapsed(self, share: float, draw: float) -> bool:
+        """Return whether attention lapses at this call (``draw``: uniform in [0, 1)).
+
+        Profile version 1 (``lapse_duration`` 0): a lapse is one call, with chance ``share``.
+        Otherwise a lapse lasts ``lapse_duration`` s (rounded to calls) and lapses start at
+        the rate ``share / lapse_duration`` per s, so they fill the share ``share`` of the time
+        at any call period (for small shares).
+        """
+        if self._lapse_calls <= 0.0:
+            return draw < share
+        if self._lapse_left > 0.0:
+            self._lapse_left -= 1.0
+            return True
+        # A lapse cannot be shorter than a call: with calls longer than a lapse, each call
+        # lapses with about the chance ``share``, which keeps the share of the time.
+        calls = max(1.0, self._lapse_calls)
+        start_chance = 1.0 - math.exp(-share / calls) if share < 1.0 else 1.0
+        if draw < start_chance:
+            self._lapse_left = max(0.0, round(self._lapse_calls) - 1.0)
+            return True
+        return False
 
     def _hold(self, error: float, rate: float, lead: float, full_scale: float) -> float:
         """Return the normalized push against ``error`` of the level-2 hold (PID in effect).
@@ -513,20 +657,44 @@ class SimulatedHuman:
         return push + self.adaptation.compensation
 
     def _perceive(self, state, practice: float) -> _Percept:
+        """Return what the person sees now: biased, noisy values (noise correlated in time)."""
         profile, rng, bias = self.profile, self._rng, self._bias
+        noise_state = self._perception_state or [None] * PERCEPT_CHANNELS
+        memory = self._perception_memory
         values = []
-        for position, velocity, noise, offset in (
+        for channel, (position, velocity, noise, offset) in enumerate((
                 (state.slider_position, state.slider_velocity, profile.slider_noise,
                  bias.slider),
                 (state.pendulum_angle, state.pendulum_angular_velocity, profile.pendulum_noise,
                  bias.pendulum),
-                (state.ball_position, state.ball_velocity, profile.ball_noise, bias.ball)):
+                (state.ball_position, state.ball_velocity, profile.ball_noise, bias.ball))):
             noise *= practice
-            values.append(position - offset + rng.normal(0.0, noise))
+            position_noise = _advance(noise_state[2 * channel], memory, rng)
+            velocity_noise = _advance(noise_state[2 * channel + 1], memory, rng)
+            noise_state[2 * channel:2 * channel + 2] = position_noise, velocity_noise
+            values.append(position - offset + noise * position_noise)
             velocity_std = (profile.velocity_noise * practice * abs(velocity)
                             + noise / MOTION_INTEGRATION_TIME)
-            values.append(velocity + rng.normal(0.0, velocity_std))
-        return _Percept(*values)
+            values.append(velocity + velocity_std * velocity_noise)
+        self._perception_state = noise_state
+        percept = _Percept(*values)
+        if self._ball_cue_gain > 0.0:
+            percept = self._with_ball_cue(percept)
+        return percept
+
+    def _with_ball_cue(self, percept: _Percept) -> _Percept:
+        """Correct the judged beam angle slowly toward the tilt the rolling ball shows.
+
+        A complementary filter: the eye's angle for fast changes, the ball's rolling speed
+        (``-ball_speed_tilt * speed``: rolling east means the east end is low) for the slow
+        part, so a misjudged horizontal fades over ``ball_cue_time`` while the ball rolls
+        freely. A ball at or near an end stop shows nothing and leaves the correction as is.
+        """
+        if abs(percept.ball) < BALL_CUE_RANGE:
+            tilt_from_ball = -self.profile.ball_speed_tilt * percept.ball_velocity
+            self._ball_cue += self._ball_cue_gain * (tilt_from_ball - percept.pendulum
+                                                     - self._ball_cue)
+        return percept._replace(pendulum=percept.pendulum + self._ball_cue)
 
     def _delayed(self, lag_steps: float) -> _Percept:
         """Return the percept of ``lag_steps`` control steps ago (interpolated)."""

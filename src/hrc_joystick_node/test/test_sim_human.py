@@ -1,6 +1,7 @@
 """The simulated human: profiles, determinism, and holding its subtask on the real physics."""
 
 import dataclasses
+import math
 import pathlib
 
 import numpy
@@ -160,3 +161,158 @@ def test_profile_defaults_are_valid():
     from hrc_common.params import validate
 
     assert validate(HumanProfile()) == []
+
+
+# -- issue 21: a person grounded in tilt perception, the same at any call period ---------------
+def synthetic_states(steps=200, period=0.2):
+    """Return a fixed, physics-free state sequence (smooth sines on every quantity)."""
+    import math
+    from hrc_joystick_node.sim_human import StateView
+
+    states = []
+    for step in range(steps):
+        time = step * period
+        states.append(StateView(
+            step, time, 0.03 * math.sin(0.7 * time), 0.021 * math.cos(0.7 * time),
+            0.1 * math.sin(1.3 * time + 0.4), 0.13 * math.cos(1.3 * time + 0.4),
+            0.05 * math.sin(0.5 * time + 1.0), 0.025 * math.cos(0.5 * time + 1.0)))
+    return states
+
+
+# sha256 (first 16 hex digits) of repr() of the commands of two seeded episodes (seed 3,
+# episodes 0 and 1) on synthetic_states, computed with the model before issue 21 (commit
+# 0aecc4c, profiles novice/skilled/paper/paper_symmetric). The *_v1 profiles reproduce them.
+VERSION_1_COMMANDS = {
+    ('paper', 'rotation'): '34c432c25097471b', ('paper', 'translation'): '11f2e5ea59a3708e',
+    ('paper_symmetric', 'rotation'): 'd41860aa97dd044d',
+    ('paper_symmetric', 'translation'): '1b60fc876f4a7e24',
+    ('skilled', 'rotation'): '00559984ffeb5059', ('skilled', 'translation'): 'd5f053bfe04daa98',
+    ('novice', 'rotation'): 'a6d75cbd0ec57825', ('novice', 'translation'): 'e6b072aa5c0f5933',
+}
+VERSION_1_PERSON_4 = {'paper': '35eaa9437b341f98', 'skilled': 'd7c066533c23c45c'}
+SUBTASKS_OF = {'rotation': ['pendulum', 'ball'], 'translation': ['slider', 'ball']}
+
+
+def command_digest(profile, dof, stamps=False):
+    import hashlib
+
+    human = SimulatedHuman(profile, dof, seed=3)
+    commands = []
+    for episode in (0, 1):
+        human.reset(episode)
+        for state in synthetic_states():
+            now = (episode * 200 + state.step) * 0.2 if stamps else None
+            commands.append(human.act(state, SUBTASKS_OF[dof], now=now))
+    return hashlib.sha256(repr(commands).encode()).hexdigest()[:16]
+
+
+@pytest.mark.parametrize('name, dof', sorted(VERSION_1_COMMANDS))
+def test_the_version_1_profiles_reproduce_the_old_commands_exactly(name, dof):
+    expected = VERSION_1_COMMANDS[(name, dof)]
+    assert command_digest(PROFILES[f'{name}_v1'], dof) == expected
+    assert command_digest(PROFILES[f'{name}_v1'], dof, stamps=True) == expected
+    # ... and the current profile of that name is a different person.
+    assert command_digest(PROFILES[name], dof) != expected
+
+
+@pytest.mark.parametrize('name', sorted(VERSION_1_PERSON_4))
+def test_a_person_of_the_version_1_population_reproduces_too(name):
+    import hashlib
+    from hrc_joystick_node.population import sample_person
+
+    human = SimulatedHuman(sample_person(PROFILES[f'{name}_v1'], 4), 'rotation', seed=3)
+    human.reset(0)
+    commands = [human.act(state, ['pendulum', 'ball']) for state in synthetic_states()]
+    assert hashlib.sha256(repr(commands).encode()).hexdigest()[:16] == VERSION_1_PERSON_4[name]
+
+
+def test_the_current_profiles_judge_the_beam_within_human_ranges():
+    # Subjective visual vertical of healthy adults: within ~2 deg, within-person SD ~1 deg.
+    # The person's total misjudgement of the horizontal (the per-episode bias and a
+    # population offset of the same SD) and the noise stay within 2 deg; paper_v1's did not.
+    two_degrees = math.radians(2.0)
+
+    def within(profile):
+        return (profile.pendulum_noise <= two_degrees
+                and math.sqrt(2.0) * profile.pendulum_bias <= two_degrees)
+
+    assert not within(PROFILES['paper_v1']) and not within(PROFILES['novice_v1'])
+    for name, profile in PROFILES.items():
+        if not name.endswith('_v1'):
+            assert within(profile), name
+            assert profile.perception_noise_time > 0.0 and profile.motor_noise_time > 0.0
+            assert profile.lapse_duration > 0.0 and profile.ball_cue_time > 0.0
+
+
+def quiet_profile(**changes):
+    """Return the skilled person with every noise, bias, lapse and fatigue off, then changes."""
+    silent = dict(slider_noise=0.0, pendulum_noise=0.0, ball_noise=0.0, slider_bias=0.0,
+                  pendulum_bias=0.0, ball_bias=0.0, velocity_noise=0.0, motor_noise=0.0,
+                  motor_noise_floor=0.0, lapse_probability=0.0, untrained_factor=1.0,
+                  fatigue_delay_ceiling=0.0, fatigue_noise_ceiling=0.0, fatigue_lapse_ceiling=0.0)
+    silent.update(changes)
+    return dataclasses.replace(PROFILES['skilled'], **silent)
+
+
+def lag_correlation(values, lag):
+    values = numpy.asarray(values) - numpy.mean(values)
+    return float(numpy.mean(values[:-lag] * values[lag:]) / numpy.var(values))
+
+
+@pytest.mark.parametrize('period', [0.2, 0.02])
+def test_motor_noise_is_one_process_in_seconds_at_any_call_period(period):
+    # Nothing in reach: the command is the motor noise floor alone.
+    profile = quiet_profile(motor_noise_floor=0.05, motor_noise_time=0.1)
+    human = SimulatedHuman(profile, 'rotation', seed=0, control_period=period)
+    still = synthetic_states(1)[0]
+    commands = [human.act(still, []) for _ in range(int(round(2000.0 / period)))]
+    assert numpy.std(commands) == pytest.approx(0.05, rel=0.05)
+    # The correlation over 0.2 s is exp(-0.2 / 0.1) at both periods: the same process.
+    calls = int(round(0.2 / period))
+    assert lag_correlation(commands, calls) == pytest.approx(math.exp(-2.0), abs=0.04)
+    # Version 1 (time 0): fresh noise at every call, uncorrelated even 0.02 s apart.
+    white = SimulatedHuman(dataclasses.replace(profile, motor_noise_time=0.0), 'rotation',
+                           seed=0, control_period=period)
+    commands = [white.act(still, []) for _ in range(20000)]
+    assert abs(lag_correlation(commands, 1)) < 0.03
+
+
+@pytest.mark.parametrize('period', [0.2, 0.02])
+def test_perception_noise_is_correlated_over_its_time_constant(period):
+    profile = quiet_profile(pendulum_noise=0.02, perception_noise_time=0.5, ball_cue_time=0.0)
+    human = SimulatedHuman(profile, 'rotation', seed=1, control_period=period)
+    still = synthetic_states(1)[0]
+    seen = [human._perceive(still, 1.0).pendulum - still.pendulum_angle
+            for _ in range(int(round(4000.0 / period)))]
+    assert numpy.std(seen) == pytest.approx(0.02, rel=0.08)
+    calls = int(round(0.4 / period))  # 0.4 s apart: exp(-0.4 / 0.5) at both periods
+    assert lag_correlation(seen, calls) == pytest.approx(math.exp(-0.8), abs=0.05)
+
+
+@pytest.mark.parametrize('period', [0.2, 0.02])
+def test_lapses_fill_their_share_of_the_time_and_last_their_duration(period):
+    profile = quiet_profile(lapse_probability=0.05, lapse_duration=0.2)
+    human = SimulatedHuman(profile, 'rotation', seed=2, control_period=period)
+    rng = numpy.random.default_rng(0)
+    lapsed = [human._lapsed(0.05, rng.random()) for _ in range(int(round(20000.0 / period)))]
+    assert numpy.mean(lapsed) == pytest.approx(0.05, rel=0.15)
+    starts = sum(1 for before, now in zip([False] + lapsed, lapsed) if now and not before)
+    assert sum(lapsed) * period / starts == pytest.approx(0.2, rel=0.15)
+
+
+@pytest.mark.parametrize('cue_time, judged_tilt', [(0.0, 0.05 - 0.03), (2.0, 0.05)])
+def test_the_rolling_ball_corrects_a_misjudged_horizontal(cue_time, judged_tilt):
+    from hrc_joystick_node.sim_human import StateView
+
+    # The beam is tilted 0.05 rad (east end up), the ball rolls west at the speed that tilt
+    # gives; the person misjudges the horizontal by 0.03 rad.
+    profile = quiet_profile(pendulum_offset=0.03, ball_cue_time=cue_time,
+                            ball_speed_tilt=0.2)
+    human = SimulatedHuman(profile, 'rotation', seed=0, control_period=0.02)
+    rolling = StateView(0, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, -0.05 / 0.2)
+    for _ in range(1000):  # 20 s, ten cue time constants
+        percept = human._perceive(rolling, 1.0)
+    assert percept.pendulum == pytest.approx(judged_tilt, abs=1e-3)
+    # A ball resting at an end stop says nothing: the correction stays where it was.
+    at_stop = rolling._replace(ball_position=0.25, ball_velocity=0.0)
+    assert human._perceive(at_stop, 1.0).pendulum == pytest.approx(judged_tilt, abs=1e-3)
