@@ -1,6 +1,8 @@
 """``sim.human_period = control_period`` reproduces the sessions from before human slices.
 
-The digests were taken at commit 0aecc4c (before the human's own rate existed) with
+With the simulated person of that time (``paper_v1``, the ``paper`` profile's numbers before
+issue 21 made its perception human-like; ``sim_human.yaml``). The digests were taken at commit
+0aecc4c (before the human's own rate existed) with
 ``golden.session_digest`` and the same configurations: every state, command, human action,
 agent step and episode summary of two short sessions (cases 4 and 5: the human acts from the
 first episode; a PPO update after the second episode). Any change of those numbers at the old
@@ -21,8 +23,8 @@ FIELDS = {
                    'truncated'),
     '/hrc/robot/cmd_wrench': ('header', 'wrench'),
     '/hrc/human/cmd_wrench': ('header', 'wrench'),
-    '/hrc/human/action': ('header', 'episode', 'step', 'command', 'dof', 'source',
-                          'source_detail', 'engaged'),
+    # (source_detail names the profile: 'paper' then, 'paper_v1' for the same numbers now)
+    '/hrc/human/action': ('header', 'episode', 'step', 'command', 'dof', 'source', 'engaged'),
     '/hrc/agent/step': ('header', 'episode', 'step', 'observation_human_action', 'action',
                         'wrench', 'subtask_ids', 'reward_components', 'reward',
                         'value_estimate', 'log_prob', 'deterministic'),
@@ -74,20 +76,21 @@ def session_digest(config) -> tuple:
 
 
 BEFORE_HUMAN_SLICES = {
-    4: ('5d1c5390df3b0c3174dec475f236a6dbfa1b32d2127fd5c14f0b68256fa5396d', 606),
-    5: ('be6cc2990430a189eebf3f8fa24a9a670fbd97ca17faf5dd5c9cbf1242f05cad', 606),
+    4: ('2fb285e1f80df3e32c54890e1dc238aa9bc3418131f3751cf45b4a21eb8ceebc', 606),
+    5: ('55fb39ea1866b3e427874da535c033664d1c2dc18773c52b7da1a755087885a1', 606),
 }
 
 
-def config(case: int, human_period: float) -> EngineConfig:
+def config(case: int, human_period: float, profile: str = 'paper_v1') -> EngineConfig:
     return EngineConfig(case=case, seed=0, training_episodes=2, evaluation_episodes=1,
                         session_id='golden', record=False, checkpoints=False,
                         overrides={'sim.episode_duration': 8.0, 'agent.horizon': 80,
-                                   'sim.human_period': human_period})
+                                   'sim.human_period': human_period,
+                                   'human.profile': profile})
 
 
 @pytest.mark.parametrize('case', sorted(BEFORE_HUMAN_SLICES))
-def test_the_old_rate_reproduces_the_sessions_from_before(case):
+def test_the_old_rate_and_person_reproduce_the_sessions_from_before(case):
     assert session_digest(config(case, 0.2)) == BEFORE_HUMAN_SLICES[case]
 
 
