@@ -21,6 +21,8 @@ import bisect
 import collections
 import subprocess
 
+import pytest
+
 from hrc_common.testing import executable_path
 
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
@@ -67,31 +69,46 @@ def by_episode(bag):
     return grouped
 
 
-def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_domain_id,
-                                                                  read_rosbag):
+def run_both(tmp_path, domain_id: int, args: list, read_rosbag) -> tuple:
+    """Run the session of ``args`` through the graph and the engine; return both bags."""
     graph_dir, engine_dir = tmp_path / 'graph', tmp_path / 'engine'
     graph = subprocess.run(
-        [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(ros_domain_id),
+        [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
          '--bags-dir', str(graph_dir / 'bags'), '--runs-dir', str(graph_dir / 'runs'),
-         '--no-report', *ARGS], capture_output=True, text=True, timeout=300)
+         '--no-report', *args], capture_output=True, text=True, timeout=300)
     assert graph.returncode == 0, graph.stdout + graph.stderr
     engine = subprocess.run(
         [str(executable_path('hrc_engine', 'inprocess_session')),
          '--bags-dir', str(engine_dir / 'bags'), '--runs-dir', str(engine_dir / 'runs'),
-         *ARGS], capture_output=True, text=True, timeout=300)
+         *args], capture_output=True, text=True, timeout=300)
     assert engine.returncode == 0, engine.stdout + engine.stderr
+    return read_rosbag(graph_dir / 'bags' / 'same'), read_rosbag(engine_dir / 'bags' / 'same')
 
-    graph_bag = read_rosbag(graph_dir / 'bags' / 'same')
-    engine_bag = read_rosbag(engine_dir / 'bags' / 'same')
+
+def assert_same(graph_bag, engine_bag, episodes) -> dict:
+    """Assert every message of TOPICS equal episode by episode; return the graph's grouped."""
     graph_messages, engine_messages = by_episode(graph_bag), by_episode(engine_bag)
     for topic in TOPICS:
-        assert sorted(graph_messages[topic]) == [0, 1, 2], topic
-        for episode in (0, 1, 2):
+        assert sorted(graph_messages[topic]) == list(episodes), topic
+        for episode in episodes:
             expected, got = graph_messages[topic][episode], engine_messages[topic][episode]
             assert len(got) == len(expected), (topic, episode, len(got), len(expected))
             for index, (one, other) in enumerate(zip(expected, got)):
                 assert one == other, f'{topic} episode {episode} message {index}: graph ' \
                     f'{one} != engine {other}'
+
+    # SessionStatus: the same sequence of announcements apart from the wall-clock stamp.
+    def announcements(bag):
+        return [{name: value for name, value in fields_of(status).items() if name != 'header'}
+                for status in bag['/hrc/session']]
+    assert announcements(engine_bag) == announcements(graph_bag)
+    return graph_messages
+
+
+def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_domain_id,
+                                                                  read_rosbag):
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, ARGS, read_rosbag)
+    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     assert len(graph_messages['/hrc/state'][2]) == STEPS + 1
     # The human acted at its own rate: a wrench for each slice of every step, the applied
     # ones in each period's state.
@@ -101,8 +118,18 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
                    for state in graph_messages['/hrc/state'][episode][1:])
     assert graph_messages['/hrc/episode'][2][0]['evaluation']
 
-    # SessionStatus: the same sequence of announcements apart from the wall-clock stamp.
-    def announcements(bag):
-        return [{name: value for name, value in fields_of(status).items() if name != 'header'}
-                for status in bag['/hrc/session']]
-    assert announcements(engine_bag) == announcements(graph_bag)
+
+@pytest.mark.slow
+@pytest.mark.parametrize('case', [1, 2, 3, 4, 6])
+def test_every_case_is_the_same_in_the_graph_and_the_engine(tmp_path, ros_domain_id,
+                                                           read_rosbag, case):
+    """Short sessions of the other cases (10 steps an episode).
+
+    Roles that change at an episode boundary included (cases 3 and 4 give the human the ball
+    in the evaluation episode); a PPO update after the second episode.
+    """
+    args = ['--case', str(case), '--episodes', '2', '--eval-episodes', '1', '--session-id',
+            'same', '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
+            '--set', 'agent.minibatch_size=8']
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    assert_same(graph_bag, engine_bag, (0, 1, 2))

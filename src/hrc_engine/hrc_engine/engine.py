@@ -200,6 +200,9 @@ class InProcessSession:
         """Publish a SessionStatus as the agent does (and tell the human the roles)."""
         core = self.core
         self.human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
+        # The sim takes the roles from the same announcement: whether the human is involved
+        # decides whether a period is stepped slice by slice at the human's rate.
+        self.protocol.set_roles(core.robot_dof, core.human_involved)
         self._write('/hrc/session', messages.session_status(core, text, self.clock()))
 
     # -- the session ------------------------------------------------------------------------
