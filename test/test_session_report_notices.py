@@ -5,7 +5,7 @@ used to print the report's stderr only when it failed.
 """
 
 from hrc_bag.synthetic import record_in_process, strategy_plan
-from hrc_bringup.plan import SessionSettings
+from hrc_common.session_plan import SessionSettings
 from hrc_bringup.session import report
 
 

@@ -28,16 +28,18 @@ from rclpy.node import Node
 
 CONTROL_PERIOD_NS = 200_000_000    # simulation time per control step (0.2 s)
 
-# topic -> (type, QoS its publisher offers), as in docs/architecture.md
-TOPICS = {
-    hrc_topics.STATE: (TaskState, hrc_qos.STATE_QOS),
-    hrc_topics.ROBOT_CMD_WRENCH: (WrenchStamped, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_CMD_WRENCH: (WrenchStamped, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_ACTION: (HumanAction, hrc_qos.HUMAN_ACTION_QOS),
-    hrc_topics.SESSION: (SessionStatus, hrc_qos.SESSION_QOS),
-    hrc_topics.EPISODE: (EpisodeSummary, hrc_qos.EPISODE_QOS),
-    hrc_topics.AGENT_STEP: (AgentStep, hrc_qos.AGENT_STEP_QOS),
+# topic -> (type, QoS its publisher offers): the contract's (hrc_common.qos_table)
+MESSAGE_CLASSES = {
+    hrc_topics.STATE: TaskState,
+    hrc_topics.ROBOT_CMD_WRENCH: WrenchStamped,
+    hrc_topics.HUMAN_CMD_WRENCH: WrenchStamped,
+    hrc_topics.HUMAN_ACTION: HumanAction,
+    hrc_topics.SESSION: SessionStatus,
+    hrc_topics.EPISODE: EpisodeSummary,
+    hrc_topics.AGENT_STEP: AgentStep,
 }
+TOPICS = {topic: (message_class, hrc_qos.OF_TOPIC[topic])
+          for topic, message_class in MESSAGE_CLASSES.items()}
 
 
 @dataclass

@@ -4,9 +4,10 @@
     ros2 run hrc_bringup session --case 1 --mode realtime --human auto --subject-id P07
 
 It starts sim, agent, human and recorder as separate processes (the executables ``ros2 run``
-starts) with one parameter file composed from ``params/*.yaml`` (see hrc_bringup.plan), prints a
-progress line per episode, and stops everything when the agent finishes, a node dies, or on
-Ctrl-C / SIGTERM, the recorder last so its bags are closed. Then it runs the report.
+starts) with one parameter file composed from ``params/*.yaml`` (see
+hrc_common.session_plan), prints a progress line per episode, and stops everything when the
+agent finishes, a node dies, or on Ctrl-C / SIGTERM, the recorder last so its bags are closed.
+Then it runs the report.
 
 Live sessions (hrc_live, docs/live_study.md): ``--display`` also starts the display node (the
 person's page and the experimenter's console on localhost); ``--params FILE`` merges a
@@ -44,15 +45,15 @@ import sys
 import time
 
 from hrc_common.contract import Phase, phase_label
+from hrc_common import paths
 from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
                                         OPERATOR_SERVICES)
+from hrc_common.session_plan import (compose, NODES, new_session_id, parse_overrides,
+                                     SessionSettings, write_session_files)
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
 import yaml
 
-from hrc_bringup.overrides import parse_overrides
-from hrc_bringup.plan import (compose, NODES, new_session_id, SessionSettings,
-                              write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
 # Seconds given to DDS discovery after every practice node is seen, before the sim starts.
@@ -66,15 +67,6 @@ STATE_GAP_S = 0.5
 STATUS_SILENCE_S = 2.5
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
-
-
-def default_params_dir() -> pathlib.Path:
-    """Return the parameter files: ./params in a checkout, else the installed ones."""
-    local = pathlib.Path('params')
-    if (local / 'sim.yaml').is_file():
-        return local
-    from ament_index_python.packages import get_package_share_directory
-    return pathlib.Path(get_package_share_directory('hrc_bringup')) / 'params'
 
 
 def parse_args(argv=None):
@@ -614,7 +606,7 @@ def run_session(settings: SessionSettings, options) -> int:
 
     from hrc_common.executables import executable_path
 
-    params_dir = pathlib.Path(options.params_dir) if options.params_dir else default_params_dir()
+    params_dir = pathlib.Path(options.params_dir) if options.params_dir else paths.params_dir()
     try:
         parameters = compose(settings, params_dir)
     except (ValueError, OSError) as error:

@@ -1,6 +1,6 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
-from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
+from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord
 
 
 def _nested(config: dict, *keys, default=None):
@@ -53,7 +53,7 @@ def record_from_bag_session(session) -> SessionRecord:
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
         final_evaluation=_final_flag(summary))
         for summary in session.summaries]
-    strategy, robot_dof = CASES.get(session.case_id, (session.strategy, session.robot_dof))
+    strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
     try:
         seed = int(session.seed)
     except ValueError:

@@ -16,7 +16,7 @@ import numpy
 from hrc_study import figures
 from hrc_study.chooser import choice_markdown, choose, PRESETS
 from hrc_study.findings import evaluate_findings, significance_note
-from hrc_study.sessions import CASES, measures, STRATEGY_SHORT
+from hrc_study.sessions import case_roles, measures, STRATEGY_SHORT
 from hrc_study.statistics import kaplan_meier, mean_interval
 
 # The paper's Table II (Tao et al.): human-involved, total episodes, total error, human effort.
@@ -57,7 +57,7 @@ def table2_markdown(rows: dict) -> str:
     header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for case_id, values in rows.items():
-        strategy, robot = CASES.get(case_id, ('?', '?'))
+        strategy, robot = case_roles().get(case_id, ('?', '?'))
         cells = [str(case_id), STRATEGY_SHORT.get(strategy, strategy), robot, str(len(values))]
         cells += [cell(mean_interval(value[key] for value in values), decimals)
                   for key, _, decimals in COLUMNS]

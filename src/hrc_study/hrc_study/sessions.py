@@ -20,17 +20,20 @@ Definitions (the issue #13 rules, see docs/results.md):
 from dataclasses import dataclass, field
 import math
 
+from hrc_common.contract import case_table
+
 # Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
 STEP_COUNTS = {'responsibility_guided': 2, 'level_guided': 2, 'learn_together': 1}
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
                   'learn_together': 'together'}
-# The paper's cases: strategy and the degree of freedom the robot drives.
-CASES = {1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided', 'rotation'),
-         3: ('level_guided', 'translation'), 4: ('level_guided', 'rotation'),
-         5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation')}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
+
+
+def case_roles() -> dict:
+    """Return {case id: (strategy, robot DOF)} of the paper's cases (``params/cases.yaml``)."""
+    return {case_id: (spec.strategy, spec.robot_dof) for case_id, spec in case_table().items()}
 
 
 @dataclass(frozen=True)
