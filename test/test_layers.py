@@ -126,7 +126,7 @@ def scan_file(path: pathlib.Path, root: pathlib.Path, packages: set) -> tuple:
 
 
 def scan(root: pathlib.Path) -> tuple:
-    """Return ([Import], {path: [(line, text, line above)] of function-level imports}, packages)."""
+    """Return ([Import], {path: [(line, text, line above)]}, packages) of the tree."""
     packages = {path.parent.name for path in root.glob('*/package.xml')}
     imports, function_level = [], {}
     for path in sorted(root.glob('*/**/*.py')):

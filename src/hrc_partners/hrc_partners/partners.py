@@ -23,7 +23,17 @@ from dataclasses import dataclass, fields
 import pathlib
 import typing
 
-from hrc_common.params import ParameterError
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import load_into, read_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
+from hrc_common.params import from_dict, ParameterError, with_overrides
+from hrc_joystick_node.human_model import ClonedHuman
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import load_profile
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+import numpy
 
 KINDS = ('profile', 'person', 'population', 'model', 'mixture')
 EVALUATION_SEED_OFFSET = 5000   # evaluation person draws: seeds no training session uses
@@ -90,8 +100,6 @@ class ClonedPartner:
     """A cloned human model as an offline partner (``start_episode`` resets its history)."""
 
     def __init__(self, path, dof: str, control_period: float = 0.2):
-        from hrc_joystick_node.human_model import ClonedHuman
-
         self.human = ClonedHuman(path, dof, control_period=control_period)
 
     def start_episode(self, episode: int) -> None:
@@ -106,10 +114,6 @@ class ClonedPartner:
 def make_partner(spec: PartnerSpec, dof: str, seed: int, control_period: float = 0.2,
                  profiles_file=None):
     """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed)."""
-    from hrc_agent_node.partners import SimulatedHumanPartner
-    from hrc_joystick_node.population import sample_person
-    from hrc_joystick_node.sim_human import load_profile
-
     if spec.kind == 'model':
         return ClonedPartner(spec.path, dof, control_period)
     if spec.kind == 'mixture':
@@ -127,11 +131,6 @@ def make_partner(spec: PartnerSpec, dof: str, seed: int, control_period: float =
 
 def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None):
     """Return an AgentCore that evaluates ``checkpoint``'s frozen policy (``episodes``, seed)."""
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.checkpoint import load_into, read_checkpoint
-    from hrc_agent_node.config import AgentParams
-    from hrc_common.params import from_dict, with_overrides
-
     config = read_checkpoint(checkpoint)['config']
     settings = dict(seed=int(seed), evaluation_only=True, resume_from=str(checkpoint),
                     evaluation_episodes=int(episodes), checkpoint_dir='', torch_threads=1)
@@ -149,10 +148,6 @@ def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None
 def evaluate(checkpoint, spec: PartnerSpec, seed: int, episodes: int,
              physics_overrides: dict = None, profiles_file=None) -> float:
     """Return the mean total error of ``checkpoint``'s frozen policy with ``spec`` (one seed)."""
-    from hrc_agent_node.offline import run_session
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     physics = with_overrides(PhysicsParams(), **(physics_overrides or {}))
     core = evaluation_core(checkpoint, seed, episodes)
     partner = make_partner(spec, core.human_dof, seed, physics.control_period, profiles_file)
@@ -186,10 +181,6 @@ class MixturePartner:
 
     def start_episode(self, episode: int) -> None:
         """Meet the partner of ``episode`` (a new draw every ``every`` episodes)."""
-        import numpy
-
-        from hrc_agent_node.partners import person_seed
-
         draw = int(episode) // self.every
         if draw != self.draw:
             self.draw = draw
@@ -197,10 +188,6 @@ class MixturePartner:
             self.spec = self.specs[int(rng.integers(len(self.specs)))]
             seed = person_seed(self.seed, draw)
             if self.spec.kind == 'population':
-                from hrc_agent_node.partners import SimulatedHumanPartner
-                from hrc_joystick_node.population import sample_person
-                from hrc_joystick_node.sim_human import load_profile
-
                 person = sample_person(load_profile(self.spec.name, self.profiles_file), seed)
                 self.partner = SimulatedHumanPartner(person, self.dof, seed,
                                                      self.control_period)

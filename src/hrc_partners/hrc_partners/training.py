@@ -16,6 +16,18 @@ import json
 import pathlib
 import sys
 
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_common.contract import SimLimits
+from hrc_common.params import with_overrides
+from hrc_joystick_node.sim_human import load_profile
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
+
 
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
                 preset: str, checkpoint, profiles_file=None, mixture=None) -> dict:
@@ -24,18 +36,6 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     ``mixture``: partner specifications to draw from every ``population_every`` episodes
     (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
     """
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.checkpoint import save_checkpoint
-    from hrc_agent_node.config import AgentParams
-    from hrc_agent_node.offline import run_session
-    from hrc_agent_node.partners import SimulatedHumanPartner
-    from hrc_common.contract import SimLimits
-    from hrc_common.params import with_overrides
-    from hrc_joystick_node.sim_human import load_profile
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
-    from hrc_partners.partners import MixturePartner, parse_spec
-
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
@@ -81,8 +81,6 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     if 'mixture' in args.kinds:
-        from hrc_partners.partners import spec_problem
-
         problems = [problem for problem in map(spec_problem, args.mixture) if problem]
         if not args.mixture or problems:
             for problem in problems or ['--kinds mixture needs --mixture SPEC...']:

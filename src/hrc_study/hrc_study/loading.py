@@ -1,5 +1,7 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
+from hrc_bag.report import load_sessions as load_bag_sessions
+
 from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord
 
 
@@ -85,8 +87,6 @@ def load_sessions(paths, log=print) -> list:
     sessions go to ``log``; a path without sessions raises FileNotFoundError, files that are
     not MCAP raise ``hrc_bag.bag_reader.BagError`` with every reason).
     """
-    from hrc_bag.report import load_sessions as load_bag_sessions
-
     records = [record_from_bag_session(session) for session in load_bag_sessions(paths, log)]
     records.sort(key=lambda record: (record.profile, record.case_id, record.seed,
                                      record.session_id))
