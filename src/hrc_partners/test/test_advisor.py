@@ -5,9 +5,11 @@ The robot is the scripted PD controller with command noise, standing in for a tr
 """
 
 from hrc_joystick_node.sim_human import load_profile
+import pytest
 from hrc_partners import advisor
 
 
+@pytest.mark.slow
 def test_right_in_clear_cases_and_quick_for_the_person():
     plan = advisor.CalibrationPlan()
     assert plan.person_seconds < 180.0

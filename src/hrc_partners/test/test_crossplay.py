@@ -4,11 +4,13 @@ import json
 import math
 
 from PIL import Image
+import pytest
 
 from hrc_partners import crossplay, crossplay_cli, training
 from hrc_partners.partners import parse_specs
 
 
+@pytest.mark.slow
 def test_matrix_files_and_drops(tmp_path, capsys):
     checkpoint = tmp_path / 'c2-one-s0.pt'
     summary = training.train_agent(2, 0, 2, 'paper', 0, 'tuned', checkpoint)
