@@ -216,14 +216,15 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
               physics_overrides: dict = None) -> Advice:
     """Run the calibration and return the advice.
 
-    ``person_for(dof)``: the person driving ``dof`` (``reset(episode)``, ``act(state,
-    subtasks, now)``: a SimulatedHuman or a ClonedHuman); ``robots[person_dof]``: the robot
+    ``person_for(dof, limits)``: the person driving ``dof`` (``reset(episode)``, ``act(state,
+    subtasks, now)``: a SimulatedHuman or a ClonedHuman), given the sim's
+    :class:`~hrc_common.contract.SimLimits` (its control period); ``robots[person_dof]``: the robot
     that holds the other degree of freedom. Episodes alternate between the assignments (a
     person's practice and fatigue do not favour one of them).
     """
     physics = with_overrides(PhysicsParams(), episode_duration=float(plan.seconds),
                              **(physics_overrides or {}))
-    people = {dof: person_for(dof) for dof in DOFS}
+    people = {dof: person_for(dof, SimLimits.of(physics)) for dof in DOFS}
     results = {dof: Assignment(dof, robots[dof].kind, [], []) for dof in DOFS}
     clock = 0.0
     with SliderPendulumBall(physics) as sim:
@@ -239,9 +240,10 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
     return Advice(results, recommend(results), plan.person_seconds)
 
 
-def simulated_person(profile, seed: int, control_period: float = 0.2):
-    """Return ``person_for(dof)`` for a simulated person (one seed, both dofs)."""
-    return lambda dof: SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
+def simulated_person(profile, seed: int):
+    """Return ``person_for(dof, limits)`` for a simulated person (one seed, both dofs)."""
+    return lambda dof, limits: SimulatedHuman(profile, dof, seed=seed,
+                                              control_period=limits.control_period)
 
 
 def weaken(person, dof: str, factor: float):
