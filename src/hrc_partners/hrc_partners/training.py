@@ -37,18 +37,17 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
     """
     physics = PhysicsParams()
+    limits = SimLimits.of(physics)
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
-        evaluation_episodes=0, checkpoint_dir='', torch_threads=1),
-        limits=SimLimits.of(physics))
+        evaluation_episodes=0, checkpoint_dir='', torch_threads=1), limits=limits)
     if mixture:
         trained_with = 'mixture:' + '+'.join(mixture)
-        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed,
-                                 physics.control_period, max(1, population_every),
-                                 profiles_file)
+        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed, limits,
+                                 max(1, population_every), profiles_file)
     else:
         partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
-                                        seed, physics.control_period, population_every)
+                                        seed, limits.control_period, population_every)
         trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
