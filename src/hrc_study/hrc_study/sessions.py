@@ -18,17 +18,28 @@ Definitions (the issue #13 rules, see docs/results.md):
 """
 
 from dataclasses import dataclass, field
+import functools
 import math
 
-from hrc_common.contract import case_table
+from hrc_common.contract import case_table, cases_file_path
+import yaml
 
-# Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
-STEP_COUNTS = {'responsibility_guided': 2, 'level_guided': 2, 'learn_together': 1}
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
                   'learn_together': 'together'}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
+
+
+@functools.lru_cache(maxsize=None)
+def strategy_step_counts() -> dict:
+    """Return {strategy: its number of training steps} (``params/cases.yaml``).
+
+    The last step's convergence ends training.
+    """
+    with open(cases_file_path(), 'rb') as stream:
+        strategies = yaml.safe_load(stream)['strategies']
+    return {name: len(strategy['steps']) for name, strategy in strategies.items()}
 
 
 def case_roles() -> dict:
@@ -66,7 +77,7 @@ class SessionRecord:
     seed: int
     profile: str
     episodes: list                  # EpisodeRecord, ordered by episode
-    step_count: int = 0             # training steps of the strategy (0: from STEP_COUNTS)
+    step_count: int = 0             # training steps of the strategy (0: from cases.yaml)
     episode_limit: int = 0          # the agent's max_training_episodes (0: unknown)
     path: str = ''
     extra: dict = field(default_factory=dict)
@@ -74,7 +85,7 @@ class SessionRecord:
     @property
     def steps(self) -> int:
         """Return the number of training steps of the session's strategy."""
-        return self.step_count or STEP_COUNTS.get(self.strategy, 1)
+        return self.step_count or strategy_step_counts().get(self.strategy, 1)
 
 
 def final_block_start(session: SessionRecord) -> int:
