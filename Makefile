@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 ENV := source scripts/env.sh
 
-.PHONY: setup run test lint clean
+.PHONY: setup run test test-quick lint clean
 
 setup:
 	@bash scripts/setup.sh
@@ -15,9 +15,14 @@ run: setup
 lint: setup
 	@$(ENV) && ruff check src test scripts bench conftest.py
 
-# Lint, then every test in one pytest invocation.
+# Lint, then every test in one pytest invocation (what CI runs).
 test: lint
 	@$(ENV) && python -m pytest $(PYTEST_ARGS)
+
+# The quick tier for the inner loop: pure cores and unit tests (no DDS, no browser, no Ray, no
+# whole session); conftest.py marks them `quick`. `make test` still runs them too.
+test-quick: setup
+	@$(ENV) && python -m pytest -m quick -q $(PYTEST_ARGS)
 
 clean:
 	rm -rf build install log

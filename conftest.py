@@ -66,6 +66,24 @@ def start_node(ros_env, request):
             print(f'----- output of {process.name} -----\n{process.output}')
 
 
+# The quick tier (``make test-quick``, ``pytest -m quick``): pure cores and unit tests, for the
+# inner loop of development. A test is left out of it when it talks DDS (one of these fixtures),
+# drives a browser, or is marked slow (whole sessions, training, Ray, a graph of nodes).
+DDS_FIXTURES = {'ros_domain_id', 'ros_env', 'rclpy_context', 'start_node'}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark each test ``dds``/``browser`` by what it uses, and ``quick`` if it is neither/slow."""
+    for item in items:
+        if DDS_FIXTURES & set(getattr(item, 'fixturenames', ())):
+            item.add_marker(pytest.mark.dds)
+        module = getattr(item, 'module', None)
+        if module is not None and hasattr(module, 'open_browser'):
+            item.add_marker(pytest.mark.browser)
+        if not any(item.get_closest_marker(name) for name in ('dds', 'browser', 'slow')):
+            item.add_marker(pytest.mark.quick)
+
+
 @pytest.hookimpl(wrapper=True, tryfirst=True)
 def pytest_runtest_makereport(item, call):
     """Keep each phase's report on the item so fixtures can see whether the test failed."""

@@ -51,6 +51,7 @@ def test_every_python_package_installs_its_scripts_where_ros2_run_looks():
         assert marker.is_file(), package
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('package, executable', SCRIPTS,
                          ids=[f'{p}/{e}' for p, e in SCRIPTS])
 def test_ros2_run_finds_and_runs(package, executable):

@@ -37,6 +37,7 @@ def assert_refused(result, reasons):
         assert reason in result.stderr, f'{reason!r} missing in:\n{result.stderr}'
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('package, executable, node, name, typo', NODES, ids=IDS)
 def test_unreadable_parameter_files_all_reported(tmp_path, package, executable, node, name,
                                                   typo):
@@ -72,6 +73,7 @@ def test_misspelt_section_and_unknown_names_all_reported(tmp_path, ros_env, pack
         f"-p {typo}: unknown parameter (did you mean '{name}'?)"])
 
 
+@pytest.mark.slow
 def test_help_into_a_closed_pipe_is_quiet():
     """`sim_node --help | head -1`: the reader leaves early; no traceback, exit code 0."""
     process = subprocess.Popen([str(executable_path('hrc_sim_node', 'sim_node')), '--help'],

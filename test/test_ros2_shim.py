@@ -41,6 +41,7 @@ def readme_ros2_run_commands() -> list:
     return found
 
 
+@pytest.mark.slow
 def test_env_sh_from_another_directory_gives_ros2_run():
     result = fresh_shell('command -v ros2 && ros2 run hrc_sim_node sim_node --help')
     assert result.returncode == 0, result.stderr
@@ -70,6 +71,7 @@ def test_the_shim_notice_comes_once_per_shell_and_env_sh_says_it_needs_bash():
             "'source scripts/env.sh'"), (shell, refused.stderr)
 
 
+@pytest.mark.slow
 def test_shim_errors_are_clear():
     result = fresh_shell('ros2 run hrc_nothing some_node; echo "code $?"; '
                          'ros2 run hrc_sim_node some_node; echo "code $?"; '
@@ -84,6 +86,7 @@ def test_shim_errors_are_clear():
         'code 1', 'code 1', 'code 2']
 
 
+@pytest.mark.slow
 def test_every_ros2_run_of_the_readme_runs():
     commands = readme_ros2_run_commands()
     assert len(commands) >= 10, commands
@@ -93,6 +96,7 @@ def test_every_ros2_run_of_the_readme_runs():
     assert result.returncode == 0, result.stderr
 
 
+@pytest.mark.slow
 def test_the_resume_command_the_runner_prints_runs(tmp_path):
     from hrc_bringup import session
     argv = ['--case', '3', '--seed', '2', '--episodes', '4', '--session-id', 'old']

@@ -5,10 +5,12 @@ used to print the report's stderr only when it failed.
 """
 
 from hrc_bag.synthetic import record_in_process, strategy_plan
-from hrc_bringup.plan import SessionSettings
 from hrc_bringup.session import report
+from hrc_common.session_plan import SessionSettings
+import pytest
 
 
+@pytest.mark.slow
 def test_the_runner_prints_the_reports_notices(tmp_path, capsys):
     plan = strategy_plan('learn_together', 1, 0, 1)
     record_in_process(tmp_path / 'bags', 'cut', 5, 'learn_together', 2, plan, steps=4)

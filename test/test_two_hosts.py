@@ -27,7 +27,7 @@ import threading
 import time
 
 from hrc_bringup import netlab
-from hrc_bringup.plan import compose, SessionSettings, write_session_files
+from hrc_common.session_plan import compose, SessionSettings, write_session_files
 from hrc_common.testing import executable_path
 import pytest
 

@@ -1,3 +1,6 @@
+import glob
+import os
+
 from setuptools import find_packages, setup
 
 package_name = 'hrc_common'
@@ -9,7 +12,9 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/params', ['../../params/cases.yaml']),
+        # every parameter and data file: hrc_common.paths.params_dir() of an installation
+        ('share/' + package_name + '/params',
+         glob.glob(os.path.join('..', '..', 'params', '*.yaml'))),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

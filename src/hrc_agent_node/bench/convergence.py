@@ -16,15 +16,16 @@ import sys
 
 import yaml
 
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import make_partner, run_session
+from hrc_common.params import with_overrides
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
 
 def run_one(job):
     """Run one offline session; return its summary."""
     preset, case, seed, episodes, evaluation, overrides = job
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.config import AgentParams
-    from hrc_agent_node.offline import make_partner, run_session
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
     physics = PhysicsParams()
     params = with_overrides(AgentParams(), case=case, seed=seed, preset=preset,

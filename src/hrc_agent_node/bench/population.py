@@ -17,16 +17,19 @@ import argparse
 import json
 import sys
 
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import make_partner, run_session
+from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_common.contract import SimLimits
+from hrc_common.params import with_overrides
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import load_profile
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
 
 def train(case, seed, episodes, profile, population_every, preset):
     """Train one agent; return (its core, the training summary)."""
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.config import AgentParams
-    from hrc_agent_node.offline import make_partner, run_session
-    from hrc_common.contract import SimLimits
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
@@ -41,12 +44,6 @@ def train(case, seed, episodes, profile, population_every, preset):
 
 def evaluate(trained, person, population_every, seed, episodes):
     """Return the mean total error of ``trained``'s frozen policy with ``person``."""
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.offline import run_session
-    from hrc_agent_node.partners import SimulatedHumanPartner
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     physics = PhysicsParams()
     params = with_overrides(trained.params, evaluation_only=True, resume_from='(in memory)',
                             evaluation_episodes=episodes)
@@ -72,9 +69,6 @@ def main(argv=None) -> int:
     parser.add_argument('--profiles', nargs='*', default=[],
                         help='other named profiles to evaluate with (held out by kind)')
     args = parser.parse_args(argv)
-
-    from hrc_joystick_node.population import sample_person
-    from hrc_joystick_node.sim_human import load_profile
 
     profile = load_profile(args.profile)
     held_out = [(f'held-out {k}', sample_person(profile, 100000 + k))

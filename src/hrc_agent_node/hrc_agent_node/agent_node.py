@@ -54,8 +54,8 @@ from hrc_common.contract import episode_kind, Phase, SimLimits
 from hrc_common.dof import DOF_INDEX, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
-from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
-                                        PAUSE_SERVICE, RESUME_SERVICE)
+from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, FINAL_CHECKPOINT,
+                                        LATEST_CHECKPOINT, PAUSE_SERVICE, RESUME_SERVICE)
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from rclpy.duration import Duration
@@ -542,7 +542,7 @@ class AgentNode(Node):
             metrics = ', '.join(f'{name} {value:.4f}' if isinstance(value, float)
                                 else f'{name} {value}' for name, value in summary.items())
             self.get_logger().info(f'evaluation: {metrics}')
-        self.save_checkpoint('final.pt')
+        self.save_checkpoint(FINAL_CHECKPOINT)
         self.publish_session('session done: ' + self.core.status_line())
         self.get_logger().info(f'session {self.core.session_id} done')
         self.exit_at = time.monotonic() + EXIT_LINGER_S

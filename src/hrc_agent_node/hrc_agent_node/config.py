@@ -5,9 +5,9 @@ and documented choices where it does not. Mirrored in ``params/agent.yaml``.
 """
 
 from dataclasses import dataclass
-import os
 
 from hrc_common.contract import id_problem, make_session_id
+from hrc_common.paths import params_file
 from hrc_common.params import param
 
 PACKAGE = 'hrc_agent_node'
@@ -147,24 +147,5 @@ class AgentParams:
 
 
 def share_file(name: str) -> str:
-    """Return the installed data file ``share/hrc_agent_node/params/<name>``.
-
-    Falls back to the repository's ``params/`` when the package is not installed (tests that
-    run from a source tree).
-    """
-    try:
-        from ament_index_python.packages import (get_package_share_directory,
-                                                 PackageNotFoundError)
-        try:
-            return os.path.join(get_package_share_directory(PACKAGE), 'params', name)
-        except PackageNotFoundError:
-            pass
-    except ImportError:
-        pass
-    return os.path.join(repository_params_dir(), name)
-
-
-def repository_params_dir() -> str:
-    """Return the repository's ``params/`` directory (next to ``src/``)."""
-    here = os.path.dirname(os.path.realpath(__file__))
-    return os.path.normpath(os.path.join(here, '..', '..', '..', 'params'))
+    """Return the data file ``params/<name>`` (``hrc_common.paths.params_file``)."""
+    return str(params_file(name))

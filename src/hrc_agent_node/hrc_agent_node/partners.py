@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import math
 
 from hrc_common.contract import check_dof
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import SimulatedHuman
 import numpy as np
 
 
@@ -107,9 +109,6 @@ class SimulatedHumanPartner:
 
     def start_episode(self, episode: int) -> None:
         """Meet the person of ``episode`` (draw a new one when the rule says so); reset."""
-        from hrc_joystick_node.population import sample_person
-        from hrc_joystick_node.sim_human import SimulatedHuman
-
         draw = int(episode) // self.population_every if self.population_every else None
         if self.human is None or draw != self.draw:
             self.draw = draw

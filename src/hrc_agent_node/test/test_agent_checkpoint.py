@@ -43,6 +43,7 @@ def observations():
     return np.random.default_rng(0).normal(size=(10, 7)).astype(np.float32)
 
 
+@pytest.mark.slow
 def test_round_trip_gives_identical_policy_outputs(tmp_path):
     core = AgentCore(params())
     run(core, 3)                         # trained a little: one update happened

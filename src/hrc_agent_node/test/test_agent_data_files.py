@@ -17,12 +17,13 @@ import yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import FORMAT, FORMAT_VERSION
-from hrc_agent_node.config import AgentParams, repository_params_dir
+from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import cases_from_dict, CasesError, load_cases
 from hrc_agent_node.task_tree import TaskTree, TaskTreeError
 from hrc_common.params import checked, ParameterError, with_overrides
+from hrc_common.paths import params_dir
 
-PARAMS = pathlib.Path(repository_params_dir())
+PARAMS = pathlib.Path(params_dir())
 WRONG_SHAPES = [5, [['slider', 'pendulum']], 'x', None, {}, [], -1, 1.5, True, {'a': [1]}]
 
 

@@ -8,6 +8,7 @@ episodes (20,000 control steps, 39 PPO updates) is at least 30 % above the mean 
 """
 
 import numpy as np
+import pytest
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
@@ -19,6 +20,7 @@ EPISODES = 100
 WINDOW = 10
 
 
+@pytest.mark.slow
 def test_ppo_raises_the_return_against_a_scripted_partner():
     physics = PhysicsParams()
     params = with_overrides(AgentParams(), case=6, seed=0, preset='tuned',

@@ -12,7 +12,7 @@ import pytest
 import yaml
 
 from geometry_msgs.msg import WrenchStamped
-from hrc_agent_node.config import repository_params_dir
+from hrc_common.paths import params_dir
 from hrc_common import qos, topics
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
@@ -22,7 +22,7 @@ from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 # with what the sim's reset response says, having no values of its own.
 PHYSICS = PhysicsParams(episode_duration=2.0, max_force=3.5, max_torque=0.75)
 STEPS = PHYSICS.steps_per_episode
-AGENT_YAML = pathlib.Path(repository_params_dir()) / 'agent.yaml'
+AGENT_YAML = pathlib.Path(params_dir()) / 'agent.yaml'
 
 
 def human_command(episode, step):
@@ -139,7 +139,7 @@ def run_until_exit(fake, process, rclpy_context, timeout):
 @pytest.fixture
 def easy_tree(tmp_path):
     """Write the repository's tree with tolerances every policy meets (steps advance fast)."""
-    with open(pathlib.Path(repository_params_dir()) / 'task_tree.yaml') as stream:
+    with open(pathlib.Path(params_dir()) / 'task_tree.yaml') as stream:
         document = yaml.safe_load(stream)
     for subtask in document['subtasks']:
         subtask['tolerance'] = 100.0

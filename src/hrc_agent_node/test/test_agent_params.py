@@ -8,11 +8,12 @@ import pytest
 import yaml
 
 from hrc_agent_node.agent_core import AgentCore, derive_seed
-from hrc_agent_node.config import AgentParams, repository_params_dir
+from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
 from hrc_common.params import checked, load_yaml, ParameterError, with_overrides
+from hrc_common.paths import params_dir
 
-AGENT_YAML = f'{repository_params_dir()}/agent.yaml'
+AGENT_YAML = f'{params_dir()}/agent.yaml'
 
 
 def test_yaml_mirrors_the_dataclass():

@@ -5,12 +5,12 @@ import copy
 import pytest
 import yaml
 
-from hrc_agent_node.config import repository_params_dir
+from hrc_common.paths import params_dir
 from hrc_agent_node.strategies import (cases_from_dict, CasesError, load_cases,
                                        StrategyProgress)
 from hrc_agent_node.task_tree import TaskTree
 
-PARAMS = repository_params_dir()
+PARAMS = params_dir()
 TREE = TaskTree.from_file(f'{PARAMS}/task_tree.yaml')
 CASES = load_cases(f'{PARAMS}/cases.yaml', TREE)
 

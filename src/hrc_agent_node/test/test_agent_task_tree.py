@@ -7,10 +7,10 @@ import types
 import pytest
 import yaml
 
-from hrc_agent_node.config import repository_params_dir
+from hrc_common.paths import params_dir
 from hrc_agent_node.task_tree import RewardShape, TaskTree, TaskTreeError
 
-TREE_FILE = f'{repository_params_dir()}/task_tree.yaml'
+TREE_FILE = f'{params_dir()}/task_tree.yaml'
 
 
 def tree_document():

@@ -24,6 +24,13 @@ import sys
 import tempfile
 import time
 
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from hrc_common import qos, topics
+from hrc_common.testing import executable_path
+from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
+from rclpy.executors import SingleThreadedExecutor
+
 CLOCK_TICKS = os.sysconf('SC_CLK_TCK')
 
 
@@ -35,11 +42,6 @@ def cpu_seconds(pid: int) -> float:
 
 def run_actors(steps_expected: int) -> None:
     """Child process: answer every state with the commands of both actors."""
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos, topics
-    from hrc_msgs.msg import AgentStep, HumanAction, TaskState
-
     rclpy.init()
     node = rclpy.create_node('bench_actors')
     robot = node.create_publisher(WrenchStamped, topics.ROBOT_CMD_WRENCH, qos.COMMAND_QOS)
@@ -74,12 +76,6 @@ def run_actors(steps_expected: int) -> None:
 
 def run_sim(episodes: int, steps: int) -> dict:
     """Play the lockstep sim for ``episodes`` x ``steps``; return the measured rates."""
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos, topics
-    from hrc_msgs.msg import EpisodeSummary, SessionStatus, TaskState
-    from rclpy.executors import SingleThreadedExecutor
-
     node = rclpy.create_node('bench_sim')
     state_publisher = node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
     session_publisher = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
@@ -124,7 +120,6 @@ def run_sim(episodes: int, steps: int) -> dict:
 
 
 def start_recorder(output_dir: str, env: dict, changes=()) -> subprocess.Popen:
-    from hrc_common.testing import executable_path
     command = [str(executable_path('hrc_bag', 'recorder_node')), '--ros-args', '-p',
                f'output_dir:={output_dir}', '-p', 'session_id:=bench']
     for change in changes:                  # NAME=VALUE: a parameter other than its default
@@ -136,7 +131,6 @@ def start_recorder(output_dir: str, env: dict, changes=()) -> subprocess.Popen:
 def measure(episodes: int, steps: int, with_recorder: bool, output_dir: str,
             changes=()) -> dict:
     """Run the emulated lockstep graph once; return rates, recorder CPU and file sizes."""
-    import rclpy
     env = dict(os.environ)
     actors = subprocess.Popen([sys.executable, __file__, '--actors'], env=env,
                               start_new_session=True)

@@ -24,6 +24,10 @@ import statistics
 import sys
 import tempfile
 
+import rclpy
+from hrc_bag.synthetic import kill_trial, SyntheticSession
+from hrc_common.testing import NodeProcess, ros_environment
+
 
 def main(argv=None) -> int:
     """Run the trials and print the measured loss windows."""
@@ -39,13 +43,8 @@ def main(argv=None) -> int:
                                                                             '0') or 0) or 97)
     arguments = parser.parse_args(argv)
 
-    from hrc_common.testing import NodeProcess, ros_environment
-
     env = ros_environment(arguments.domain_id)
     os.environ.update(env)              # this process's participant joins the same domain
-    import rclpy
-
-    from hrc_bag.synthetic import kill_trial, SyntheticSession
 
     rclpy.init()
     node = rclpy.create_node('sigkill_bench')

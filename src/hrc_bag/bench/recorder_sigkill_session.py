@@ -24,6 +24,12 @@ import tempfile
 import threading
 import time
 
+import rclpy
+from hrc_bag import bag_reader
+from hrc_bag.recovery import recover_file
+from hrc_common import qos, topics
+from hrc_msgs.msg import EpisodeSummary
+
 
 def descendants(pid: int) -> list:
     """Return the ids of the processes below ``pid`` (Linux /proc)."""
@@ -58,7 +64,6 @@ def recorder_of(runner_pid: int):
 
 def check_episode(folder, name, summary_steps) -> list:
     """Return what episode file ``name`` lacks (empty when whole)."""
-    from hrc_bag import bag_reader
     counts = {}
     for message in bag_reader.scan_file(pathlib.Path(folder) / name).messages:
         counts[message.topic] = counts.get(message.topic, 0) + 1
@@ -72,13 +77,6 @@ def check_episode(folder, name, summary_steps) -> list:
 def trial(number: int, kill_after: float, finished: float, episodes: int, work: str,
           domain_id: int, changes=()) -> dict:
     """Run one session, kill its recorder after ``kill_after`` s of episodes, check the bags."""
-    import rclpy
-    from hrc_common import qos, topics
-    from hrc_msgs.msg import EpisodeSummary
-
-    from hrc_bag import bag_reader
-    from hrc_bag.recovery import recover_file
-
     session_id = f'kill{number}'
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain_id), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
                FASTDDS_BUILTIN_TRANSPORTS='UDPv4', PYTHONUNBUFFERED='1')

@@ -19,6 +19,7 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Message, Metadata, Schema
 from mcap.stream_reader import StreamReader
+from mcap_ros2.decoder import DecoderFactory
 import yaml
 
 from hrc_bag.format import END_FILE_SUFFIX, METADATA_FILE
@@ -307,7 +308,6 @@ class MessageDecoder:
     """Decode BagMessage CDR data into Python objects using the schemas stored in the bag."""
 
     def __init__(self):
-        from mcap_ros2.decoder import DecoderFactory
         self._factory = DecoderFactory()
         self._decoders = {}
 

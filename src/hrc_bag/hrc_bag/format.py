@@ -49,8 +49,11 @@ import os
 import pathlib
 import typing
 
-from hrc_common.contract import atomic_write, NS_PER_S, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
+from hrc_common.contract import (atomic_write, DOF_NAME, NS_PER_S, PERSONAL_FILE_MODE,
+                                 PUBLIC_FILE_MODE)
 from mcap.writer import CompressionType, IndexType, Writer
+from mcap_ros2._dynamic import serialize_dynamic
+import yaml
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
@@ -249,7 +252,6 @@ def custom_data_of(information: dict) -> dict:
 
 def session_summary(config: dict, status: typing.Optional[dict]) -> dict:
     """Return case, strategy, roles and seed of a session from its config, else its status."""
-    from hrc_common.contract import DOF_NAME
     status = status or {}
     roles = config.get('roles')
     if roles is None and ('robot_dof' in config or 'human_dof' in config):
@@ -544,7 +546,6 @@ class SessionIndex:
 
     def _load(self) -> None:
         """Continue a session an earlier recorder started (its closed files stay listed)."""
-        import yaml
         try:
             document = load_yaml(self.path.read_text())
         except yaml.YAMLError as error:
@@ -639,7 +640,6 @@ class MessageEncoder:
     def _encoder(self, type_name: str):
         encoder = self._encoders.get(type_name)
         if encoder is None:
-            from mcap_ros2._dynamic import serialize_dynamic
             package, name = msgdefs.split_type_name(type_name)
             full_name = f'{package}/msg/{name}'
             encoders = serialize_dynamic(full_name, msgdefs.full_definition(full_name))

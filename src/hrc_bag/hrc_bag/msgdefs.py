@@ -21,6 +21,8 @@ import functools
 import pathlib
 import re
 
+from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+
 SEPARATOR = '=' * 80
 
 # Field types that are not messages (ROS 2 .msg primitive types).
@@ -47,8 +49,6 @@ def split_type_name(type_name: str) -> tuple:
 
 def share_directory(package: str) -> pathlib.Path:
     """Return the installed share directory of ``package`` (DefinitionNotFound if none)."""
-    from ament_index_python.packages import (get_package_share_directory,
-                                             PackageNotFoundError)
     try:
         return pathlib.Path(get_package_share_directory(package))
     except PackageNotFoundError:

@@ -3,6 +3,10 @@
 import argparse
 import sys
 
+from hrc_bag.bag_reader import BagError, is_session_folder
+from hrc_bag.report import (load_study_index, StudyFolderError, StudyIndexError, write_report,
+                            write_study_report)
+
 DESCRIPTION = ('Analyse recorded hrc sessions: writes table2.md, table2.csv, sessions.csv, '
                'human_time.md (.csv: human time by input source), fig5_training.png, '
                'fig6_actions.png, fig7_three_factor.png (+ .csv) into --out. Sessions of the '
@@ -48,10 +52,6 @@ def main(argv=None):
     if not arguments.paths and not arguments.study_dir:
         _log('give session folders (or bag files) and/or --study-dir DIR')
         return 2
-    from hrc_bag.bag_reader import BagError, is_session_folder
-    from hrc_bag.report import (load_study_index, StudyFolderError, StudyIndexError,
-                                write_report, write_study_report)
-
     entries, paths = [], list(arguments.paths)
     if arguments.study_dir:
         try:

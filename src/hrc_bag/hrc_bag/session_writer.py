@@ -34,14 +34,13 @@ Usage::
 * Log times are ns since the epoch (what the recorder stores: reception time); the engine
   passes its wall clock, or a synthetic clock for deterministic files.
 * ``descriptions`` ({topic: TopicDescription}) overrides the QoS metadata; by default the
-  contract QoS of ``hrc_common.qos`` as a live publisher offers it (that one import loads
-  rclpy's QoS classes; pass ``descriptions`` to stay free of rclpy altogether).
+  contract QoS (``hrc_common.qos_table``) as a live publisher offers it.
 """
 
 import pathlib
 import typing
 
-from hrc_common import contract
+from hrc_common import contract, qos_table
 from hrc_common import topics as hrc_topics
 
 from hrc_bag.format import (DEFAULT_CHUNK_SIZE, EpisodeFile, episode_file_stem, file_mode,
@@ -55,23 +54,11 @@ TOPIC_TYPES = hrc_topics.TYPES
 
 def contract_descriptions() -> dict:
     """Return {topic: TopicDescription} of the /hrc topics as their publishers offer them."""
-    from hrc_common import qos as hrc_qos
-    contract_qos = {
-        hrc_topics.STATE: hrc_qos.STATE_QOS,
-        hrc_topics.ROBOT_CMD_WRENCH: hrc_qos.COMMAND_QOS,
-        hrc_topics.HUMAN_CMD_WRENCH: hrc_qos.COMMAND_QOS,
-        hrc_topics.HUMAN_ACTION: hrc_qos.HUMAN_ACTION_QOS,
-        hrc_topics.SESSION: hrc_qos.SESSION_QOS,
-        hrc_topics.EPISODE: hrc_qos.EPISODE_QOS,
-        hrc_topics.AGENT_STEP: hrc_qos.AGENT_STEP_QOS,
-    }
     descriptions = {}
-    for topic, qos in contract_qos.items():
+    for topic, qos in qos_table.OF_TOPIC.items():
         type_name = TOPIC_TYPES[topic]
-        profile = offered_profile(
-            reliable=qos.reliability.name == 'RELIABLE',
-            transient_local=qos.durability.name == 'TRANSIENT_LOCAL',
-            deadline_ns=int(qos.deadline.nanoseconds))
+        profile = offered_profile(reliable=qos.reliable, transient_local=qos.transient_local,
+                                  deadline_ns=qos.deadline_ns)
         descriptions[topic] = TopicDescription(type_name, (profile,), type_hash(type_name))
     return descriptions
 

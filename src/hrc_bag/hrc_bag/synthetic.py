@@ -25,19 +25,29 @@ from hrc_common.contract import episode_kind, EpisodeKind, NS_PER_S
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 import numpy
 from rclpy.node import Node
+from rclpy.serialization import serialize_message
+
+from hrc_bag import bag_reader, cdr_peek
+from hrc_bag.format import RawMessage, TopicDescription
+from hrc_bag.qos_yaml import profile_to_dict
+from hrc_bag.recorder_params import RecorderParams
+from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.recovery import recover_file
 
 CONTROL_PERIOD_NS = 200_000_000    # simulation time per control step (0.2 s)
 
-# topic -> (type, QoS its publisher offers), as in docs/architecture.md
-TOPICS = {
-    hrc_topics.STATE: (TaskState, hrc_qos.STATE_QOS),
-    hrc_topics.ROBOT_CMD_WRENCH: (WrenchStamped, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_CMD_WRENCH: (WrenchStamped, hrc_qos.COMMAND_QOS),
-    hrc_topics.HUMAN_ACTION: (HumanAction, hrc_qos.HUMAN_ACTION_QOS),
-    hrc_topics.SESSION: (SessionStatus, hrc_qos.SESSION_QOS),
-    hrc_topics.EPISODE: (EpisodeSummary, hrc_qos.EPISODE_QOS),
-    hrc_topics.AGENT_STEP: (AgentStep, hrc_qos.AGENT_STEP_QOS),
+# topic -> (type, QoS its publisher offers): the contract's (hrc_common.qos_table)
+MESSAGE_CLASSES = {
+    hrc_topics.STATE: TaskState,
+    hrc_topics.ROBOT_CMD_WRENCH: WrenchStamped,
+    hrc_topics.HUMAN_CMD_WRENCH: WrenchStamped,
+    hrc_topics.HUMAN_ACTION: HumanAction,
+    hrc_topics.SESSION: SessionStatus,
+    hrc_topics.EPISODE: EpisodeSummary,
+    hrc_topics.AGENT_STEP: AgentStep,
 }
+TOPICS = {topic: (message_class, hrc_qos.OF_TOPIC[topic])
+          for topic, message_class in MESSAGE_CLASSES.items()}
 
 
 @dataclass
@@ -288,13 +298,6 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
     evaluation) per episode, optionally a fourth item, the summary's ``EpisodeSummary.KIND_*``.
     Returns the SyntheticSession (its ``published`` holds every message).
     """
-    from rclpy.serialization import serialize_message
-
-    from hrc_bag.qos_yaml import profile_to_dict
-    from hrc_bag.format import RawMessage, TopicDescription
-    from hrc_bag.recorder_params import RecorderParams
-    from hrc_bag.recording import boundary_event, EpisodeRecorder
-
     clock = [0.0]
     params = RecorderParams(output_dir=str(output_dir), session_id=session_id)
     counter = [0]
@@ -417,7 +420,6 @@ class KillTrial:
 
 def _recorded_by_episode(folder, prefix: str, stamps: dict) -> tuple:
     """Return ({file name: {episode: {topic: count}}}, {topic: count}) of a session folder."""
-    from hrc_bag import bag_reader, cdr_peek
     decoder = bag_reader.MessageDecoder()
     by_file, totals = {}, {}
     for path in sorted(pathlib.Path(folder).glob('*.mcap')):
@@ -446,9 +448,6 @@ def kill_trial(session: SyntheticSession, recorder_pid: int, folder, kill_after:
     recorder left open are finished by :func:`hrc_bag.recovery.recover_file`, and the bags
     are compared with what ``session`` sent.
     """
-    from hrc_bag import bag_reader
-    from hrc_bag.recovery import recover_file
-
     folder = pathlib.Path(folder)
 
     def listed():

@@ -41,9 +41,15 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import multiprocessing
 import time
 
+from hrc_common import paths
 from hrc_common.contract import case_problem, make_session_id
+from hrc_common.domains import DomainReservation
+from hrc_common.executables import executable_path
+from hrc_common.session_plan import package_version, parse_overrides
+from hrc_engine.engine import EngineConfig, run_session
 
 ENGINES = ('inprocess', 'graph')
 
@@ -115,7 +121,7 @@ def _cpu_seconds() -> float:
 def _ray_node_id() -> str:
     if 'ray' not in sys.modules:
         return ''
-    import ray
+    import ray  # optional heavy dependency (the --ray executor); loaded by then
     try:
         return ray.get_runtime_context().get_node_id() if ray.is_initialized() else ''
     except Exception:   # not inside a Ray worker
@@ -124,9 +130,6 @@ def _ray_node_id() -> str:
 
 def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session with the in-process engine; return (exit code, error text)."""
-    from hrc_bringup.overrides import parse_overrides
-    from hrc_engine.engine import EngineConfig, run_session
-
     overrides = parse_overrides(task.overrides)
     run_session(EngineConfig(
         case=task.case, seed=task.seed, training_episodes=task.training_episodes,
@@ -139,9 +142,6 @@ def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
 
 def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
-    from hrc_common.executables import executable_path
-    from hrc_common.domains import DomainReservation
-
     reservation = DomainReservation()
     try:
         command = [str(executable_path('hrc_bringup', 'session')), '--case', str(task.case),
@@ -190,7 +190,6 @@ class LocalPool:
     """The embedded executor: a process pool on this machine."""
 
     def __init__(self, workers: int):
-        import multiprocessing
         self.workers = workers
         # spawn: a fresh interpreter per worker (no forked torch or PyBullet state)
         self.pool = multiprocessing.get_context('spawn').Pool(workers, _ignore_interrupt)
@@ -217,7 +216,7 @@ class RayExecutor:
     """Ray: an existing cluster (``address``) or a local instance started here (None)."""
 
     def __init__(self, address, cpus_per_session: float):
-        import ray
+        import ray  # optional heavy dependency: only the --ray executor needs it
         self.ray = ray
         ray.init(address=address, include_dashboard=False, log_to_driver=False,
                  logging_level='ERROR', configure_logging=True)
@@ -320,7 +319,6 @@ def parse_args(argv=None):
         if profile in options.profile_seeds:
             reasons.append(f'--profiles repeats {profile!r}')
         options.profile_seeds[profile] = int(count) if colon else options.seeds
-    from hrc_bringup.overrides import parse_overrides
     try:
         parse_overrides(options.overrides)
     except ValueError as error:
@@ -338,11 +336,10 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
     s / n), so a sweep cut short by --stop-after holds whole seeds (all cases) of every
     profile, the first profile first.
     """
-    from hrc_bringup.session import default_params_dir
     # resolved here, so that every worker reads the same files (a checkout's params/ when the
     # driver runs in one; on a cluster the same path, or the installed share/, on every node)
     params_dir = str((pathlib.Path(options.params_dir) if options.params_dir
-                      else default_params_dir()).resolve())
+                      else paths.params_dir()).resolve())
     not_after = time.time() + 60 * options.stop_after if options.stop_after else 0.0
     order = list(options.profile_seeds)
     planned = sorted(((seed_index / seeds, order.index(profile), seed_index, profile)
@@ -452,7 +449,7 @@ def main(argv=None) -> int:
     if not options.report:
         return 1 if failed else 0
     out = options.report_out or str(runs_dir / 'report')
-    from hrc_study import results_cli
+    from hrc_study import results_cli  # scipy and matplotlib (seconds): only for --report
     code = results_cli.main([str(bags_dir), '--out', out])
     return 1 if failed or code else 0
 
@@ -472,7 +469,6 @@ def _uncommitted_sources() -> list:
 
 
 def _version() -> str:
-    from hrc_bringup.plan import package_version
     return package_version()
 
 

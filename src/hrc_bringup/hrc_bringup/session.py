@@ -4,9 +4,10 @@
     ros2 run hrc_bringup session --case 1 --mode realtime --human auto --subject-id P07
 
 It starts sim, agent, human and recorder as separate processes (the executables ``ros2 run``
-starts) with one parameter file composed from ``params/*.yaml`` (see hrc_bringup.plan), prints a
-progress line per episode, and stops everything when the agent finishes, a node dies, or on
-Ctrl-C / SIGTERM, the recorder last so its bags are closed. Then it runs the report.
+starts) with one parameter file composed from ``params/*.yaml`` (see
+hrc_common.session_plan), prints a progress line per episode, and stops everything when the
+agent finishes, a node dies, or on Ctrl-C / SIGTERM, the recorder last so its bags are closed.
+Then it runs the report.
 
 Live sessions (hrc_live, docs/live_study.md): ``--display`` also starts the display node (the
 person's page and the experimenter's console on localhost); ``--params FILE`` merges a
@@ -35,6 +36,7 @@ Exit codes: 0 done, 1 a node failed, 2 bad arguments, 3 aborted by the operator,
 """
 
 import argparse
+from dataclasses import replace
 import os
 import pathlib
 import shlex
@@ -43,16 +45,26 @@ import subprocess
 import sys
 import time
 
-from hrc_common.contract import Phase, phase_label
+from diagnostic_msgs.msg import DiagnosticStatus
+from hrc_common import paths, qos, topics
+from hrc_common.contract import ACTIVE_PHASES, DOF_INDEX, Phase, phase_label, source_label
+from hrc_common.executables import executable_path
 from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT,
                                         OPERATOR_SERVICES)
+from hrc_common.session_plan import (compose, NODES, new_session_id, parse_overrides,
+                                     SessionSettings, write_session_files)
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
+from hrc_live.study import (append_index, consent_problem, IndexEntry, load_registry,
+                            position_of, StudyError)
+from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
+from hrc_msgs.srv import ResetEpisode
+import rclpy
+from rclpy.context import Context
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
 import yaml
 
-from hrc_bringup.overrides import parse_overrides
-from hrc_bringup.plan import (compose, NODES, new_session_id, SessionSettings,
-                              write_session_files)
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
 # Seconds given to DDS discovery after every practice node is seen, before the sim starts.
@@ -71,15 +83,6 @@ STATE_GAP_S = 0.5
 STATUS_SILENCE_S = 2.5
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
-
-
-def default_params_dir() -> pathlib.Path:
-    """Return the parameter files: ./params in a checkout, else the installed ones."""
-    local = pathlib.Path('params')
-    if (local / 'sim.yaml').is_file():
-        return local
-    from ament_index_python.packages import get_package_share_directory
-    return pathlib.Path(get_package_share_directory('hrc_bringup')) / 'params'
 
 
 def parse_args(argv=None):
@@ -209,7 +212,6 @@ def parse_args(argv=None):
         if not settings.subject_id:
             reasons.append('--study-dir needs --subject-id (the registered pseudonym)')
         else:
-            from hrc_live.study import consent_problem, load_registry, StudyError
             try:
                 problem = consent_problem(load_registry(options.study_dir),
                                           settings.subject_id)
@@ -267,11 +269,6 @@ class Progress:
     """Listens to /hrc/session and /hrc/episode and prints what happens (one rclpy node)."""
 
     def __init__(self, context, interactive: bool):
-        import rclpy
-
-        from hrc_common import qos, topics
-        from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
-
         self.node = rclpy.create_node('session_runner', context=context)
         self.interactive = interactive
         self.status = None
@@ -328,8 +325,6 @@ class Progress:
 
     def _on_action(self, action):
         """Say which input drives the person's side whenever it changes (never silently)."""
-        from hrc_common.contract import source_label
-
         if action.source_detail.startswith('not involved'):
             return  # zero on purpose: the person has no part in this training step
         source = source_label(action.source)
@@ -413,11 +408,6 @@ class InputGuard:
     """
 
     def __init__(self, node, kind: str, device: str, link_timeout: float = 1.0):
-        from hrc_common import qos, topics
-        from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
-        from std_msgs.msg import String
-        from std_srvs.srv import Trigger
-
         self.node, self.kind, self.device = node, kind, device
         self.lost = ''                  # why the input is lost ('' = it is not)
         # The link watchdog (two hosts, docs/two_hosts.md): monotonic s of the newest state,
@@ -448,7 +438,6 @@ class InputGuard:
                                  qos.SESSION_QOS)
         # The human node's input status (src/hrc_joystick_node/README.md): pause_requested
         # when its joystick is missing or lost, state 'ok' when it is back.
-        from diagnostic_msgs.msg import DiagnosticStatus
         self.input_status = {}          # the newest status's key-values, plus 'message'
         node.create_subscription(DiagnosticStatus, topics.HUMAN_INPUT, self._on_input_status,
                                  qos.SESSION_QOS)
@@ -506,8 +495,6 @@ class InputGuard:
 
     def _lose(self, reason: str) -> None:
         """Pause the session at once: the person's input is lost while they act."""
-        from hrc_common.contract import ACTIVE_PHASES
-
         if self.lost or (self.last_status is not None
                          and self.last_status.phase not in ACTIVE_PHASES):
             return  # already paused, or nothing runs (done, aborted, paused by the operator)
@@ -639,12 +626,7 @@ def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
 
 def run_session(settings: SessionSettings, options) -> int:
     """Run one session; return the exit code (0 = the agent finished the session)."""
-    import rclpy
-    from rclpy.context import Context
-
-    from hrc_common.executables import executable_path
-
-    params_dir = pathlib.Path(options.params_dir) if options.params_dir else default_params_dir()
+    params_dir = pathlib.Path(options.params_dir) if options.params_dir else paths.params_dir()
     try:
         parameters = compose(settings, params_dir)
     except (ValueError, OSError) as error:
@@ -846,8 +828,6 @@ def index_session(settings: SessionSettings, options, kind: str, started: str,
     """Add the session to the study's per-subject index (with --study-dir)."""
     if not options.study_dir:
         return
-    from hrc_live.study import append_index, IndexEntry, load_registry, position_of
-
     session_id = settings.session_id + ('-practice' if kind == 'practice' else '')
     run_dir = pathlib.Path(settings.runs_dir) / session_id
     tlx = run_dir.parent / settings.session_id / 'tlx.yaml'
@@ -896,14 +876,6 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
     page and the recorder know the roles. Recorded as the session ``<session-id>-practice``.
     Returns the exit code (0 = every practice episode ran).
     """
-    from dataclasses import replace
-
-    from hrc_common import qos, topics
-    from hrc_common.contract import DOF_INDEX
-    from hrc_common.executables import executable_path
-    from hrc_msgs.msg import SessionStatus, TaskState
-    from hrc_msgs.srv import ResetEpisode
-
     practice = replace(settings, session_id=f'{settings.session_id}-practice', resume_from='')
     parameters = compose(practice, params_dir)
     episode_break = float(parameters.pop('agent').get('episode_break', 3.0))
@@ -1045,8 +1017,6 @@ def print_display_address(display, executor, stop_reason: list) -> None:
 
 def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) -> list:
     """Return the command line of the display node of this session."""
-    from hrc_common.executables import executable_path
-
     command = [str(executable_path('hrc_live', 'display_node')), '--ros-args']
     display_params = params_dir / 'display.yaml'
     if display_params.is_file():
@@ -1061,8 +1031,6 @@ def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) ->
 def restart_agent(supervisor: Supervisor, parameters: dict, settings: SessionSettings,
                   run_dir: pathlib.Path, restarts: int) -> None:
     """Start the agent again from the session's last checkpoint (after a paused input loss)."""
-    from hrc_common.executables import executable_path
-
     checkpoint = (pathlib.Path(parameters['agent']['checkpoint_dir']) / settings.session_id
                   / LATEST_CHECKPOINT)
     resumed = {node: dict(values) for node, values in parameters.items()}
@@ -1079,8 +1047,6 @@ def restart_agent(supervisor: Supervisor, parameters: dict, settings: SessionSet
 
 def report(settings: SessionSettings, run_dir: pathlib.Path) -> None:
     """Run the report CLI on the session's bags and print its Table II."""
-    from hrc_common.executables import executable_path
-
     bag_dir = pathlib.Path(settings.bags_dir) / settings.session_id
     out_dir = run_dir / 'report'
     result = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')), str(bag_dir),

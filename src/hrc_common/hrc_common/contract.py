@@ -60,6 +60,8 @@ import tempfile
 
 import yaml
 
+from hrc_common.paths import params_file
+
 # --------------------------------------------------------------------------- phases
 
 
@@ -381,25 +383,8 @@ class CaseSpec:
 
 
 def cases_file_path() -> str:
-    """Return the default cases file path.
-
-    share/hrc_common/params/cases.yaml when installed, else the repository's params/cases.yaml
-    (a source checkout).
-    """
-    try:
-        from ament_index_python.packages import (get_package_share_directory,
-                                                 PackageNotFoundError)
-        try:
-            installed = os.path.join(get_package_share_directory('hrc_common'), 'params',
-                                     CASES_FILE_NAME)
-            if os.path.exists(installed):
-                return installed
-        except PackageNotFoundError:
-            pass
-    except ImportError:
-        pass
-    here = os.path.dirname(os.path.realpath(__file__))
-    return os.path.normpath(os.path.join(here, '..', '..', '..', 'params', CASES_FILE_NAME))
+    """Return the default cases file path: ``cases.yaml`` of ``hrc_common.paths.params_dir()``."""
+    return str(params_file(CASES_FILE_NAME))
 
 
 def load_case_table(path=None) -> dict:

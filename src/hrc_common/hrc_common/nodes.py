@@ -3,6 +3,10 @@
 import os
 import sys
 
+import rclpy
+from rclpy._rclpy_pybind11 import RCLError
+from rclpy.executors import ExternalShutdownException
+
 from hrc_common.params import (describe, node_parameter_problems, ParameterError,
                                parse_ros_arguments, RosArguments, set_process_arguments)
 
@@ -60,10 +64,6 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
             reasons += node_parameter_problems(RosArguments(overrides=arguments.overrides),
                                                '', '/', params_cls)
         return report_bad_parameters(executable, reasons)
-
-    import rclpy
-    from rclpy._rclpy_pybind11 import RCLError
-    from rclpy.executors import ExternalShutdownException
 
     node = None
     code = 0

@@ -1,50 +1,44 @@
-"""QoS profiles of the hrc topics, one place so publishers and subscribers always match.
+"""rclpy QoS profiles of the hrc topics, built from the one table ``hrc_common.qos_table``.
 
-A deadline is a contract both sides must offer/request alike (an offered deadline longer than
-the requested one makes the pair incompatible), hence the shared constants.
+The table (pure, no rclpy) says what each topic offers; this module turns it into the
+``QoSProfile`` objects the nodes create their publishers and subscriptions with, so
+publishers, subscribers and recordings always agree.
 """
 
-from hrc_common import topics
+from hrc_common import qos_table
+from hrc_common.contract import NS_PER_S
 from rclpy.duration import Duration
 from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
                        qos_profile_sensor_data)
 
-# A command stream that stays silent this long (s) is reported by the deadline event.
-# Between episodes the sim holds and no commands flow, so the event is informative, not an error.
-COMMAND_DEADLINE_S = 1.0
+COMMAND_DEADLINE_S = qos_table.COMMAND_DEADLINE_NS / NS_PER_S
 
-STATE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                       reliability=ReliabilityPolicy.RELIABLE)
-COMMAND_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         deadline=Duration(seconds=COMMAND_DEADLINE_S))
-HUMAN_ACTION_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                              reliability=ReliabilityPolicy.RELIABLE)
-SESSION_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-# Late joiners (the recorder, a report tool) get the recent episode summaries.
-EPISODE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100,
-                         reliability=ReliabilityPolicy.RELIABLE,
-                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
-AGENT_STEP_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                            reliability=ReliabilityPolicy.RELIABLE)
+
+def profile_of(spec: qos_table.TopicQoS) -> QoSProfile:
+    """Return the rclpy profile of one row of the QoS table."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST, depth=spec.depth,
+        reliability=(ReliabilityPolicy.RELIABLE if spec.reliable
+                     else ReliabilityPolicy.BEST_EFFORT),
+        durability=(DurabilityPolicy.TRANSIENT_LOCAL if spec.transient_local
+                    else DurabilityPolicy.VOLATILE),
+        deadline=Duration(nanoseconds=spec.deadline_ns))
+
+
+STATE_QOS = profile_of(qos_table.STATE)
+COMMAND_QOS = profile_of(qos_table.COMMAND)
+HUMAN_ACTION_QOS = profile_of(qos_table.HUMAN_ACTION)
+SESSION_QOS = profile_of(qos_table.SESSION)
+EPISODE_QOS = profile_of(qos_table.EPISODE)
+AGENT_STEP_QOS = profile_of(qos_table.AGENT_STEP)
 JOY_QOS = qos_profile_sensor_data
 # Visualization (image, markers): best effort, only the newest matters.
 VISUAL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                         reliability=ReliabilityPolicy.BEST_EFFORT)
 
 # The profile each topic of the session graph (hrc_common.topics.TYPES) is published with.
-OF_TOPIC = {
-    topics.STATE: STATE_QOS,
-    topics.ROBOT_CMD_WRENCH: COMMAND_QOS,
-    topics.HUMAN_CMD_WRENCH: COMMAND_QOS,
-    topics.HUMAN_ACTION: HUMAN_ACTION_QOS,
-    topics.SESSION: SESSION_QOS,
-    topics.EPISODE: EPISODE_QOS,
-    topics.AGENT_STEP: AGENT_STEP_QOS,
-}
+OF_TOPIC = {topic: profile_of(spec) for topic, spec in qos_table.OF_TOPIC.items()}
 # Publishers and subscriptions of the control loop without QoS event handlers (rclpy's defaults
 # log incompatible QoS): each handler is an entity of the wait set rclpy's executor rebuilds at
 # every turn, about 20 us per handler per turn (bench/wait_set_cost.py); the profiles above are

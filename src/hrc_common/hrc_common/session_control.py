@@ -20,5 +20,8 @@ OPERATOR_SERVICES = {'pause': PAUSE_SERVICE, 'resume': RESUME_SERVICE, 'abort': 
 # parameters (2, hrc_common.nodes.EXIT_BAD_PARAMETERS).
 EXIT_OPERATOR_ABORT = 3
 
-# Name of the checkpoint the agent writes at every episode end (the one to resume from).
+# Checkpoint file names in <checkpoint_dir>/<session_id>/, written by the agent node and the
+# in-process engine alike: at every episode end (the one to resume from), and once at the end
+# of training.
 LATEST_CHECKPOINT = 'latest.pt'
+FINAL_CHECKPOINT = 'final.pt'

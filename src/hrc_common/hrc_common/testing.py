@@ -103,7 +103,7 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
     ``limits``: an ``hrc_common.contract.SimLimits``. The caller spins the node (add it to the
     test's executor) and destroys it.
     """
-    import rclpy
+    import rclpy  # optional: the other helpers (domains, executables) serve pure tests too
 
     node = rclpy.create_node(name, context=context)
     for field in limits.NAMES:

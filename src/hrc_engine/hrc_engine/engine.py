@@ -34,24 +34,15 @@ import typing
 
 import yaml
 
-from hrc_common.contract import NS_PER_S, SimLimits
+from hrc_common import qos_table
+from hrc_common.contract import SimLimits
+from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
 
-# The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns):
-# hrc_common.qos without rclpy (a test checks that both agree).
-COMMAND_DEADLINE_NS = NS_PER_S   # 1 s
-OFFERED_QOS = {
-    '/hrc/state': (True, False, 0),
-    '/hrc/robot/cmd_wrench': (True, False, COMMAND_DEADLINE_NS),
-    '/hrc/human/cmd_wrench': (True, False, COMMAND_DEADLINE_NS),
-    '/hrc/human/action': (True, False, 0),
-    '/hrc/session': (True, True, 0),
-    '/hrc/episode': (True, True, 0),
-    '/hrc/agent/step': (True, False, 0),
-}
-LATEST_CHECKPOINT = 'latest.pt'
-FINAL_CHECKPOINT = 'final.pt'
+# The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns).
+OFFERED_QOS = {topic: (qos.reliable, qos.transient_local, qos.deadline_ns)
+               for topic, qos in qos_table.OF_TOPIC.items()}
 
 
 @dataclass
@@ -98,8 +89,8 @@ class SessionResult:
 
 def compose_parameters(config: EngineConfig) -> tuple:
     """Return (SessionSettings, {node: parameters}) exactly as ``session`` composes them."""
-    from hrc_bringup.plan import compose, new_session_id, SessionSettings
-    from hrc_bringup.session import default_params_dir
+    from hrc_common.paths import params_dir as default_params_dir
+    from hrc_common.session_plan import compose, new_session_id, SessionSettings
 
     settings = SessionSettings(
         case=config.case, seed=config.seed, mode='lockstep', human_input='sim',
@@ -177,7 +168,7 @@ class InProcessSession:
     # -- recording --------------------------------------------------------------------------
     def _open_bags(self) -> None:
         from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
-        from hrc_bringup.plan import write_session_files
+        from hrc_common.session_plan import write_session_files
 
         _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
         text = config_path.read_text()

@@ -10,6 +10,9 @@ import argparse
 import json
 import sys
 
+from hrc_common.params import ParameterError
+from hrc_common.session_plan import parse_overrides
+
 from hrc_engine.engine import EngineConfig, run_session
 
 
@@ -40,8 +43,6 @@ def parse_args(argv=None) -> EngineConfig:
     parser.add_argument('--json', action='store_true', help='print the result as JSON')
     options = parser.parse_args(argv)
 
-    from hrc_bringup.overrides import parse_overrides
-
     reasons, overrides = [], {}
     try:
         overrides = parse_overrides(options.set)
@@ -62,8 +63,6 @@ def parse_args(argv=None) -> EngineConfig:
 
 def main(argv=None) -> int:
     """Run the session; print its result; exit 0, or 2 for bad parameters."""
-    from hrc_common.params import ParameterError
-
     config, as_json = parse_args(argv)
     try:
         result = run_session(config)

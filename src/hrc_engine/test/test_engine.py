@@ -26,6 +26,7 @@ def short_config(tmp_path, **fields):
     return EngineConfig(**values)
 
 
+@pytest.mark.slow
 def test_a_session_runs_without_rclpy_and_its_result_pickles(tmp_path):
     script = textwrap.dedent(f"""
         import pickle, sys
@@ -57,6 +58,7 @@ def test_the_same_seed_gives_the_same_session_and_another_seed_another(tmp_path)
     assert first.episodes != other.episodes
 
 
+@pytest.mark.slow
 def test_the_bags_carry_the_graphs_qos_and_the_report_reads_them(tmp_path, read_rosbag):
     from hrc_bag.format import offered_profile
     from hrc_common import qos

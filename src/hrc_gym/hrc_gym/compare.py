@@ -22,7 +22,12 @@ weight 0.5).
 
 import math
 
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.strategies import StrategyProgress
+from hrc_common.params import with_overrides
 import numpy as np
+import torch
 
 from hrc_gym.env import SliderPendulumBallEnv
 
@@ -48,9 +53,6 @@ def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int, **changes
 
     ``changes``: other AgentParams values (e.g. ``horizon``), for experiments.
     """
-    from hrc_agent_node.config import AgentParams
-    from hrc_common.params import with_overrides
-
     overrides = dict(seed=seed, max_training_episodes=episodes, evaluation_episodes=0,
                      checkpoint_dir='', torch_threads=1,
                      # Stay in the environment's training step: the criterion is judged
@@ -63,8 +65,6 @@ def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int, **changes
 
 def sb3_ppo_kwargs(params) -> dict:
     """Return stable_baselines3.PPO keyword arguments equal to our PPO's ``params``."""
-    import torch
-
     return dict(n_steps=params.horizon, batch_size=params.minibatch_size,
                 n_epochs=params.epochs, learning_rate=params.learning_rate,
                 gamma=params.gamma, gae_lambda=params.gae_lambda, clip_range=params.clip_coef,
@@ -86,8 +86,6 @@ def train_ours(setting: str, seed: int, episodes: int, **changes) -> list:
 
     ``changes``: AgentParams values other than Table I's (experiments only).
     """
-    from hrc_agent_node.agent_core import AgentCore
-
     env = make_env(setting)
     try:
         core = AgentCore(agent_params(env, seed, episodes, **changes), tree=env.task.tree,
@@ -117,10 +115,10 @@ def train_ours(setting: str, seed: int, episodes: int, **changes) -> list:
 
 def train_sb3(setting: str, seed: int, episodes: int, env=None) -> tuple:
     """Train SB3's PPO for ``episodes`` episodes; return (records, model)."""
-    import torch
+    # stable_baselines3: an optional dependency (the cross-check only), about 2 s to import
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
-    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+    from stable_baselines3.common.callbacks import BaseCallback  # stable_baselines3: as above
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize  # as above
 
     torch.set_num_threads(1)
     env = env if env is not None else make_env(setting)
@@ -175,8 +173,6 @@ def episodes_to_criterion(env, records, window: int = CRITERION_WINDOW):
     The strategies' own judge (``StrategyProgress``): every subtask the training step watches
     within its tolerance in each of ``window`` consecutive episodes.
     """
-    from hrc_agent_node.strategies import StrategyProgress
-
     task = env.task
     progress = StrategyProgress(task.case, task.tree, window, window)
     progress.step_index = task.step_spec.index

@@ -9,6 +9,7 @@ components of peak 3.99 over 200 steps). Observed: 1403 vs 702 in about 7 s.
 """
 
 import numpy as np
+import pytest
 import torch
 
 from hrc_gym.compare import make_env, run_policy
@@ -19,6 +20,7 @@ EVALUATION_SEED = 123
 MARGIN = 300.0
 
 
+@pytest.mark.slow
 def test_sb3_ppo_beats_a_random_policy_on_the_robot_alone_step():
     from stable_baselines3 import PPO
 

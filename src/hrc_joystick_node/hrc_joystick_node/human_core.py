@@ -161,7 +161,7 @@ def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile
 def core_from_parameters(parameters: dict, limits: SimLimits) -> 'HumanCore':
     """Return the core for the human node's parameters given as a plain dict.
 
-    E.g. as ``hrc_bringup.plan.compose`` composes them; checked as the node checks them
+    E.g. as ``hrc_common.session_plan.compose`` composes them; checked as the node checks them
     (ParameterError with every reason). No device or /joy in this process: input ``sim``.
     ``limits``: the sim's (as the node reads them from the sim's parameters).
     """

@@ -171,6 +171,7 @@ import yaml
 
 from hrc_common.dof import check_dof, ROTATION, TRANSLATION
 from hrc_common.params import from_dict, param, ParameterError
+from hrc_common.paths import params_file
 from hrc_joystick_node.adaptation import TwoRateAdaptation
 from hrc_joystick_node.fatigue import Fatigue
 
@@ -309,11 +310,8 @@ class HumanProfile:
 
 
 def default_profiles_path() -> pathlib.Path:
-    """Return the installed ``share/hrc_joystick_node/params/sim_human.yaml``."""
-    from ament_index_python.packages import get_package_share_directory
-
-    share = pathlib.Path(get_package_share_directory('hrc_joystick_node'))
-    return share / 'params' / 'sim_human.yaml'
+    """Return ``params/sim_human.yaml`` (``hrc_common.paths.params_file``)."""
+    return params_file('sim_human.yaml')
 
 
 def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:

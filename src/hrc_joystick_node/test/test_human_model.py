@@ -165,6 +165,7 @@ def physics():
         yield model
 
 
+@pytest.mark.slow
 def test_the_person_adapts_to_a_partner_that_leaves_a_constant_disturbance(physics):
     profile = PROFILES['paper']
     frozen = dataclasses.replace(profile, fast_learning_rate=0.0, slow_learning_rate=0.0)

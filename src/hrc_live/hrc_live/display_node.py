@@ -46,6 +46,7 @@ from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
 from hrc_common.params import declare_parameters, ParameterError, with_overrides
 from hrc_common.session_control import OPERATOR_SERVICES
+from hrc_common.tlx import check_tlx, raw_tlx, TLX_STEP
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
 from rclpy.node import Node
@@ -59,7 +60,6 @@ from hrc_live.display_core import (AgentPlan, console_document, DisplayModel, Hu
                                    status_document)
 from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
-from hrc_live.tlx import check_tlx, raw_tlx, TLX_STEP
 
 SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the person's page "
            '(scene drawn in the browser from a pushed state stream) and /console for the '

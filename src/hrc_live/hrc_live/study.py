@@ -27,14 +27,12 @@ import pathlib
 import typing
 
 from hrc_common.contract import atomic_write, id_problem, PERSONAL_FILE_MODE
+from hrc_common.study_index import INDEX_FILE, IndexEntry, PAPER_CASES, SESSION_KINDS
 import yaml
 
 SUBJECTS_FILE = 'subjects.yaml'
-INDEX_FILE = 'index.yaml'
 CONSENT_VALUES = ('yes', 'no')
 SUBJECT_FIELDS = ('id', 'consent', 'consent_date', 'registered', 'order')
-SESSION_KINDS = ('practice', 'condition')
-PAPER_CASES = (1, 2, 3, 4, 5, 6)
 # The agent settings every condition of the study runs with (docs/live_study.md, "the study's
 # settings"), written into each session command by ``study plan``. A modelling choice, from a
 # measured case 2 run: with the tuned reward preset the robot alone converged in 92 episodes
@@ -202,23 +200,6 @@ def assign_orders(subjects: list, cases: typing.Sequence[int] = PAPER_CASES) -> 
 
 
 # ---------------------------------------------------------------------------- session index
-
-@dataclass
-class IndexEntry:
-    """One session a subject took part in."""
-
-    subject_id: str
-    session_id: str
-    case: int
-    kind: str                   # practice | condition
-    position: int               # 1-based position of the case in the subject's order (0 = ?)
-    started: str                # ISO date-time
-    ended: str
-    exit_code: int
-    bags: str                   # folder of the session's bags
-    run_dir: str                # logs, parameters, checkpoints, report
-    tlx_file: str = ''          # raw NASA-TLX answers ('' = none asked)
-
 
 def load_index(folder) -> list:
     """Return the IndexEntries of ``folder``/index.yaml ([] if none)."""

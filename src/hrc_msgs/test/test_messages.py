@@ -7,6 +7,7 @@ import sys
 import textwrap
 
 import pytest
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
@@ -86,18 +87,25 @@ def test_reset_service_types():
     assert deserialize_message(serialize_message(response), ResetEpisode.Response).success
 
 
+# Reliable and transient local (as /hrc/session): a subscription that matches late still gets
+# each message. Defined here: hrc_msgs is the lowest layer and imports no other hrc package.
+LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
 PUBLISHER_SCRIPT = textwrap.dedent("""
     import sys, time, pickle, base64
     import rclpy
     from rclpy.serialization import deserialize_message
     from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
-    from hrc_common import qos
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     rclpy.init()
     node = rclpy.create_node('message_publisher')
     messages = [deserialize_message(base64.b64decode(data), cls) for data, cls in zip(
         {payloads!r}, [TaskState, HumanAction, SessionStatus, EpisodeSummary, AgentStep])]
-    publishers = [node.create_publisher(type(m), '/hrc/test/' + type(m).__name__,
-                                        qos.SESSION_QOS) for m in messages]
+    qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    publishers = [node.create_publisher(type(m), '/hrc/test/' + type(m).__name__, qos)
+                  for m in messages]
     deadline = time.monotonic() + 20
     while time.monotonic() < deadline:
         if all(p.get_subscription_count() > 0 for p in publishers):
@@ -116,8 +124,6 @@ def test_every_message_crosses_processes(rclpy_context, ros_env):
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
-    from hrc_common import qos
-
     messages = sample_messages()
     payloads = [base64.b64encode(serialize_message(m)).decode() for m in messages]
     script = PUBLISHER_SCRIPT.format(payloads=payloads)
@@ -129,7 +135,7 @@ def test_every_message_crosses_processes(rclpy_context, ros_env):
         name = type(message).__name__
         node.create_subscription(type(message), '/hrc/test/' + name,
                                  lambda m, name=name: received.setdefault(name, m),
-                                 qos.SESSION_QOS)
+                                 LATCHED_QOS)
     publisher = subprocess.Popen([sys.executable, '-c', script], env=ros_env,
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     try:

@@ -20,11 +20,24 @@ asked for, the deterministic scripted PD controller of hrc_agent_node.partners s
 for the robot (the fast tests use it and say so).
 """
 
+import dataclasses
 from dataclasses import dataclass
 import math
 import typing
 
-from hrc_common.contract import other_dof
+from hrc_agent_node.partners import ScriptedPartner
+from hrc_common.contract import other_dof, SimLimits
+from hrc_common.params import with_overrides
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+from hrc_sim_node.protocol import per_dof, roles
+from hrc_study.statistics import mean_interval
+import numpy
+from scipy import stats
+
+from hrc_partners.crossplay import format_cell
+from hrc_partners.partners import evaluation_core
 
 DOFS = ('translation', 'rotation')
 OWN_SUBTASK = {'translation': 'slider', 'rotation': 'pendulum'}
@@ -53,8 +66,6 @@ class ScriptedRobot:
     kind = 'scripted PD controller (stand-in for a trained robot)'
 
     def __init__(self, dof: str, noise: float = 0.0, seed: int = 0, max_torque: float = 0.5):
-        from hrc_agent_node.partners import ScriptedPartner
-
         self.controller = ScriptedPartner(dof, max_torque=max_torque, noise=noise, seed=seed)
 
     def start_episode(self, limits) -> None:
@@ -74,8 +85,6 @@ class TrainedRobot:
     kind = 'trained agent'
 
     def __init__(self, checkpoint, seed: int = 0):
-        from hrc_partners.partners import evaluation_core
-
         self.core = evaluation_core(checkpoint, seed, episodes=10000)
         self.dof = self.core.robot_dof
 
@@ -96,10 +105,6 @@ class TrainedRobot:
 
 def team_episode(sim, robot, person, person_dof: str, seed: int, clock_start: float) -> tuple:
     """Run one episode; return (team total error, the person's own-subtask error)."""
-    from hrc_sim_node.protocol import per_dof, roles
-
-    from hrc_common.contract import SimLimits
-
     subtasks = [OWN_SUBTASK[person_dof], 'ball']
     robot.start_episode(SimLimits.of(sim.params))
     state = sim.reset(int(seed))
@@ -129,12 +134,10 @@ class Assignment:
 
     def team(self):
         """Return the expected team error (hrc_study Interval)."""
-        from hrc_study.statistics import mean_interval
         return mean_interval(self.team_errors)
 
     def skill(self):
         """Return the person's own-subtask error on this degree of freedom (Interval)."""
-        from hrc_study.statistics import mean_interval
         return mean_interval(self.own_errors)
 
 
@@ -154,8 +157,6 @@ class Advice:
 
     def describe(self) -> str:
         """Return the recommendation as readable lines."""
-        from hrc_partners.crossplay import format_cell
-
         lines = []
         for dof, assignment in self.assignments.items():
             unit = 'm' if dof == 'translation' else 'rad'
@@ -180,9 +181,6 @@ def difference_interval(first, second, confidence: float = 0.95) -> tuple:
     calibration runs its episodes in pairs with the same initial state, one of each
     assignment; Welch's interval otherwise.
     """
-    import numpy
-    from scipy import stats
-
     a, b = numpy.asarray(first, dtype=float), numpy.asarray(second, dtype=float)
     if len(a) == len(b) and len(a) >= 2:
         differences = a - b
@@ -218,17 +216,15 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
               physics_overrides: dict = None) -> Advice:
     """Run the calibration and return the advice.
 
-    ``person_for(dof)``: the person driving ``dof`` (``reset(episode)``, ``act(state,
-    subtasks, now)``: a SimulatedHuman or a ClonedHuman); ``robots[person_dof]``: the robot
+    ``person_for(dof, limits)``: the person driving ``dof`` (``reset(episode)``, ``act(state,
+    subtasks, now)``: a SimulatedHuman or a ClonedHuman), given the sim's
+    :class:`~hrc_common.contract.SimLimits` (its control period); ``robots[person_dof]``: the robot
     that holds the other degree of freedom. Episodes alternate between the assignments (a
     person's practice and fatigue do not favour one of them).
     """
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     physics = with_overrides(PhysicsParams(), episode_duration=float(plan.seconds),
                              **(physics_overrides or {}))
-    people = {dof: person_for(dof) for dof in DOFS}
+    people = {dof: person_for(dof, SimLimits.of(physics)) for dof in DOFS}
     results = {dof: Assignment(dof, robots[dof].kind, [], []) for dof in DOFS}
     clock = 0.0
     with SliderPendulumBall(physics) as sim:
@@ -244,11 +240,10 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
     return Advice(results, recommend(results), plan.person_seconds)
 
 
-def simulated_person(profile, seed: int, control_period: float = 0.2):
-    """Return ``person_for(dof)`` for a simulated person (one seed, both dofs)."""
-    from hrc_joystick_node.sim_human import SimulatedHuman
-
-    return lambda dof: SimulatedHuman(profile, dof, seed=seed, control_period=control_period)
+def simulated_person(profile, seed: int):
+    """Return ``person_for(dof, limits)`` for a simulated person (one seed, both dofs)."""
+    return lambda dof, limits: SimulatedHuman(profile, dof, seed=seed,
+                                              control_period=limits.control_period)
 
 
 def weaken(person, dof: str, factor: float):
@@ -257,8 +252,6 @@ def weaken(person, dof: str, factor: float):
     Perception noise, per-episode bias and the error at which the stick is pushed fully are
     multiplied by ``factor`` for the slider (translation) or the beam angle (rotation).
     """
-    import dataclasses
-
     name = OWN_SUBTASK[dof]
     return dataclasses.replace(person, **{
         f'{name}_{field}': getattr(person, f'{name}_{field}') * float(factor)
@@ -271,8 +264,6 @@ def asymmetric_person(base, seed: int, weak_dof: str, factor: float):
     Known asymmetric skill, everything else as the person of ``base`` (e.g. of
     ``paper_symmetric``).
     """
-    from hrc_joystick_node.population import sample_person
-
     return weaken(sample_person(base, seed), weak_dof, factor)
 
 
@@ -318,10 +309,6 @@ def validate(draws: int, plan: CalibrationPlan, truth_episodes: int = 16,
     trained robot (a robot that is not perfect on either degree of freedom, so the person's
     skill decides).
     """
-    import numpy
-
-    from hrc_joystick_node.sim_human import load_profile
-
     base = load_profile(base_profile, profiles_file)
     rng = numpy.random.default_rng([seed, 15])
     robots = {dof: ScriptedRobot(other_dof(dof), noise=robot_noise, seed=seed) for dof in DOFS}
@@ -353,8 +340,6 @@ def validate(draws: int, plan: CalibrationPlan, truth_episodes: int = 16,
 
 def validation_table(results: typing.List[Draw]) -> str:
     """Return the validation as a Markdown table and a summary line."""
-    from hrc_partners.crossplay import format_cell
-
     lines = ['| person | weaker at | x | advice: person on translation | person on rotation | '
              'advice | truth (long run): translation | rotation | truth | right |',
              '|---|---|---|---|---|---|---|---|---|---|']

@@ -18,6 +18,9 @@ import argparse
 import pathlib
 import sys
 
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import load_profile
+
 
 def main(argv=None) -> int:
     """Console entry point."""
@@ -35,8 +38,9 @@ def main(argv=None) -> int:
     parser.add_argument('--truth-seconds', type=float, default=0.0)
     args = parser.parse_args(argv)
 
+    # after the parsing: these load torch (seconds), --help and usage errors answer without
     from hrc_partners import advisor
-    from hrc_partners.partners import spec_problem
+    from hrc_partners.partners import spec_problem  # torch, as above
 
     problems = []
     if args.episodes < 2:
@@ -88,11 +92,8 @@ def _positive(text: str) -> bool:
 
 
 def _person(spec: str, weak_dof: str, factor: str):
-    from hrc_joystick_node.population import sample_person
-    from hrc_joystick_node.sim_human import load_profile
-
-    from hrc_partners.advisor import weaken
-    from hrc_partners.partners import parse_spec
+    from hrc_partners.advisor import weaken  # torch (via hrc_partners.partners), as in main()
+    from hrc_partners.partners import parse_spec  # torch, as above
 
     parsed = parse_spec(spec)
     person = load_profile(parsed.name)

@@ -16,6 +16,9 @@ import pathlib
 import sys
 
 from hrc_common.params import ParameterError
+from hrc_joystick_node.human_model import build_network, save_human_model
+
+from hrc_partners.recordings import load_demonstrations
 
 
 def parse_args(argv):
@@ -37,9 +40,7 @@ def parse_args(argv):
 
 def clone(args, log=print) -> dict:
     """Train and save the clone described by ``args``; return the report (ParameterError)."""
-    from hrc_joystick_node.human_model import build_network, save_human_model
-    from hrc_partners import cloning
-    from hrc_partners.recordings import load_demonstrations
+    from hrc_partners import cloning  # torch (seconds): --help answers without it
 
     problems = []
     if not 1 <= args.history_steps <= 256:

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 import math
 import typing
 
-import numpy
-
-from hrc_joystick_node.human_model import input_size, STATE_FIELDS
+from hrc_joystick_node.human_model import build_network, input_size, STATE_FIELDS
 from hrc_joystick_node.sim_human import normalize_subtasks, SUBTASKS
+import numpy
+import torch
 
 CONTROLLED = {'rotation': STATE_FIELDS.index('pendulum_angle'),
               'translation': STATE_FIELDS.index('slider_position')}
@@ -85,10 +85,6 @@ def train_clone(demonstrations, settings: CloneSettings = None) -> tuple:
 
     The config holds ``history_steps`` and ``hidden``; the caller adds the rest.
     """
-    import torch
-
-    from hrc_joystick_node.human_model import build_network
-
     settings = settings or CloneSettings()
     config = {'history_steps': int(settings.history_steps),
               'hidden': [int(width) for width in settings.hidden]}
@@ -116,8 +112,6 @@ def train_clone(demonstrations, settings: CloneSettings = None) -> tuple:
 
 def predict(network, trace, history_steps: int) -> numpy.ndarray:
     """Return the network's command at every step of one recorded episode (open loop)."""
-    import torch
-
     with torch.no_grad():
         rows = torch.tensor(features(trace.states, trace.subtasks, history_steps),
                             dtype=torch.float64)

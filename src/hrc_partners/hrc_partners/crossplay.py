@@ -17,6 +17,8 @@ import pathlib
 import typing
 
 from hrc_common.params import ParameterError
+from hrc_study.statistics import mean_interval
+import numpy
 
 from hrc_partners.partners import evaluate, parse_specs, spec_problem
 
@@ -82,8 +84,6 @@ class Matrix:
 
     def cell(self, agent: str, partner: str):
         """Return the cell's hrc_study Interval (mean over seeds, 95 % t interval)."""
-        from hrc_study.statistics import mean_interval
-
         return mean_interval(self.errors[agent][partner])
 
     def drop(self, agent: Agent, partner: str) -> float:
@@ -156,11 +156,10 @@ def markdown(matrix: Matrix) -> str:
 
 def heatmap(matrix: Matrix, path) -> None:
     """Draw the matrix (log colour scale, mean and drop in each cell) to a PNG."""
-    import matplotlib
+    import matplotlib  # optional heavy dependency (about 1 s): only when a figure is drawn
     matplotlib.use('Agg')
-    import matplotlib.colors
-    import matplotlib.pyplot as plt
-    import numpy
+    import matplotlib.colors  # matplotlib, as above
+    import matplotlib.pyplot as plt  # after use('Agg'): no display needed
 
     values = numpy.array([[matrix.cell(agent.name, partner).estimate
                            for partner in matrix.partners] for agent in matrix.agents])

@@ -33,8 +33,9 @@ def main(argv=None) -> int:
     parser.add_argument('--quiet', action='store_true', help='no line per cell on stderr')
     args = parser.parse_args(argv)
 
+    # after the parsing: these load torch (seconds), --help and usage errors answer without
     from hrc_partners import crossplay
-    from hrc_partners.partners import spec_problem
+    from hrc_partners.partners import spec_problem  # torch, as above
 
     problems = []
     if args.episodes < 1:

@@ -23,7 +23,18 @@ from dataclasses import dataclass, fields
 import pathlib
 import typing
 
-from hrc_common.params import ParameterError
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import load_into, read_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
+from hrc_common.contract import SimLimits
+from hrc_common.params import from_dict, ParameterError, with_overrides
+from hrc_joystick_node.human_model import ClonedHuman
+from hrc_joystick_node.population import sample_person
+from hrc_joystick_node.sim_human import load_profile
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+import numpy
 
 KINDS = ('profile', 'person', 'population', 'model', 'mixture')
 EVALUATION_SEED_OFFSET = 5000   # evaluation person draws: seeds no training session uses
@@ -89,10 +100,8 @@ def parse_specs(texts) -> typing.List[PartnerSpec]:
 class ClonedPartner:
     """A cloned human model as an offline partner (``start_episode`` resets its history)."""
 
-    def __init__(self, path, dof: str, control_period: float = 0.2):
-        from hrc_joystick_node.human_model import ClonedHuman
-
-        self.human = ClonedHuman(path, dof, control_period=control_period)
+    def __init__(self, path, dof: str, limits: SimLimits):
+        self.human = ClonedHuman(path, dof, control_period=limits.control_period)
 
     def start_episode(self, episode: int) -> None:
         """Clear the model's state history."""
@@ -103,35 +112,28 @@ class ClonedPartner:
         return float(self.human.act(state, list(subtasks)))
 
 
-def make_partner(spec: PartnerSpec, dof: str, seed: int, control_period: float = 0.2,
-                 profiles_file=None):
-    """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed)."""
-    from hrc_agent_node.partners import SimulatedHumanPartner
-    from hrc_joystick_node.population import sample_person
-    from hrc_joystick_node.sim_human import load_profile
+def make_partner(spec: PartnerSpec, dof: str, seed: int, limits: SimLimits, profiles_file=None):
+    """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed).
 
+    ``limits``: the sim's (its control period is the partner's).
+    """
     if spec.kind == 'model':
-        return ClonedPartner(spec.path, dof, control_period)
+        return ClonedPartner(spec.path, dof, limits)
     if spec.kind == 'mixture':
-        return MixturePartner(spec.parts, dof, seed + EVALUATION_SEED_OFFSET, control_period,
-                              1, profiles_file)
+        return MixturePartner(spec.parts, dof, seed + EVALUATION_SEED_OFFSET, limits, 1,
+                              profiles_file)
     profile = load_profile(spec.name, profiles_file)
+    period = limits.control_period
     if spec.kind == 'person':
-        return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed,
-                                     control_period)
+        return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed, period)
     if spec.kind == 'population':
-        return SimulatedHumanPartner(profile, dof, seed + EVALUATION_SEED_OFFSET,
-                                     control_period, population_every=1)
-    return SimulatedHumanPartner(profile, dof, seed, control_period)
+        return SimulatedHumanPartner(profile, dof, seed + EVALUATION_SEED_OFFSET, period,
+                                     population_every=1)
+    return SimulatedHumanPartner(profile, dof, seed, period)
 
 
 def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None):
     """Return an AgentCore that evaluates ``checkpoint``'s frozen policy (``episodes``, seed)."""
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.checkpoint import load_into, read_checkpoint
-    from hrc_agent_node.config import AgentParams
-    from hrc_common.params import from_dict, with_overrides
-
     config = read_checkpoint(checkpoint)['config']
     settings = dict(seed=int(seed), evaluation_only=True, resume_from=str(checkpoint),
                     evaluation_episodes=int(episodes), checkpoint_dir='', torch_threads=1)
@@ -149,13 +151,9 @@ def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None
 def evaluate(checkpoint, spec: PartnerSpec, seed: int, episodes: int,
              physics_overrides: dict = None, profiles_file=None) -> float:
     """Return the mean total error of ``checkpoint``'s frozen policy with ``spec`` (one seed)."""
-    from hrc_agent_node.offline import run_session
-    from hrc_common.params import with_overrides
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     physics = with_overrides(PhysicsParams(), **(physics_overrides or {}))
     core = evaluation_core(checkpoint, seed, episodes)
-    partner = make_partner(spec, core.human_dof, seed, physics.control_period, profiles_file)
+    partner = make_partner(spec, core.human_dof, seed, SimLimits.of(physics), profiles_file)
     with SliderPendulumBall(physics) as sim:
         return float(run_session(core, sim, partner)['evaluation']['total_error'])
 
@@ -169,14 +167,14 @@ class MixturePartner:
     offline loop tells it each episode (``start_episode``).
     """
 
-    def __init__(self, specs, dof: str, seed: int = 0, control_period: float = 0.2,
-                 every: int = 1, profiles_file=None):
+    def __init__(self, specs, dof: str, seed: int, limits: SimLimits, every: int = 1,
+                 profiles_file=None):
         if every < 1:
             raise ValueError(f'every must be >= 1, got {every}')
         self.specs = list(specs)
         self.dof = dof
         self.seed = int(seed)
-        self.control_period = float(control_period)
+        self.limits = limits           # the sim's: its control period is each partner's
         self.every = int(every)
         self.profiles_file = profiles_file
         self.draw = None
@@ -186,10 +184,6 @@ class MixturePartner:
 
     def start_episode(self, episode: int) -> None:
         """Meet the partner of ``episode`` (a new draw every ``every`` episodes)."""
-        import numpy
-
-        from hrc_agent_node.partners import person_seed
-
         draw = int(episode) // self.every
         if draw != self.draw:
             self.draw = draw
@@ -197,15 +191,11 @@ class MixturePartner:
             self.spec = self.specs[int(rng.integers(len(self.specs)))]
             seed = person_seed(self.seed, draw)
             if self.spec.kind == 'population':
-                from hrc_agent_node.partners import SimulatedHumanPartner
-                from hrc_joystick_node.population import sample_person
-                from hrc_joystick_node.sim_human import load_profile
-
                 person = sample_person(load_profile(self.spec.name, self.profiles_file), seed)
                 self.partner = SimulatedHumanPartner(person, self.dof, seed,
-                                                     self.control_period)
+                                                     self.limits.control_period)
             else:
-                self.partner = make_partner(self.spec, self.dof, seed, self.control_period,
+                self.partner = make_partner(self.spec, self.dof, seed, self.limits,
                                             self.profiles_file)
             self.drawn.append((draw, self.spec.text))
         self.partner.start_episode(int(episode))

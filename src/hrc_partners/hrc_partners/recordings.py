@@ -14,6 +14,8 @@ or, without one, is its own subject: splits are by subject, never by step.
 from dataclasses import dataclass, field
 import typing
 
+from hrc_bag import bag_reader
+from hrc_bag.report.loading import load_sessions, topics_of_type
 from hrc_common.contract import (dof_name, HUMAN_ACTION_TYPE, InputSource, SESSION_STATUS_TYPE,
                                  TASK_STATE_TYPE)
 import numpy
@@ -71,8 +73,6 @@ def _subtasks_of(statuses, episode: int) -> typing.List[str]:
 
 def read_episode(file, topics: dict, decoder, episode: int) -> typing.Optional[tuple]:
     """Return (EpisodeTrace, human dof, source details) of one episode file, or None if empty."""
-    from hrc_bag import bag_reader
-
     wanted = topics[TASK_STATE_TYPE] + topics[HUMAN_ACTION_TYPE] + topics[SESSION_STATUS_TYPE]
     scan = bag_reader.scan_file(file, topics=wanted)
     states, actions, statuses = {}, {}, []
@@ -106,9 +106,6 @@ def load_demonstrations(paths, log=print) -> typing.List[Demonstration]:
     skipped with a line to ``log``. A session whose person drove both degrees of freedom is
     split into one demonstration per degree of freedom.
     """
-    from hrc_bag import bag_reader
-    from hrc_bag.report.loading import load_sessions, topics_of_type
-
     decoder = bag_reader.MessageDecoder()
     found = []
     for session in load_sessions(paths, log, decoder):

@@ -11,6 +11,8 @@ import dataclasses
 import pathlib
 import typing
 
+from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_joystick_node.sim_human import load_profile
 import yaml
 
 FAST_SLOW_DELAYS = {'fast': 0.1, 'slow': 0.6}   # s: reaction delays of the demonstration pair
@@ -18,8 +20,6 @@ FAST_SLOW_DELAYS = {'fast': 0.1, 'slow': 0.6}   # s: reaction delays of the demo
 
 def write_profiles(path, people: typing.Dict[str, dict], base: str = 'skilled') -> str:
     """Write a profiles file: each person = profile ``base`` with the fields given changed."""
-    from hrc_joystick_node.sim_human import load_profile
-
     template = load_profile(base)
     profiles = {}
     for name, changes in people.items():
@@ -53,8 +53,6 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
     episode. ``episodes`` training episodes of ``seconds`` s of simulation, no evaluation, no
     checkpoints.
     """
-    from hrc_engine.engine import EngineConfig, run_session
-
     folders = []
     for person in people:
         for seed in seeds:
@@ -76,8 +74,6 @@ def record_with_model(bags_dir, runs_dir, model_file, seed: int = 0, case: int =
     The engine's human side is the human node's core with ``input: model`` (the session's
     composed parameters, with the human's input switched to the model).
     """
-    from hrc_engine.engine import compose_parameters, EngineConfig, run_session
-
     config = EngineConfig(case=case, seed=int(seed), training_episodes=int(episodes),
                           evaluation_episodes=0, session_id=f'model-seed{seed}',
                           bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,

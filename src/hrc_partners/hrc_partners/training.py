@@ -16,6 +16,18 @@ import json
 import pathlib
 import sys
 
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_common.contract import SimLimits
+from hrc_common.params import with_overrides
+from hrc_joystick_node.sim_human import load_profile
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
+
 
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
                 preset: str, checkpoint, profiles_file=None, mixture=None) -> dict:
@@ -24,31 +36,18 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
     ``mixture``: partner specifications to draw from every ``population_every`` episodes
     (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
     """
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.checkpoint import save_checkpoint
-    from hrc_agent_node.config import AgentParams
-    from hrc_agent_node.offline import run_session
-    from hrc_agent_node.partners import SimulatedHumanPartner
-    from hrc_common.contract import SimLimits
-    from hrc_common.params import with_overrides
-    from hrc_joystick_node.sim_human import load_profile
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
-    from hrc_partners.partners import MixturePartner, parse_spec
-
     physics = PhysicsParams()
+    limits = SimLimits.of(physics)
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
-        evaluation_episodes=0, checkpoint_dir='', torch_threads=1),
-        limits=SimLimits.of(physics))
+        evaluation_episodes=0, checkpoint_dir='', torch_threads=1), limits=limits)
     if mixture:
         trained_with = 'mixture:' + '+'.join(mixture)
-        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed,
-                                 physics.control_period, max(1, population_every),
-                                 profiles_file)
+        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed, limits,
+                                 max(1, population_every), profiles_file)
     else:
         partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
-                                        seed, physics.control_period, population_every)
+                                        seed, limits.control_period, population_every)
         trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
@@ -81,8 +80,6 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     if 'mixture' in args.kinds:
-        from hrc_partners.partners import spec_problem
-
         problems = [problem for problem in map(spec_problem, args.mixture) if problem]
         if not args.mixture or problems:
             for problem in problems or ['--kinds mixture needs --mixture SPEC...']:

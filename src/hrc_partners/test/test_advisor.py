@@ -5,9 +5,11 @@ The robot is the scripted PD controller with command noise, standing in for a tr
 """
 
 from hrc_joystick_node.sim_human import load_profile
+import pytest
 from hrc_partners import advisor
 
 
+@pytest.mark.slow
 def test_right_in_clear_cases_and_quick_for_the_person():
     plan = advisor.CalibrationPlan()
     assert plan.person_seconds < 180.0
@@ -70,3 +72,17 @@ def test_a_trained_robot_plays_a_team_episode_with_the_sims_limits(tmp_path):
         team, own = advisor.team_episode(sim, robot, person, 'translation', 0, 0.0)
     assert team > 0.0 and own >= 0.0
     assert robot.core.limits.max_torque == 0.8
+
+
+def test_the_person_gets_the_sims_control_period():
+    # the sim's limits reach the person: a control period set for the sim is the person's too
+    given = []
+
+    def person_for(dof, limits):
+        given.append(limits)
+        return advisor.simulated_person(load_profile('paper'), 0)(dof, limits)
+
+    robots = {dof: advisor.ScriptedRobot(advisor.other_dof(dof)) for dof in advisor.DOFS}
+    plan = advisor.CalibrationPlan(episodes_per_dof=1, seconds=1.0)
+    advisor.calibrate(person_for, robots, plan, physics_overrides={'control_period': 0.1})
+    assert [limits.control_period for limits in given] == [0.1, 0.1]

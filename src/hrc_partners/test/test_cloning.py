@@ -2,6 +2,8 @@
 
 import json
 
+import pytest
+
 from hrc_partners import clone_cli, cloning, synthetic
 from hrc_partners.recordings import load_demonstrations
 
@@ -13,6 +15,7 @@ def _clone(capsys, paths, held_out, out):
     return json.loads(capsys.readouterr().out)
 
 
+@pytest.mark.slow
 def test_clones_of_a_slow_and_a_fast_person(tmp_path, capsys):
     profiles = synthetic.fast_and_slow(tmp_path / 'people.yaml')
     folders = synthetic.record_sessions(tmp_path / 'bags', tmp_path / 'runs', profiles,

@@ -4,11 +4,13 @@ import json
 import math
 
 from PIL import Image
+import pytest
 
 from hrc_partners import crossplay, crossplay_cli, training
 from hrc_partners.partners import parse_specs
 
 
+@pytest.mark.slow
 def test_matrix_files_and_drops(tmp_path, capsys):
     checkpoint = tmp_path / 'c2-one-s0.pt'
     summary = training.train_agent(2, 0, 2, 'paper', 0, 'tuned', checkpoint)
@@ -62,6 +64,7 @@ def test_specs():
 
 
 def test_mixture_population_draws_profiles_people_and_clones(tmp_path):
+    from hrc_common.contract import SimLimits
     from hrc_joystick_node.human_model import build_network, save_human_model
     from hrc_partners.partners import MixturePartner, parse_spec
     from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
@@ -73,8 +76,9 @@ def test_mixture_population_draws_profiles_people_and_clones(tmp_path):
     assert [part.kind for part in spec.parts] == ['population', 'model']
 
     def draws(seed):
-        partner = MixturePartner(spec.parts, 'translation', seed=seed, every=2)
-        with SliderPendulumBall(PhysicsParams()) as sim:
+        physics = PhysicsParams()
+        partner = MixturePartner(spec.parts, 'translation', seed, SimLimits.of(physics), every=2)
+        with SliderPendulumBall(physics) as sim:
             state = sim.reset(0)
             for episode in range(12):
                 partner.start_episode(episode)

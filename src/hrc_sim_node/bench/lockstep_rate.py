@@ -16,11 +16,19 @@ import random
 import sys
 import time
 
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from hrc_common import qos, topics
+from hrc_common.testing import NodeProcess, ros_environment
+from hrc_msgs.msg import TaskState
+from hrc_msgs.srv import ResetEpisode
+from hrc_sim_node.physics import SliderPendulumBall
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
+
 
 def in_process_rate(steps: int) -> float:
     """Control steps per second of the physics core alone (zero commands, whole episodes)."""
-    from hrc_sim_node.physics import SliderPendulumBall
-
     physics = SliderPendulumBall()
     done = 0
     start = time.perf_counter()
@@ -36,13 +44,6 @@ def in_process_rate(steps: int) -> float:
 
 def lockstep_rate(episodes: int, executor_name: str) -> tuple:
     """Return (control steps/s, steps, missing flags seen) of the sim node over DDS."""
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos, topics
-    from hrc_common.testing import NodeProcess, ros_environment
-    from hrc_msgs.msg import TaskState
-    from hrc_msgs.srv import ResetEpisode
-
     domain_id = random.randint(101, 200)
     env = ros_environment(domain_id)
     os.environ.update({k: v for k, v in env.items() if k.startswith('ROS_')})
@@ -76,10 +77,8 @@ def lockstep_rate(episodes: int, executor_name: str) -> tuple:
     node.create_subscription(TaskState, topics.STATE, on_state, qos.STATE_QOS)
     client = node.create_client(ResetEpisode, topics.RESET_SERVICE)
     if executor_name == 'events':
-        from rclpy.experimental import EventsExecutor
         executor = EventsExecutor()
     else:
-        from rclpy.executors import SingleThreadedExecutor
         executor = SingleThreadedExecutor()
     executor.add_node(node)
     try:

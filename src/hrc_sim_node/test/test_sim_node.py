@@ -379,8 +379,11 @@ def test_a_second_publisher_cannot_push_out_the_actors_matching_command(
 
 
 def test_lockstep_at_the_human_rate_asks_the_human_every_slice(start_node, sim_client):
-    """Ten slice states per step on /hrc/sim/slice_state; the period's state holds the
-    human's ten applied commands (clamped to the sim's max_torque), the robot's one."""
+    """Ten slice states per step on /hrc/sim/slice_state.
+
+    The period's state holds the human's ten applied commands (clamped to the sim's
+    max_torque) and the robot's one.
+    """
     start_sim(start_node, sim_client, human_period=0.02, **PATIENT)
     sim_client.wait(lambda: sim_client.slice_subscription.get_publisher_count() > 0)
     first = sim_client.reset(seed=2).state

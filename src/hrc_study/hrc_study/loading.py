@@ -1,6 +1,8 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
-from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
+from hrc_bag.report import load_sessions as load_bag_sessions
+
+from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord
 
 
 def _nested(config: dict, *keys, default=None):
@@ -68,7 +70,7 @@ def record_from_bag_session(session) -> SessionRecord:
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
         final_evaluation=_final_flag(summary), kind=_kind_label(summary))
         for summary in session.summaries]
-    strategy, robot_dof = CASES.get(session.case_id, (session.strategy, session.robot_dof))
+    strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
     try:
         seed = int(session.seed)
     except ValueError:
@@ -112,8 +114,6 @@ def load_sessions(paths, log=print) -> list:
     sessions go to ``log``; a path without sessions raises FileNotFoundError, files that are
     not MCAP raise ``hrc_bag.bag_reader.BagError`` with every reason).
     """
-    from hrc_bag.report import load_sessions as load_bag_sessions
-
     records = [record_from_bag_session(session) for session in load_bag_sessions(paths, log)]
     records.sort(key=lambda record: (record.profile, record.case_id, record.seed,
                                      record.session_id))

@@ -12,7 +12,9 @@ import argparse
 import shlex
 import sys
 
-from hrc_study.chooser import parse_priorities
+from hrc_study.chooser import choice_markdown, parse_priorities
+from hrc_study.loading import load_sessions
+from hrc_study.results_doc import read_experiment, write_results
 
 DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episodes to '
                "convergence, the paper's findings with paired, censoring-aware, "
@@ -51,10 +53,6 @@ def main(argv=None) -> int:
     """Run the study's report."""
     argv = sys.argv[1:] if argv is None else argv
     arguments = parse_arguments(argv)
-    from hrc_study.chooser import choice_markdown
-    from hrc_study.loading import load_sessions
-    from hrc_study.results_doc import read_experiment, write_results
-
     def log(text):
         print(f'hrc_results: {text}', file=sys.stderr)
 

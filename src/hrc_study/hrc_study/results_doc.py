@@ -16,7 +16,7 @@ import numpy
 from hrc_study import figures
 from hrc_study.chooser import choice_markdown, choose, PRESETS
 from hrc_study.findings import evaluate_findings, significance_note
-from hrc_study.sessions import (CASES, EFFORT_UNITS, measures, other_dof_of,
+from hrc_study.sessions import (case_roles, EFFORT_UNITS, measures, other_dof_of,
                                 PHYSICAL_EFFORT_KEYS, STRATEGY_SHORT)
 from hrc_study.statistics import bca_interval, kaplan_meier, mean_interval
 
@@ -77,7 +77,7 @@ def column_interval(values, key: str, intervals: str = 'bca', seed: int = 0,
 
 def _units_of(key: str, case_id: int) -> str:
     """Return the physical unit of a physical-effort cell of ``case_id``."""
-    robot = CASES.get(case_id, ('', ''))[1]
+    robot = case_roles().get(case_id, ('', ''))[1]
     if not robot:
         return ''
     dof = robot if key.startswith('robot') else other_dof_of(robot)
@@ -96,7 +96,7 @@ def table2_markdown(rows: dict, intervals: str = 'bca', seed: int = 0,
     header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for case_id, values in rows.items():
-        strategy, robot = CASES.get(case_id, ('?', '?'))
+        strategy, robot = case_roles().get(case_id, ('?', '?'))
         cells = [str(case_id), STRATEGY_SHORT.get(strategy, strategy), robot, str(len(values))]
         for key, _, decimals in COLUMNS:
             text = cell(column_interval([value[key] for value in values], key, intervals, seed,

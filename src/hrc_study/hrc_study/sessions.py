@@ -27,15 +27,12 @@ from dataclasses import dataclass, field
 import functools
 import math
 
-# Training steps per strategy (params/cases.yaml); the last one's convergence ends training.
-STEP_COUNTS = {'responsibility_guided': 2, 'level_guided': 2, 'learn_together': 1}
+from hrc_common.contract import case_table, cases_file_path
+import yaml
+
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
                   'learn_together': 'together'}
-# The paper's cases: strategy and the degree of freedom the robot drives.
-CASES = {1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided', 'rotation'),
-         3: ('level_guided', 'translation'), 4: ('level_guided', 'rotation'),
-         5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation')}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
 # Effort in physical units: the variance of the command in N^2 (translation, the slider's
@@ -43,6 +40,22 @@ EFFORT_KEYS = ('human_effort', 'robot_effort')
 # times the limit squared (the sim's max_force / max_torque: a normalized 1 is the limit).
 PHYSICAL_EFFORT_KEYS = ('human_effort_physical', 'robot_effort_physical')
 EFFORT_UNITS = {'translation': 'N^2', 'rotation': '(N*m)^2'}
+
+
+@functools.lru_cache(maxsize=None)
+def strategy_step_counts() -> dict:
+    """Return {strategy: its number of training steps} (``params/cases.yaml``).
+
+    The last step's convergence ends training.
+    """
+    with open(cases_file_path(), 'rb') as stream:
+        strategies = yaml.safe_load(stream)['strategies']
+    return {name: len(strategy['steps']) for name, strategy in strategies.items()}
+
+
+def case_roles() -> dict:
+    """Return {case id: (strategy, robot DOF)} of the paper's cases (``params/cases.yaml``)."""
+    return {case_id: (spec.strategy, spec.robot_dof) for case_id, spec in case_table().items()}
 
 
 @dataclass(frozen=True)
@@ -91,7 +104,7 @@ class SessionRecord:
     seed: int
     profile: str
     episodes: list                  # EpisodeRecord, ordered by episode
-    step_count: int = 0             # training steps of the strategy (0: from STEP_COUNTS)
+    step_count: int = 0             # training steps of the strategy (0: from cases.yaml)
     episode_limit: int = 0          # the agent's max_training_episodes (0: unknown)
     path: str = ''
     extra: dict = field(default_factory=dict)
@@ -99,7 +112,7 @@ class SessionRecord:
     @property
     def steps(self) -> int:
         """Return the number of training steps of the session's strategy."""
-        return self.step_count or STEP_COUNTS.get(self.strategy, 1)
+        return self.step_count or strategy_step_counts().get(self.strategy, 1)
 
 
 @functools.lru_cache(maxsize=1)

@@ -2,7 +2,7 @@
 
 import numpy
 
-from hrc_study.sessions import CASES, EpisodeRecord, SessionRecord
+from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord, strategy_step_counts
 
 
 def make_session(case_id: int, seed: int, total_error: float, episodes: int, converged: bool,
@@ -20,8 +20,8 @@ def make_session(case_id: int, seed: int, total_error: float, episodes: int, con
     final block 'evaluation'; without, the kind is unknown (as older bags).
     """
     rng = rng if rng is not None else numpy.random.default_rng(seed)
-    strategy, robot_dof = CASES[case_id]
-    steps = 1 if strategy == 'learn_together' else 2
+    strategy, robot_dof = case_roles()[case_id]
+    steps = strategy_step_counts()[strategy]
     records = []
     step_change = human_from if strategy == 'responsibility_guided' else episodes // 2
     if strategy == 'learn_together':

@@ -23,6 +23,7 @@ recorder) are read up to their last complete chunk.
 import pathlib
 
 from hrc_common.contract import atomic_write, PERSONAL_FILE_MODE
+from hrc_common.tlx import TLX_SCALES
 
 from hrc_bag.report.figures import (figure_actions, figure_three_factor,
                                     figure_training_curves)
@@ -85,7 +86,6 @@ def write_study_report(entries, out_dir, sessions=(), log=print) -> dict:
     ``entries``: :func:`load_study_index` of the study folder; ``sessions``: Sessions already
     loaded (the others are read from each entry's bag folder). Returns {'rows', 'files'}.
     """
-    from hrc_live.tlx import TLX_SCALES
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     rows = subject_rows(entries, sessions, log)

@@ -2,7 +2,8 @@
 
 A study folder (``session --study-dir DIR``, see docs/live_study.md) holds ``index.yaml``:
 one entry per session a subject took part in, practice or condition, written by
-``hrc_live.study.append_index``. Its format (the fields of ``hrc_live.study.IndexEntry``)::
+``hrc_live.study.append_index``. Its format (the fields of
+``hrc_common.study_index.IndexEntry``)::
 
     - subject_id: P01            # the pseudonym (no names anywhere)
       session_id: p01-case2      # the bags are <bags>/ = bags/<session_id>
@@ -21,11 +22,11 @@ The practice of a condition is indexed as the session ``<session_id>-practice`` 
 ``{session_id, case, answered, scales: {mental, physical, temporal, performance, effort,
 frustration}, raw_tlx}``.
 
-:func:`load_study_index` reads the index with ``hrc_live.study.IndexEntry`` (imported when a
-study is read: ``hrc_live.study`` needs no rclpy; hrc_bag does not declare hrc_live as a
-dependency because hrc_live's tests depend on hrc_bag) and checks it by shape first: every
-reason at once in a :class:`StudyIndexError`. :func:`subject_rows` gives one row per condition
-(its practice counted apart, in its own columns) and one per practice without a condition.
+:func:`load_study_index` reads the index with ``hrc_common.study_index.IndexEntry`` (the
+format both sides import; hrc_bag sits below hrc_live, docs/architecture.md) and checks it by
+shape first: every reason at once in a :class:`StudyIndexError`. :func:`subject_rows` gives one
+row per condition (its practice counted apart, in its own columns) and one per practice without
+a condition.
 Only pseudonymous ids, numbers and the TLX scores go into the rows: no notes, no names.
 """
 
@@ -34,6 +35,8 @@ import math
 import pathlib
 
 from hrc_common.contract import id_problem
+from hrc_common.study_index import INDEX_FILE, IndexEntry, PAPER_CASES, SESSION_KINDS
+from hrc_common.tlx import check_tlx, raw_tlx
 import yaml
 
 from hrc_bag import bag_reader
@@ -51,14 +54,6 @@ class StudyIndexError(ValueError):
 
 class StudyFolderError(StudyIndexError):
     """The study folder or its index does not exist (a bad --study-dir)."""
-
-
-def _live_study():
-    try:
-        from hrc_live import study, tlx
-    except ImportError as error:      # hrc_bag does not depend on hrc_live (see the module doc)
-        raise StudyFolderError(f'reading a study needs the hrc_live package ({error})') from None
-    return study, tlx
 
 
 def _text_problem(value, name: str) -> str:
@@ -108,14 +103,13 @@ def entry_problems(record, number: int, fields: tuple, kinds: tuple, cases: tupl
 
 
 def load_study_index(folder) -> list:
-    """Return the ``hrc_live.study.IndexEntry`` list of ``folder``/index.yaml, checked by shape.
+    """Return the ``IndexEntry`` list of ``folder``/index.yaml, checked by shape.
 
     Raises :class:`StudyFolderError` when the folder or its index does not exist and
     :class:`StudyIndexError` (every reason at once) when the index is not a list of entries.
     """
-    study, _ = _live_study()
     folder = pathlib.Path(folder)
-    path = folder / study.INDEX_FILE
+    path = folder / INDEX_FILE
     if not folder.is_dir():
         raise StudyFolderError(f'{folder}: no such study folder')
     if not path.is_file():
@@ -130,10 +124,10 @@ def load_study_index(folder) -> list:
     if not isinstance(document, list):
         raise StudyIndexError(f'{path}: not a list of session entries '
                               f'(a {type(document).__name__})')
-    fields = tuple(study.IndexEntry.__dataclass_fields__)
+    fields = tuple(IndexEntry.__dataclass_fields__)
     reasons = [reason for number, record in enumerate(document, 1)
-               for reason in entry_problems(record, number, fields, study.SESSION_KINDS,
-                                            study.PAPER_CASES)]
+               for reason in entry_problems(record, number, fields, SESSION_KINDS,
+                                            PAPER_CASES)]
     pairs = [(record.get('session_id'), record.get('kind')) for record in document
              if isinstance(record, dict)]
     reasons += [f'session {session_id!r} ({kind}) is indexed twice'
@@ -145,7 +139,7 @@ def load_study_index(folder) -> list:
     for record in document:
         values = {name: (str(value) if name in ('started', 'ended') else value)
                   for name, value in record.items()}
-        entries.append(study.IndexEntry(**values))
+        entries.append(IndexEntry(**values))
     return entries
 
 
@@ -157,7 +151,6 @@ def load_tlx_answer(entry, log=print) -> dict:
     """
     if not entry.tlx_file:
         return {}
-    _, tlx = _live_study()
     path = pathlib.Path(entry.tlx_file)
     if not path.is_file():
         log(f'{entry.session_id}: no NASA-TLX stored ({path} does not exist)')
@@ -174,7 +167,7 @@ def load_tlx_answer(entry, log=print) -> dict:
         return {}
     if len(answers) > 1:
         log(f'{entry.session_id}: {len(answers)} NASA-TLX answers in {path}: the last counts')
-    scores, reasons = tlx.check_tlx(answers[-1].get('scales'))
+    scores, reasons = check_tlx(answers[-1].get('scales'))
     if reasons:
         raise StudyIndexError(f'{path}: the answer of {entry.session_id}: ' + '; '.join(reasons))
     return scores
@@ -253,7 +246,7 @@ def subject_rows(entries: list, sessions=(), log=print) -> list:
                        **_practice_values(_session_of(practice, known, log)))
         row['tlx'] = load_tlx_answer(entry, log)
         if row['tlx']:
-            row['raw_tlx'] = _live_study()[1].raw_tlx(row['tlx'])
+            row['raw_tlx'] = raw_tlx(row['tlx'])
         rows.append(row)
     for practice in practices.values():
         if practice.session_id in used:

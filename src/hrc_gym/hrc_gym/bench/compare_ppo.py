@@ -21,7 +21,10 @@ import os
 import sys
 import time
 
+from hrc_study.statistics import logrank_faster, mann_whitney_less
 import numpy as np
+
+from hrc_gym.compare import episodes_to_criterion, make_env, random_returns, train_ours, train_sb3
 
 LEARNERS = ('ours', 'sb3')
 LABELS = {'ours': 'this project (AgentCore)', 'sb3': 'Stable-Baselines3 PPO'}
@@ -45,8 +48,6 @@ def moving_average(values, width: int) -> np.ndarray:
 
 def summarize(results: dict) -> list:
     """Return printable lines: criterion episodes and return means per learner and setting."""
-    from hrc_gym.compare import episodes_to_criterion, make_env
-
     lines = []
     for setting in results['runs']:
         env = make_env(setting)
@@ -85,9 +86,6 @@ def compare_learners(results: dict, setting: str, env) -> str:
 
     Both two-sided in effect: each one-sided p-value is given in both directions.
     """
-    from hrc_gym.compare import episodes_to_criterion
-    from hrc_study.statistics import logrank_faster, mann_whitney_less
-
     runs = results['runs'][setting]
     if not all(runs.get(learner) for learner in LEARNERS):
         return 'comparison: needs runs of both learners'
@@ -110,11 +108,9 @@ def compare_learners(results: dict, setting: str, env) -> str:
 
 def plot(results: dict, path: str) -> None:
     """Draw the learning curves with min-max bands over the seeds, one panel per setting."""
-    import matplotlib
+    import matplotlib  # optional heavy dependency (about 1 s): only when a figure is drawn
     matplotlib.use('Agg')
-    from matplotlib import pyplot
-
-    from hrc_gym.compare import episodes_to_criterion, make_env
+    from matplotlib import pyplot  # after use('Agg'): no display needed
 
     settings = list(results['runs'])
     figure, axes = pyplot.subplots(1, len(settings), figsize=(6.2 * len(settings), 4.2),
@@ -168,7 +164,6 @@ def main(argv=None) -> int:
         print(f'--episodes must be at least {SUMMARY_WINDOW}', file=sys.stderr)
         return 2
 
-    from hrc_gym.compare import random_returns, train_ours, train_sb3
 
     os.makedirs(args.out, exist_ok=True)
     data_path = os.path.join(args.out, 'ppo_comparison.json')

@@ -17,6 +17,8 @@ import sys
 
 import numpy as np
 
+from hrc_gym.compare import episodes_to_criterion, make_env, train_ours
+
 STEPS_PER_EPISODE = 200
 
 
@@ -36,8 +38,6 @@ def main(argv=None) -> int:
     parser.add_argument('--episodes', type=int, default=200)
     parser.add_argument('--horizon', type=int, default=400)
     args = parser.parse_args(argv)
-
-    from hrc_gym.compare import episodes_to_criterion, make_env, train_ours
 
     with open(args.data) as stream:
         results = json.load(stream)

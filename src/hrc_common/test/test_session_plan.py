@@ -1,12 +1,12 @@
-"""hrc_bringup.plan: one consistent parameter set per session."""
+"""hrc_common.session_plan: one consistent parameter set per session."""
 
 import pathlib
 
 import pytest
 import yaml
 
-from hrc_bringup.plan import (compose, new_session_id, parse_override, SessionSettings,
-                              write_session_files)
+from hrc_common.session_plan import (compose, new_session_id, parse_override, SessionSettings,
+                                     write_session_files)
 
 PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
 

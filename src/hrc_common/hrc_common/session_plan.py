@@ -1,5 +1,8 @@
 """Compose the parameters of every node of a session (pure, no rclpy).
 
+Used by the session runner and the experiment (``hrc_bringup``) and by the in-process engine
+(``hrc_engine``), so it lives below both.
+
 A session is one paper case run with one seed. The plan starts from each node's parameter file
 (``params/<node>.yaml``), applies the session-level settings so that every node agrees (case,
 seed, roles, clock mode, session id; the sim's limits and control period are not copied: the
@@ -78,6 +81,24 @@ def parse_override(text: str):
     key, raw = text.split('=', 1)
     node, name = key.split('.', 1)
     return node, name, yaml.safe_load(raw) if raw != '' else ''
+
+
+def parse_overrides(texts) -> dict:
+    """Return {'node.name': value} of ``--set`` texts (a later one wins).
+
+    Raises ValueError with the reason of every text that is not ``node.parameter=value``.
+    """
+    overrides, reasons = {}, []
+    for text in texts:
+        try:
+            node, name, value = parse_override(text)
+        except ValueError as error:
+            reasons.append(str(error))
+            continue
+        overrides[f'{node}.{name}'] = value
+    if reasons:
+        raise ValueError('; '.join(reasons))
+    return overrides
 
 
 def load_node_parameters(params_dir: pathlib.Path, node: str) -> dict:

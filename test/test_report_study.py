@@ -8,8 +8,8 @@ import subprocess
 import sys
 
 from hrc_common.testing import executable_path
+from hrc_common.tlx import TLX_SCALES
 from hrc_live import study
-from hrc_live.tlx import TLX_SCALES
 import pytest
 import yaml
 
