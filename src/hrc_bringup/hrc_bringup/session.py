@@ -39,6 +39,7 @@ import argparse
 from dataclasses import replace
 import os
 import pathlib
+import re
 import shlex
 import signal
 import subprocess
@@ -999,8 +1000,6 @@ def print_display_address(display, executor, stop_reason: list) -> None:
 
     (issue 25) Read from the display's log line; its port may be chosen by the system (0).
     """
-    import re
-
     deadline = time.monotonic() + DISPLAY_ADDRESS_WAIT_S
     while time.monotonic() < deadline and not stop_reason:
         found = re.search(r'serving the display on (http://\S+?/) ', display.tail(lines=50))

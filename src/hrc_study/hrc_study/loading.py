@@ -1,6 +1,7 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
 from hrc_bag.report import load_sessions as load_bag_sessions
+from hrc_common.contract import EpisodeKind
 
 from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord
 
@@ -90,8 +91,6 @@ def record_from_bag_session(session) -> SessionRecord:
 
 def _kind_label(summary) -> str:
     """Return the summary's kind label, '' when it does not say (bags before the field)."""
-    from hrc_common.contract import EpisodeKind
-
     try:
         kind = EpisodeKind(int(getattr(summary, 'kind', 0)))
     except ValueError:

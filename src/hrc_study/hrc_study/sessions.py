@@ -28,6 +28,7 @@ import functools
 import math
 
 from hrc_common.contract import case_table, cases_file_path
+from hrc_sim_node.physics import PhysicsParams
 import yaml
 
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
@@ -118,8 +119,6 @@ class SessionRecord:
 @functools.lru_cache(maxsize=1)
 def default_limits() -> dict:
     """Return the sim's default command limits {dof: N or N*m} (hrc_sim_node's PhysicsParams)."""
-    from hrc_sim_node.physics import PhysicsParams
-
     params = PhysicsParams()
     return {'translation': float(params.max_force), 'rotation': float(params.max_torque)}
 
