@@ -1,7 +1,7 @@
 """Who may act on the display (pure): the Host, Origin and secret checks, and the TLX's grid."""
 
 from hrc_live.display_node import host_name, RequestGuard, TOKEN_HEADER
-from hrc_live.tlx import check_tlx, TLX_STEP
+from hrc_common.tlx import check_tlx, TLX_STEP
 
 PORT, TOKEN = 8765, 'session-secret'
 ANSWER = {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20, 'effort': 50,
