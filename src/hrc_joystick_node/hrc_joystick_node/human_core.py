@@ -214,12 +214,21 @@ class HumanCore:
         if problems:
             raise ValueError("the sim's limits are unusable: " + '; '.join(problems))
         changed = limits != self.limits
-        if self.limits is None or limits.human_step != self.limits.human_step:
-            # The simulated person acts at the human's rate (the sim's human_period).
-            self.sim_human = self._new_sim_human(self.dof, limits.human_step)
+        if self.limits is None or self._person_period(limits) != self._person_period(
+                self.limits):
+            self.sim_human = self._new_sim_human(self.dof, self._person_period(limits))
             self._sim_episode = None
         self.limits = limits
         return changed
+
+    def _person_period(self, limits: SimLimits) -> float:
+        """Return how often the simulated person acts (s).
+
+        The simulated human acts at the human's rate (the sim's ``human_period``); a cloned
+        model at the control period, the rate its recordings were cut at (one HumanAction a
+        control step), holding its command over the period's slices.
+        """
+        return limits.control_period if self.params.input == MODEL else limits.human_step
 
     def _new_sim_human(self, dof: str, control_period: float):
         if self.params.input == MODEL:
@@ -238,7 +247,7 @@ class HumanCore:
         changed = (not self.session_seen or dof != self.dof
                    or bool(involved) != self.involved or known != self.subtasks)
         if dof != self.dof and self.limits is not None:
-            self.sim_human = self._new_sim_human(dof, self.limits.human_step)
+            self.sim_human = self._new_sim_human(dof, self._person_period(self.limits))
             self._sim_episode = None
         self.dof, self.involved, self.subtasks = dof, bool(involved), known
         self.session_seen = True
@@ -338,6 +347,10 @@ class HumanCore:
                                                   params.enable_button >= 0, params.deadzone,
                                                   params.invert)
             return command, engaged, active, reading.name + (f' ({why})' if why else '')
+        last = self.last_answer
+        if (active == MODEL and moment[1] > 0 and last is not None and last.source == MODEL
+                and (last.episode, last.step) == (episode, moment[0])):
+            return last.command, True, MODEL, last.detail   # held within the period
         if active in (SIM, MODEL):
             if (episode != self._sim_episode or self._sim_step is None
                     or moment <= self._sim_step):

@@ -51,7 +51,10 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
 
     Case 3 (level-guided, robot on translation) puts the person on the rotation from the first
     episode. ``episodes`` training episodes of ``seconds`` s of simulation, no evaluation, no
-    checkpoints.
+    checkpoints. The person acts once a control period (``sim.human_period`` 0.2 s): a clone
+    learns one command a control step (HumanAction) and acts at that rate (HumanCore), so the
+    people it learns from are recorded at that rate too (cloning from the commands applied at
+    the human's own rate, ``TaskState.human_applied``, is not built yet).
     """
     folders = []
     for person in people:
@@ -61,7 +64,7 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
                 evaluation_episodes=0, session_id=f'{person}-seed{seed}',
                 bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
                 human_profile=person,
-                overrides={'sim.episode_duration': float(seconds),
+                overrides={'sim.episode_duration': float(seconds), 'sim.human_period': 0.2,
                            'human.profiles_file': str(profiles_file)}))
             folders.append(result.bag_dir)
     return folders
