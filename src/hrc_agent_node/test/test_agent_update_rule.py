@@ -140,12 +140,15 @@ def test_background_update_keeps_the_old_weights_acting_until_it_finished():
     core = make_core()
     core.set_learner_mode('background')
     assert isinstance(core.learner, BackgroundLearner)
-    gate = threading.Event()
+    gate, trained = threading.Event(), threading.Event()
     real_update = core.ppo.update
 
     def gated_update(buffer):
+        # The live networks are trained at once; the update "finishes" when the gate opens.
+        stats = real_update(buffer)
+        trained.set()
         assert gate.wait(30), 'the test never opened the gate'
-        return real_update(buffer)
+        return stats
 
     core.ppo.update = gated_update
     core.start_episode()
@@ -153,10 +156,11 @@ def test_background_update_keeps_the_old_weights_acting_until_it_finished():
     for step in range(3):
         core.act(state(step, angle=angle_of(step)))
     frozen = copy.deepcopy(core.ppo.value)
-    for step in range(3, 6):   # the update started at step 3 and waits at the gate
+    for step in range(3, 6):   # the update started at step 3 and has not finished
         decision = core.act(state(step, angle=angle_of(step)))
         assert decision.update is None and core.learner.busy
         old_values.append(decision.record.value)
+        assert trained.wait(30)   # from step 4 on, the live networks hold the new weights
     import torch
     with torch.no_grad():
         expected = [float(frozen(torch.as_tensor(core.observation(
@@ -184,13 +188,15 @@ def test_background_update_keeps_the_old_weights_acting_until_it_finished():
 # ---------------------------------------------------------------- the floor of the judging rule
 
 
-@pytest.mark.parametrize('update_rule, judging_rule, floor', [
-    (OLD_RULE, 'spaced', 12),          # the earlier rules: 3 x (3 training + 1 judging)
-    (NEW_RULE, 'spaced', 6),
-    (OLD_RULE, 'in_a_row', 6),
-    (NEW_RULE, 'in_a_row', 4),         # 1 training episode, then 3 judging in a row
+@pytest.mark.parametrize('update_rule, judging_rule, interval, floor', [
+    (OLD_RULE, 'spaced', 0, 12),       # the earlier rules: 3 x (3 training + 1 judging)
+    (NEW_RULE, 'spaced', 0, 6),
+    (OLD_RULE, 'in_a_row', 0, 6),
+    (NEW_RULE, 'in_a_row', 0, 4),      # 1 training episode, then 3 judging in a row
+    (NEW_RULE, 'in_a_row', 2, 5),      # judging after every 2nd training episode
 ])
-def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_rule, floor):
+def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_rule, interval,
+                                                           floor):
     """A policy that satisfies every subtask from the start: the rule alone sets the count.
 
     Case 6 (learn together): one step, the human in every episode; the paper's 200-step
@@ -198,7 +204,8 @@ def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_
     """
     steps = 200
     core = make_core(case=6, horizon=512, minibatch_size=64, convergence_window=3,
-                     update_rule=update_rule, judging_rule=judging_rule)
+                     update_rule=update_rule, judging_rule=judging_rule,
+                     judging_interval=interval)
     while core.phase == 'training' or core.phase == 'updating':
         if core.phase == 'updating':
             core.update()
@@ -209,7 +216,7 @@ def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_
         core.end_episode(state(steps, final=True))
     assert core.converged
     assert core.human_involved_episodes == core.total_episodes == floor
-    per_trigger = training_episodes_per_trigger(update_rule, 512, steps)
+    per_trigger = training_episodes_per_trigger(update_rule, 512, steps, interval)
     assert episode_floor(judging_rule, 3, per_trigger) == floor
 
 
