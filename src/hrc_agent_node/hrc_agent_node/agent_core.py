@@ -10,11 +10,12 @@ so they cannot diverge::
         state = <reset the sim with plan.seed>   #   evaluation), human involved or not
         while not (state.truncated or state.terminated):
             answer = <the human's answer to state> if core.needs_human_action else None
-            decision = core.act(state, answer)   # robot action for this state
+            decision = core.act(state, answer)   # robot action for this state (an update due
+                                                 #   inside the episode runs here first)
             state = <step the sim with decision.action and the human's command>
         result = core.end_episode(state)          # reward of the last step, metrics, strategy
         if core.phase == 'updating':
-            core.update()                         # PPO, between episodes only
+            core.update()                         # PPO at the episode's end, when due
         <save core.state_dict() (checkpoint.save_checkpoint)>
 
 Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
@@ -35,6 +36,15 @@ Three kinds of episode (:class:`EpisodePlan`):
   burden the paper measures). ``convergence_judged_on: training`` judges the stochastic
   training episodes instead (the earlier rule; no judging episodes);
 * **evaluation**: the frozen policy after training (Table II); not counted in the totals.
+
+When PPO updates is ``update_rule``: ``episode_end_after_horizon`` (the earlier rule) at the end
+of the episode that filled ``horizon`` samples; ``horizon_or_episode_end`` after ``horizon``
+samples or at an episode's end, whichever comes first. Inside an episode the update runs in
+:meth:`act` at a defined step boundary (see :meth:`_step_boundary`), so every loop gets it
+without a call of its own. The learner (``hrc_agent_node.learner``) runs it synchronously
+(deterministic) unless :meth:`set_learner_mode` chose ``background`` (the agent node's realtime
+episodes). ``judging_rule: in_a_row`` follows a judging episode that met the step's condition
+with another one of the same policy (the floors of the rules: strategies.py).
 
 When a step advances to a step with another reward, the rollout buffer (samples of the old
 reward) and the reward scaler's statistics are reset, so the first update of the new step
