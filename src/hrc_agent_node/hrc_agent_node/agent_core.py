@@ -10,11 +10,12 @@ so they cannot diverge::
         state = <reset the sim with plan.seed>   #   evaluation), human involved or not
         while not (state.truncated or state.terminated):
             answer = <the human's answer to state> if core.needs_human_action else None
-            decision = core.act(state, answer)   # robot action for this state
+            decision = core.act(state, answer)   # robot action for this state (an update due
+                                                 #   inside the episode runs here first)
             state = <step the sim with decision.action and the human's command>
         result = core.end_episode(state)          # reward of the last step, metrics, strategy
         if core.phase == 'updating':
-            core.update()                         # PPO, between episodes only
+            core.update()                         # PPO at the episode's end, when due
         <save core.state_dict() (checkpoint.save_checkpoint)>
 
 Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
@@ -35,6 +36,15 @@ Three kinds of episode (:class:`EpisodePlan`):
   burden the paper measures). ``convergence_judged_on: training`` judges the stochastic
   training episodes instead (the earlier rule; no judging episodes);
 * **evaluation**: the frozen policy after training (Table II); not counted in the totals.
+
+When PPO updates is ``update_rule``: ``episode_end_after_horizon`` (the earlier rule) at the end
+of the episode that filled ``horizon`` samples; ``horizon_or_episode_end`` after ``horizon``
+samples or at an episode's end, whichever comes first. Inside an episode the update runs in
+:meth:`act` at a defined step boundary (see :meth:`_step_boundary`), so every loop gets it
+without a call of its own. The learner (``hrc_agent_node.learner``) runs it synchronously
+(deterministic) unless :meth:`set_learner_mode` chose ``background`` (the agent node's realtime
+episodes). ``judging_rule: in_a_row`` follows a judging episode that met the step's condition
+with another one of the same policy (the floors of the rules: strategies.py).
 
 When a step advances to a step with another reward, the rollout buffer (samples of the old
 reward) and the reward scaler's statistics are reset, so the first update of the new step
@@ -57,6 +67,7 @@ import math
 import numpy as np
 
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.learner import make_learner
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
@@ -115,6 +126,7 @@ class Decision:
     wrench: float            # the action in N (translation) or N*m (rotation)
     record: StepRecord       # this step (its reward is filled in when the next state arrives)
     previous: StepRecord = None  # the previous step, now complete with its reward
+    update: dict = None      # statistics of a PPO update whose weights took over at this step
 
 
 @dataclass
@@ -172,6 +184,7 @@ class _EpisodeLog:
     states_reached: int = 0
     pending: StepRecord = None
     next_step: int = 0
+    segment_start: int = 0   # first sample not handed to the buffer yet (a rollout cut inside)
 
 
 def derive_seed(session_seed: int, episode: int) -> int:
@@ -227,6 +240,8 @@ class AgentCore:
         self.ppo = PPO(self.observation_size, p, p.seed)
         self.reward_scaler = RewardScaler(p.gamma, p.normalize_rewards)
         self.buffer = RolloutBuffer()
+        # Runs the updates: synchronous (deterministic) unless set_learner_mode('background').
+        self.learner = make_learner('synchronous', self.ppo)
         self.phase = 'evaluation' if p.evaluation_only else 'training'
         self.episode = 0                    # index of the current (or next) episode
         self.total_episodes = 0             # training and judging episodes finished
@@ -337,8 +352,39 @@ class AgentCore:
 
     @property
     def update_due(self) -> bool:
-        """Return True when the rollout buffer holds a horizon of samples."""
-        return len(self.buffer) >= self.params.horizon
+        """Return True when an update is due at this episode end (by ``update_rule``).
+
+        ``episode_end_after_horizon``: the buffer holds a horizon of samples;
+        ``horizon_or_episode_end``: it holds any sample, or a background update started inside
+        the episode has not been swapped in yet.
+        """
+        if self.params.update_rule == 'episode_end_after_horizon':
+            return len(self.buffer) >= self.params.horizon
+        return len(self.buffer) > 0 or self.learner.busy
+
+    @property
+    def updates_inside_episodes(self) -> bool:
+        """Return True when updates may run inside an episode (``horizon_or_episode_end``)."""
+        return self.params.update_rule == 'horizon_or_episode_end'
+
+    @property
+    def learner_mode(self) -> str:
+        """Return 'synchronous' (update at once, deterministic) or 'background' (realtime)."""
+        return self.learner.mode
+
+    def set_learner_mode(self, mode: str) -> None:
+        """Run the next updates synchronously or in the background (between episodes only).
+
+        The agent node runs its realtime episodes with ``background`` so an update inside an
+        episode never delays a control step; everything else is ``synchronous``.
+        """
+        if self._log is not None:
+            raise RuntimeError(f'episode {self.episode} is running: change the learner between '
+                               'episodes')
+        if mode == self.learner.mode:
+            return
+        self._settle_learner()
+        self.learner = make_learner(mode, self.ppo)
 
     @property
     def limits(self) -> SimLimits:
@@ -458,6 +504,7 @@ class AgentCore:
         previous = self._close_pending(state) if log.next_step > 0 else None
         plan = log.plan
         observation = self.observation(state, human_action)
+        update = self._step_boundary(log, observation)
         raw, action, log_prob, value = self.ppo.act(observation,
                                                     deterministic=plan.deterministic)
         record = StepRecord(plan.episode, int(state.step), human_action, action, raw,
@@ -470,7 +517,71 @@ class AgentCore:
         log.robot_actions.append(action)
         log.human_actions.append(human_action)
         log.next_step = int(state.step) + 1
-        return Decision(action, record.wrench, record, previous)
+        return Decision(action, record.wrench, record, previous, update)
+
+    def _step_boundary(self, log: _EpisodeLog, observation) -> dict:
+        """Before the action for a state of a training episode: the updates due inside it.
+
+        Only under ``update_rule: horizon_or_episode_end``. First a background update that has
+        finished is swapped in (its weights act from this state on). Then, when the buffer and
+        the episode's samples not yet in it hold ``horizon`` samples, the rollout is cut here
+        and the update starts: synchronously it runs now, so this state's action already comes
+        from the new weights (a defined step: sessions stay deterministic); in the background
+        the old weights keep acting until a later boundary. The cut segment is truncated, not
+        terminated: it bootstraps from V(this state) of the weights that collected it. Returns
+        the statistics of the update that took over at this step, or None.
+        """
+        if not self.updates_inside_episodes or log.plan.deterministic:
+            return None
+        swapped = self.learner.poll()
+        if swapped is not None:
+            self._updated(swapped)
+        if self.learner.busy:
+            return swapped
+        waiting = len(self.buffer) + len(log.train_rewards) - log.segment_start
+        if waiting < self.params.horizon:
+            return swapped
+        self._hand_over_segment(log, self.ppo.value_of(observation), terminated=False)
+        started = self._start_update()
+        return started if started is not None else swapped
+
+    def _hand_over_segment(self, log: _EpisodeLog, final_value: float, terminated: bool):
+        """Add the episode's samples since the last cut to the buffer (GAE computed now).
+
+        ``final_value``: V of the state after the segment's last sample (ignored when
+        ``terminated``).
+        """
+        start, end = log.segment_start, len(log.train_rewards)
+        if end > start:
+            self.buffer.add_episode(log.observations[start:end], log.raw_actions[start:end],
+                                    log.log_probs[start:end], log.values[start:end],
+                                    log.train_rewards[start:end], final_value, terminated,
+                                    self.params.gamma, self.params.gae_lambda)
+        log.segment_start = end
+
+    def _start_update(self):
+        """Hand the buffer to the learner (a fresh buffer collects on); return its stats or None.
+
+        None: a background update started; its statistics come when it is swapped in.
+        """
+        rollout, self.buffer = self.buffer, RolloutBuffer()
+        stats = self.learner.start(rollout)
+        if stats is not None:
+            self._updated(stats)
+        return stats
+
+    def _updated(self, stats: dict) -> None:
+        """Note an update whose weights act from now on."""
+        self.last_update = stats
+        if self.judged_on_evaluation and self.params.judging_interval == 0:
+            self.judging_due = True
+
+    def _settle_learner(self):
+        """Wait for a background update still running and swap it in; return its stats or None."""
+        stats = self.learner.wait()
+        if stats is not None:
+            self._updated(stats)
+        return stats
 
     def end_episode(self, final_state, human_action=None) -> EpisodeResult:
         """Close the running episode at its final state; update counters and the strategy.
@@ -493,14 +604,13 @@ class AgentCore:
                   for subtask_id, total in log.error_sums.items()}
         converged, event = False, ''
         if not plan.evaluation:
-            if not plan.judging and steps:
+            if not plan.judging and steps > log.segment_start:
                 # Truncation (time limit) bootstraps from V(final state), observed with the
-                # human action of the final state; termination from 0.
+                # human action of the final state; termination from 0. The samples since the
+                # last cut inside the episode (all of them when there was none) go to the buffer.
                 final_value = 0.0 if terminated else self.ppo.value_of(
                     self.observation(final_state, final_human_action))
-                self.buffer.add_episode(log.observations, log.raw_actions, log.log_probs,
-                                        log.values, log.train_rewards, final_value, terminated,
-                                        self.params.gamma, self.params.gae_lambda)
+                self._hand_over_segment(log, final_value, terminated)
             converged, event = self._count_and_judge(plan, errors)
         result = EpisodeResult(
             plan.episode, plan.training_step, plan.human_involved, plan.evaluation, steps,
@@ -534,10 +644,16 @@ class AgentCore:
                     and self.episodes_since_judging >= interval:
                 self.judging_due = True
         converged, event = self.progress.record(errors) if judge else (False, '')
+        if plan.judging and event == '' and self.params.judging_rule == 'in_a_row' \
+                and self.progress.last_episode_met():
+            # Judge the same frozen policy again on the next episode, until the window is full
+            # (no training, no update in between) or an episode fails.
+            self.judging_due = True
         if event == 'advanced':
             self._start_step(self.case.steps[plan.training_step])
         if event == 'finished' or self.total_episodes >= self.params.max_training_episodes:
             event = 'training_finished'
+            self._settle_learner()   # as a synchronous update would have been: already in
             self.buffer.clear()  # the converged (or last) policy is the one evaluated
             self.judging_due = False
             self.phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
@@ -562,16 +678,21 @@ class AgentCore:
         """Run the PPO update on the buffer (phase ``updating``), then go back to training.
 
         Under ``convergence_judged_on: evaluation`` with ``judging_interval: 0`` the next
-        episode judges the updated policy.
+        episode judges the updated policy. Under ``update_rule: horizon_or_episode_end`` this is
+        the update at the episode's end (of the samples since the last one inside it, after
+        swapping in a background update still running); returns the statistics of the last
+        update run.
         """
         if self.phase != 'updating':
             raise RuntimeError(f'no update is due in phase {self.phase!r}')
-        self.last_update = self.ppo.update(self.buffer)
-        self.buffer.clear()
+        # A background update started inside the episode first; then the samples since.
+        stats = self._settle_learner()
+        if len(self.buffer) > 0:
+            stats = self._start_update()
+            if stats is None:        # background learner: between episodes nothing acts
+                stats = self._settle_learner()
         self.phase = 'training'
-        if self.judged_on_evaluation and self.params.judging_interval == 0:
-            self.judging_due = True
-        return self.last_update
+        return stats
 
     # ------------------------------------------------------------------ operator
 
@@ -649,6 +770,8 @@ class AgentCore:
         """Return everything needed to continue the session (see checkpoint.py)."""
         if self._log is not None:
             raise RuntimeError('checkpoints are taken between episodes, not during one')
+        if self.learner.busy:
+            raise RuntimeError('an update is running: checkpoints follow update()')
         return {'ppo': self.ppo.state_dict(), 'reward_scaler': self.reward_scaler.state_dict(),
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,

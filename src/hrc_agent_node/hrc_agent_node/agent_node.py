@@ -21,12 +21,18 @@ loop). The step protocol (docs/architecture.md):
 * the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
   computed from the state reached);
 * on the final state (truncated/terminated): ``/hrc/agent/step`` of the last action,
-  ``/hrc/episode``; the PPO update when the buffer holds a horizon (phase ``updating`` announced
-  first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with any change; then the
-  reset for the next episode. After training (last step converged or max_training_episodes) the
-  evaluation phase runs the frozen deterministic policy; then phase ``done`` and the node exits
-  with code 0. In realtime the next reset waits until ``episode_break`` wall seconds after the
-  final state (the person rests; the update runs within the break).
+  ``/hrc/episode``; the PPO update when one is due at the episode's end (``update_rule``; phase
+  ``updating`` announced first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with
+  any change; then the reset for the next episode. After training (last step converged or
+  max_training_episodes) the evaluation phase runs the frozen deterministic policy; then phase
+  ``done`` and the node exits with code 0. In realtime the next reset waits until
+  ``episode_break`` wall seconds after the final state (the person rests; the update runs
+  within the break). Under ``update_rule:
+  horizon_or_episode_end`` updates also fall inside an episode, at the step where the horizon is
+  reached: in lockstep episodes synchronously at that step (as the in-process engine and the
+  offline loop: bit-identical), in realtime episodes in a learner thread while the old weights
+  keep acting; the new ones take over at the first step boundary after it finished
+  (``hrc_agent_node.learner``).
 
 Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``):
 
@@ -224,6 +230,11 @@ class AgentNode(Node):
 
     def start_episode(self):
         """Begin the next episode in the core and ask the sim to reset for it."""
+        # An update inside a realtime episode runs in a learner thread (the control step never
+        # waits for it; new weights act from a later step boundary); lockstep episodes update
+        # synchronously at the step where the update is due, exactly as the in-process engine.
+        self.core.set_learner_mode('background' if self.next_clock_mode() == 'realtime'
+                                   else 'synchronous')
         plan = self.core.start_episode()
         self.stamps = {}
         self.states_before_limits = []
@@ -440,6 +451,17 @@ class AgentNode(Node):
         self.wrench_pub.publish(wrench)
         if decision.previous is not None:
             self.publish_step(decision.previous)
+        if decision.update is not None:
+            self.log_update(decision.update, f'took over at episode {msg.episode} step '
+                                             f'{msg.step}')
+
+    def log_update(self, stats: dict, when: str):
+        """Log one PPO update's statistics."""
+        self.get_logger().info(
+            f'PPO update {stats["update"]} ({when}): {stats["samples"]} samples in '
+            f'{stats["seconds"]:.2f} s, policy loss {stats["policy_loss"]:.4f}, value loss '
+            f'{stats["value_loss"]:.4f}, approx kl {stats["approx_kl"]:.5f}, action std '
+            f'{stats["action_std"]:.3f}')
 
     def publish_step(self, record):
         """Publish one AgentStep (the state acted on, the action and the reward it earned)."""
@@ -488,11 +510,8 @@ class AgentNode(Node):
             self.publish_session(f'updating the policy after episode {result.episode} '
                                  f'({self.core.buffered_samples} samples)')
             stats = self.core.update()
-            self.get_logger().info(
-                f'PPO update {stats["update"]}: {stats["samples"]} samples in '
-                f'{stats["seconds"]:.2f} s, policy loss {stats["policy_loss"]:.4f}, value loss '
-                f'{stats["value_loss"]:.4f}, approx kl {stats["approx_kl"]:.5f}, action std '
-                f'{stats["action_std"]:.3f}')
+            if stats is not None:
+                self.log_update(stats, f'after episode {result.episode}')
         self.save_checkpoint(LATEST_CHECKPOINT)
         if result.event == 'training_finished':
             outcome = 'converged' if result.converged else 'not converged'

@@ -13,6 +13,10 @@ from hrc_common.params import param
 PACKAGE = 'hrc_agent_node'
 TREE_FILE_NAME = 'task_tree.yaml'
 CASES_FILE_NAME = 'cases.yaml'
+# When PPO updates (AgentParams.update_rule), the earlier rule first.
+UPDATE_RULES = ('episode_end_after_horizon', 'horizon_or_episode_end')
+# How judging episodes follow one another (AgentParams.judging_rule), the earlier rule first.
+JUDGING_RULES = ('spaced', 'in_a_row')
 
 
 @dataclass
@@ -42,7 +46,9 @@ class AgentParams:
     cases_file: str = param('', 'Strategies and cases YAML; empty = share/hrc_agent_node/'
                                 'params/cases.yaml')
     preset: str = param('paper', 'Reward preset of the task tree file (paper = alpha 10, '
-                                 'sigma 1, mu 0; tuned = sigma scaled to each range)')
+                                 'sigma 1, mu 0; tuned = sigma scaled to each range; graded = '
+                                 'sigma half the distance from the goal to the stops, a slope '
+                                 'from the stops to the goal)')
     checkpoint_dir: str = param('runs/checkpoints', 'Directory of checkpoints '
                                                     '(<dir>/<session_id>/latest.pt, final.pt); '
                                                     'empty = no checkpoints')
@@ -86,11 +92,27 @@ class AgentParams:
     judging_interval: int = param(0, 'convergence_judged_on evaluation: 0 = one judging episode '
                                      'after each PPO update; N = one after every N training '
                                      'episodes', low=0, high=100000)
+    judging_rule: str = param(
+        'spaced', 'convergence_judged_on evaluation: spaced = each judging episode follows its '
+        'trigger (an update or judging_interval training episodes), so the window of N judged '
+        'episodes needs N triggers (the earlier rule); in_a_row = a judging episode that '
+        "satisfies the step's watched subtasks is followed by another judging episode of the "
+        'same frozen policy until the window is full (converged) or one fails (training '
+        'resumes); see strategies.py for the floor of each rule',
+        choices=JUDGING_RULES)
     # --- PPO (Table I unless noted)
     gamma: float = param(0.995, 'Discount factor (Table I)', low=0.0, high=1.0)
     gae_lambda: float = param(0.95, 'GAE factor (Table I)', low=0.0, high=1.0)
-    horizon: int = param(512, 'Experience horizon: update once the buffer holds this many '
-                              'steps, at an episode end (Table I)', low=2, high=1000000)
+    horizon: int = param(512, 'Experience horizon (Table I): samples per PPO update; when the '
+                              'update runs is update_rule', low=2, high=1000000)
+    update_rule: str = param(
+        'episode_end_after_horizon', 'When PPO updates: episode_end_after_horizon = at the end '
+        'of the episode in which the buffer reached horizon samples (the earlier rule); '
+        "horizon_or_episode_end = after horizon samples or at an episode's end, whichever comes "
+        "first (MATLAB's PPO agent, the reading of Table I): inside an episode the rollout is "
+        'cut at the step boundary where it holds horizon samples (bootstrapped from V of that '
+        'state) and the update runs before the action for that state',
+        choices=UPDATE_RULES)
     minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)
     epochs: int = param(3, 'Epochs per update (Table I)', low=1, high=100)
     learning_rate: float = param(0.001, 'Adam learning rate (Table I)', low=1e-7, high=1.0)

@@ -6,8 +6,10 @@
   [-1, 1], and the log-probability is the one of the unclipped sample (as CleanRL and SB3 do for
   Box actions). The deterministic (evaluation) action is the mean, clipped.
 * Value: a separate MLP of the same shape.
-* Advantages: GAE(gamma, lambda) per episode. A time-limit truncation bootstraps from V of the
-  final state; only a termination uses 0 (see :func:`compute_gae`).
+* Advantages: GAE(gamma, lambda) per episode segment. A time-limit truncation bootstraps from
+  V of the final state, and so does a rollout cut inside an episode (``update_rule:
+  horizon_or_episode_end``) from V of the state where it was cut; only a termination uses 0
+  (see :func:`compute_gae`).
 * Update: ``epochs`` passes over the buffer in shuffled minibatches; clipped surrogate,
   value MSE, entropy bonus, advantages normalized per minibatch, global gradient-norm clip, Adam.
 * Rewards for training may be divided by the running standard deviation of the discounted
@@ -17,6 +19,7 @@ All randomness (initialization, exploration noise, minibatch order) comes from g
 by :class:`PPO`, so a run is reproduced from its seed and its state restored from a checkpoint.
 """
 
+import copy
 import math
 import time
 
@@ -191,7 +194,11 @@ class RolloutBuffer:
 
     def add_episode(self, observations, actions, log_probs, values, rewards, final_value,
                     terminated, gamma, gae_lambda) -> None:
-        """Add one episode's samples; ``final_value`` = V(final state) (ignored if terminated)."""
+        """Add one episode's samples (or a segment of one, cut where the rollout was cut).
+
+        ``final_value`` = V of the state after the last sample (the final state of a truncated
+        episode, or the state where the rollout was cut); ignored if ``terminated``.
+        """
         if len(observations) == 0:
             return
         values = np.asarray(values, dtype=np.float64)
@@ -247,19 +254,37 @@ class PPO:
         self.action_generator = torch.Generator().manual_seed(seed * 2 + 1)
         self.shuffle_generator = torch.Generator().manual_seed(seed * 2 + 2)
         self.updates = 0
+        # (policy, value) the actor uses while a background update trains the live networks.
+        self._frozen_actor = None
+
+    def freeze_actor(self) -> None:
+        """Act with a copy of the current networks until :meth:`release_actor`.
+
+        A background update (``hrc_agent_node.learner``) trains ``policy`` and ``value`` in
+        another thread; the actor must neither read them half-updated nor wait for them.
+        """
+        self._frozen_actor = (copy.deepcopy(self.policy), copy.deepcopy(self.value))
+
+    def release_actor(self) -> None:
+        """Act with the live (updated) networks again: the weight swap, at a step boundary."""
+        self._frozen_actor = None
+
+    def _acting_networks(self) -> tuple:
+        return self._frozen_actor or (self.policy, self.value)
 
     @torch.no_grad()
     def act(self, observation, deterministic: bool = False) -> tuple:
         """Return (raw action, clipped action, log_prob, value) for one observation."""
+        policy, value_function = self._acting_networks()
         obs = torch.as_tensor(np.asarray(observation, dtype=np.float32)).unsqueeze(0)
-        distribution = self.policy.distribution(obs)
+        distribution = policy.distribution(obs)
         if deterministic:
             raw = distribution.mean
         else:
             raw = torch.normal(distribution.mean, distribution.stddev,
                                generator=self.action_generator)
         log_prob = distribution.log_prob(raw).sum(-1)
-        value = self.value(obs)
+        value = value_function(obs)
         raw_value = float(raw[0, 0])
         return (raw_value, min(1.0, max(-1.0, raw_value)), float(log_prob[0]), float(value[0]))
 
@@ -267,7 +292,7 @@ class PPO:
     def value_of(self, observation) -> float:
         """Return V(observation)."""
         obs = torch.as_tensor(np.asarray(observation, dtype=np.float32)).unsqueeze(0)
-        return float(self.value(obs)[0])
+        return float(self._acting_networks()[1](obs)[0])
 
     def update(self, buffer: RolloutBuffer) -> dict:
         """Run one PPO update on every sample of ``buffer``; return statistics."""

@@ -23,6 +23,26 @@ Chosen here (and parameters of the agent):
 
 Episodes are counted per step: the window restarts when a step begins, so a new reward is
 judged only on episodes trained under it.
+
+**The floor of a rule.** With judging episodes (``convergence_judged_on: evaluation``) a step
+cannot end before its window of judged episodes is full, and every judging episode follows a
+trigger (a PPO update, or ``judging_interval`` training episodes). So even a policy that
+satisfies the step from its first episode needs a fixed number of episodes in the step: the
+rule's floor (:func:`episode_floor`). In the last step of every case the human acts in every
+episode, so the floor is the smallest possible count of human-involved episodes there. With a
+window W and T training episodes per trigger:
+
+* ``judging_rule: spaced`` (the earlier rule): W * (T + 1). With the earlier update rule
+  (``episode_end_after_horizon``, horizon 512, 200-step episodes) T = 3: **12** episodes for
+  W = 3, and every count is a multiple of 4. With ``horizon_or_episode_end`` every training
+  episode ends with an update, T = 1: **6**;
+* ``judging_rule: in_a_row``: a judging episode that satisfies the step is followed by another
+  judging episode of the same frozen policy, until the window is full or one fails: T + W,
+  **6** with the earlier update rule and **4** with ``horizon_or_episode_end``.
+
+The in-a-row rule judges one policy on W episodes (different reset seeds and, with the human,
+different behaviour) instead of W successive policies on one episode each; the policy it
+declares converged is the one evaluated afterwards.
 """
 
 from dataclasses import dataclass
@@ -165,6 +185,32 @@ def _resolve_ids(raw, tree, robot_action, human_action, where) -> list:
         raise CasesError(f'{where}: {error}') from None
 
 
+def training_episodes_per_trigger(update_rule: str, horizon: int, episode_steps: int,
+                                  judging_interval: int = 0) -> int:
+    """Return how many training episodes come before each judging episode (at least).
+
+    ``judging_interval`` N > 0: N. Otherwise one judging episode follows each update:
+    ``episode_end_after_horizon`` updates at the end of the episode that fills the horizon
+    (ceil(horizon / episode_steps) episodes), ``horizon_or_episode_end`` after every episode.
+    """
+    if judging_interval > 0:
+        return int(judging_interval)
+    if update_rule == 'horizon_or_episode_end':
+        return 1
+    return -(-int(horizon) // int(episode_steps))
+
+
+def episode_floor(judging_rule: str, window: int, training_per_trigger: int) -> int:
+    """Return the fewest episodes a step can take under a judging rule (see the module doc).
+
+    ``spaced``: window * (training_per_trigger + 1); ``in_a_row``: training_per_trigger +
+    window.
+    """
+    if judging_rule == 'in_a_row':
+        return int(training_per_trigger) + int(window)
+    return int(window) * (int(training_per_trigger) + 1)
+
+
 class StrategyProgress:
     """Where a session is in its case's training steps, and when to move on.
 
@@ -211,6 +257,12 @@ class StrategyProgress:
         recent = self.step_history[-window:]
         return all(episode[subtask_id] for episode in recent
                    for subtask_id in step.watch)
+
+    def last_episode_met(self) -> bool:
+        """Return True when the last recorded episode satisfied every subtask the step watches."""
+        if not self.step_history:
+            return False
+        return all(self.step_history[-1][subtask_id] for subtask_id in self.step.watch)
 
     def record(self, errors: dict) -> tuple:
         """Record a training episode; return (condition_met, event).

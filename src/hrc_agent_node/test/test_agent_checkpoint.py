@@ -74,6 +74,23 @@ def test_resumed_session_continues_exactly(tmp_path):
     assert resumed.total_episodes == straight.total_episodes == 5
 
 
+def test_resumed_session_continues_exactly_with_updates_inside_episodes(tmp_path):
+    """Horizon 15 in 20-step episodes: updates at steps 15 and at episode ends."""
+    new_rules = dict(update_rule='horizon_or_episode_end', judging_rule='in_a_row', horizon=15,
+                     minibatch_size=8)
+    straight = AgentCore(params(**new_rules))
+    straight_returns = run(straight, 5)
+    first = AgentCore(params(**new_rules))
+    first_returns = run(first, 2)
+    assert first.ppo.updates == 2          # inside episode 0 and at its end; 1 is judging
+    save_checkpoint(first, tmp_path / 'latest.pt')
+    resumed = AgentCore(params(**new_rules))
+    load_into(resumed, tmp_path / 'latest.pt')
+    resumed_returns = run(resumed, 3)
+    assert first_returns + resumed_returns == pytest.approx(straight_returns, rel=0, abs=0)
+    assert resumed.ppo.updates == straight.ppo.updates
+
+
 def test_policy_loads_for_evaluation_alone(tmp_path):
     trained = AgentCore(params())
     run(trained, 3)
