@@ -143,7 +143,8 @@ class EpisodeResult:
     episode_return: float
     errors: dict             # subtask id -> mean |x - mu| over the states reached
     robot_effort: float      # variance of the robot's normalized action
-    human_effort: float      # variance of the human's normalized action
+    human_effort: float      # variance of the human's normalized action (of every command
+    #                          applied at the human's rate when the states carry them)
     converged: bool          # the step's condition was met after this episode
     event: str               # '' | 'advanced' | 'training_finished' | 'evaluation_finished'
     last_record: StepRecord = None
@@ -180,6 +181,7 @@ class _EpisodeLog:
     rewards: list = field(default_factory=list)
     robot_actions: list = field(default_factory=list)
     human_actions: list = field(default_factory=list)
+    human_slices: list = field(default_factory=list)   # normalized, at the human's rate
     error_sums: dict = field(default_factory=dict)
     states_reached: int = 0
     pending: StepRecord = None
@@ -516,8 +518,23 @@ class AgentCore:
         log.values.append(value)
         log.robot_actions.append(action)
         log.human_actions.append(human_action)
+        self._collect_human_slices(log, state)
         log.next_step = int(state.step) + 1
         return Decision(action, record.wrench, record, previous, update)
+
+    def _collect_human_slices(self, log: _EpisodeLog, state) -> None:
+        """Keep the human's commands the sim applied within the period that led to ``state``.
+
+        At the human's own rate a state carries several (``human_applied``, N or N*m, one per
+        slice of the period; TaskState and the engine's states alike): the human's effort is
+        then their variance (normalized), the person's real input, not that of the period
+        means the robot observes. One value per period (the human acts once a period): the
+        observed actions, as before.
+        """
+        applied = getattr(state, 'human_applied', None)
+        if applied is not None and len(applied) > 1:
+            scale = self.limits.full_scale(self.human_dof)
+            log.human_slices.extend(float(value) / scale for value in applied)
 
     def _step_boundary(self, log: _EpisodeLog, observation) -> dict:
         """Before the action for a state of a training episode: the updates due inside it.
@@ -597,6 +614,7 @@ class AgentCore:
         if human_action is None and self.needs_human_action:
             human_action = log.human_actions[-1] if log.human_actions else 0.0
         final_human_action = self.observed_human_action(final_state, human_action)
+        self._collect_human_slices(log, final_state)
         last = self._close_pending(final_state) if log.pending is not None else None
         terminated = bool(final_state.terminated)
         steps = len(log.rewards)
@@ -616,7 +634,8 @@ class AgentCore:
             plan.episode, plan.training_step, plan.human_involved, plan.evaluation, steps,
             terminated, bool(final_state.truncated), float(sum(log.rewards)), errors,
             float(np.var(log.robot_actions)) if log.robot_actions else 0.0,
-            float(np.var(log.human_actions)) if log.human_actions else 0.0,
+            float(np.var(log.human_slices)) if log.human_slices
+            else float(np.var(log.human_actions)) if log.human_actions else 0.0,
             converged, event, last, judging=plan.judging)
         if plan.evaluation:
             self.evaluation_results.append(result)

@@ -1,5 +1,6 @@
 """What the robot observes as the human action (human_action_source)."""
 
+import numpy as np
 import pytest
 
 from hrc_agent_node.agent_core import AgentCore
@@ -60,3 +61,43 @@ def test_same_step_episode_ending_at_its_first_state_needs_no_answer():
         assert final.truncated and not state.truncated
         result = core.end_episode(final)
     assert result.steps == 0 and core.total_episodes == 1
+
+
+def test_the_humans_effort_is_that_of_every_command_applied_at_its_rate():
+    """At the human's rate the effort is that of every command the sim applied.
+
+    The robot observes the period's mean; the effort reported is the variance of the
+    person's real input.
+    """
+    from hrc_sim_node.stepper import PeriodState
+
+    params = PhysicsParams(episode_duration=0.6)
+    slices = params.human_slices
+    core = core_for(5, 'applied')
+    full_scale = params.max_torque
+    applied = []
+    with SliderPendulumBall(params) as sim:
+        core.start_episode()
+        state = PeriodState(sim.reset(seed=1), ())
+        while not state.truncated:
+            decision = core.act(state)
+            commands = [0.5 * (-1) ** index * full_scale for index in range(slices)]
+            for command in commands:
+                sim.advance(decision.action * params.max_force, command,
+                            params.substeps_per_slice)
+            state = PeriodState(sim.finish_period(), commands)
+            applied += [command / full_scale for command in commands]
+            # what the robot observes: the period's mean (0 here), not the last slice
+            assert abs(state.applied_torque) < 1e-12
+        result = core.end_episode(state)
+    assert result.human_effort == pytest.approx(np.var(applied)) and result.human_effort > 0.2
+    # One command a period (the human held it): the observed actions, as before.
+    core = core_for(5, 'applied')
+    with SliderPendulumBall(params) as sim:
+        core.start_episode()
+        state = sim.reset(seed=1)
+        observed = []
+        while not state.truncated:
+            observed.append(core.act(state).record.observed_human_action)
+            state = PeriodState(sim.step(0.0, 0.3 * full_scale), [0.3 * full_scale])
+        assert core.end_episode(state).human_effort == pytest.approx(np.var(observed))

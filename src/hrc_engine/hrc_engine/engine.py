@@ -246,7 +246,8 @@ class InProcessSession:
             answer = self.human.answer(plan.episode, state, stamp)
             human_wrench = messages.wrench_on(answer.dof, answer.wrench)
             # The human's answer to the same state only when the core asks for it (same_step).
-            decision = core.act(state, answer.command if core.needs_human_action else None)
+            decision = core.act(advanced.observed,
+                                answer.command if core.needs_human_action else None)
             robot_wrench = messages.wrench_on(core.robot_dof, decision.wrench)
             self._write('/hrc/robot/cmd_wrench', messages.wrench_stamped(stamp, robot_wrench))
             if decision.previous is not None:
@@ -273,7 +274,7 @@ class InProcessSession:
             self._publish_state(advanced)
             self.steps += 1
         self.episode_seconds.append(time.perf_counter() - started)
-        self._finish_episode(advanced.state, advanced.stamp)
+        self._finish_episode(advanced.observed, advanced.stamp)
 
     def _publish_state(self, advanced) -> int:
         """Write the state of a control step (an hrc_sim_node.stepper.Advanced)."""

@@ -37,9 +37,31 @@ class Advanced:
     human_applied: list = field(default_factory=list)  # period end: per part of the period
 
     @property
+    def observed(self):
+        """Return the state with its applied human commands (what a TaskState carries)."""
+        return PeriodState(self.state, self.human_applied)
+
+    @property
     def episode_over(self) -> bool:
         """Return True when this is the last state of the episode."""
         return self.period_end and bool(self.state.truncated or self.state.terminated)
+
+
+class PeriodState:
+    """A period's state as the actors see it in a TaskState.
+
+    The PhysicsState's fields plus ``human_applied`` (the human's commands applied in each
+    slice of the period).
+    """
+
+    __slots__ = ('_state', 'human_applied')
+
+    def __init__(self, state, human_applied):
+        self._state = state
+        self.human_applied = tuple(human_applied)
+
+    def __getattr__(self, name):
+        return getattr(self._state, name)
 
 
 class SimStepper:
