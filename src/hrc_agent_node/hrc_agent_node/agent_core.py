@@ -58,6 +58,7 @@ import numpy as np
 
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
+from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import SimLimits
@@ -224,7 +225,12 @@ class AgentCore:
         self.progress = StrategyProgress(self.case, self.tree, p.convergence_window,
                                          p.satisfied_window)
         self.observation_size = 7 if p.observe_rates else 4
-        self.ppo = PPO(self.observation_size, p, p.seed)
+        # algorithm: the learner acts and learns; PPO learns from self.buffer (rollouts), SAC
+        # from its own replay buffer (sac.py). self.ppo names the PPO learner (None under SAC).
+        self.off_policy = p.algorithm == 'sac'
+        self.learner = SAC(self.observation_size, p, p.seed) if self.off_policy \
+            else PPO(self.observation_size, p, p.seed)
+        self.ppo = None if self.off_policy else self.learner
         self.reward_scaler = RewardScaler(p.gamma, p.normalize_rewards)
         self.buffer = RolloutBuffer()
         self.phase = 'evaluation' if p.evaluation_only else 'training'
@@ -263,8 +269,8 @@ class AgentCore:
 
     @property
     def buffered_samples(self) -> int:
-        """Return how many training samples wait for the next PPO update."""
-        return len(self.buffer)
+        """Return how many training samples wait for the next PPO update (SAC: replay size)."""
+        return len(self.learner.replay) if self.off_policy else len(self.buffer)
 
     @property
     def preset(self) -> str:
@@ -337,7 +343,9 @@ class AgentCore:
 
     @property
     def update_due(self) -> bool:
-        """Return True when the rollout buffer holds a horizon of samples."""
+        """Return True when the rollout buffer holds a horizon of samples (SAC: see sac.py)."""
+        if self.off_policy:
+            return self.learner.update_due
         return len(self.buffer) >= self.params.horizon
 
     @property
@@ -458,8 +466,13 @@ class AgentCore:
         previous = self._close_pending(state) if log.next_step > 0 else None
         plan = log.plan
         observation = self.observation(state, human_action)
-        raw, action, log_prob, value = self.ppo.act(observation,
-                                                    deterministic=plan.deterministic)
+        if self.off_policy and previous is not None and not plan.deterministic:
+            # SAC: the previous step's transition is complete; under sac_update_at step it
+            # learns from it here, before choosing this step's action.
+            self.learner.observe(log.observations[-1], log.robot_actions[-1],
+                                 log.rewards[-1], observation, terminated=False)
+        raw, action, log_prob, value = self.learner.act(observation,
+                                                        deterministic=plan.deterministic)
         record = StepRecord(plan.episode, int(state.step), human_action, action, raw,
                             self.wrench_of(action), value, log_prob, plan.deterministic)
         log.pending = record
@@ -493,10 +506,16 @@ class AgentCore:
                   for subtask_id, total in log.error_sums.items()}
         converged, event = False, ''
         if not plan.evaluation:
-            if not plan.judging and steps:
+            if not plan.judging and steps and self.off_policy:
+                # SAC: the last transition; truncation bootstraps from the final state.
+                self.learner.observe(log.observations[-1], log.robot_actions[-1],
+                                     log.rewards[-1],
+                                     self.observation(final_state, final_human_action),
+                                     terminated)
+            elif not plan.judging and steps:
                 # Truncation (time limit) bootstraps from V(final state), observed with the
                 # human action of the final state; termination from 0.
-                final_value = 0.0 if terminated else self.ppo.value_of(
+                final_value = 0.0 if terminated else self.learner.value_of(
                     self.observation(final_state, final_human_action))
                 self.buffer.add_episode(log.observations, log.raw_actions, log.log_probs,
                                         log.values, log.train_rewards, final_value, terminated,
@@ -550,6 +569,8 @@ class AgentCore:
         if tuple(previous_step.robot_subtasks) != tuple(self.progress.step.robot_subtasks):
             self.buffer.clear()
             self.reward_scaler.reset()
+            if self.off_policy:
+                self.learner.clear_replay()
         self.judging_due = False
         self.episodes_since_judging = 0
 
@@ -566,7 +587,8 @@ class AgentCore:
         """
         if self.phase != 'updating':
             raise RuntimeError(f'no update is due in phase {self.phase!r}')
-        self.last_update = self.ppo.update(self.buffer)
+        self.last_update = self.learner.update() if self.off_policy \
+            else self.learner.update(self.buffer)
         self.buffer.clear()
         self.phase = 'training'
         if self.judged_on_evaluation and self.params.judging_interval == 0:
@@ -649,7 +671,8 @@ class AgentCore:
         """Return everything needed to continue the session (see checkpoint.py)."""
         if self._log is not None:
             raise RuntimeError('checkpoints are taken between episodes, not during one')
-        return {'ppo': self.ppo.state_dict(), 'reward_scaler': self.reward_scaler.state_dict(),
+        return {self.params.algorithm: self.learner.state_dict(),   # 'ppo' or 'sac'
+                'reward_scaler': self.reward_scaler.state_dict(),
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
                              'human_involved_episodes': self.human_involved_episodes,
@@ -663,7 +686,7 @@ class AgentCore:
 
     def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
         """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""
-        self.ppo.load_state_dict(state['ppo'], policy_only=policy_only)
+        self.learner.load_state_dict(state[self.params.algorithm], policy_only=policy_only)
         counters = state['counters']
         self.episode = int(counters['episode'])
         self.total_episodes = int(counters['total_episodes'])
