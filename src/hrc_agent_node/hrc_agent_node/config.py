@@ -118,10 +118,12 @@ class AgentParams:
                                        "step's action in realtime); episode_end = the episode's "
                                        'owed gradient steps run in the update between episodes',
                                choices=('step', 'episode_end'))
-    sac_updates_per_step: int = param(20, 'SAC: critic gradient steps per stored transition '
-                                          '(update-to-data ratio; DroQ: 20); one actor step '
-                                          'follows them', low=1, high=1000)
-    sac_batch_size: int = param(256, 'SAC: transitions per gradient step', low=1, high=100000)
+    sac_updates_per_step: int = param(10, 'SAC: critic gradient steps per stored transition '
+                                          '(update-to-data ratio; DroQ: 20, halved for the 2 '
+                                          'shared cores); one actor step follows them',
+                                      low=1, high=1000)
+    sac_batch_size: int = param(128, 'SAC: transitions per gradient step (DroQ: 256)', low=1,
+                                high=100000)
     sac_replay_size: int = param(100000, 'SAC: replay buffer capacity (transitions; 500 '
                                          'episodes of 200 steps)', low=1, high=10000000)
     sac_learning_starts: int = param(200, 'SAC: stored transitions before the first gradient '
@@ -139,8 +141,9 @@ class AgentParams:
                                 'minimum)', low=1, high=20)
     sac_dropout: float = param(0.01, 'SAC: dropout probability in the critics (DroQ: 0.01)',
                                low=0.0, high=0.9)
-    sac_hidden_size: int = param(128, 'SAC: units per hidden layer of actor and critics (ReLU; '
-                                      'critics add dropout and layer norm)', low=1, high=4096)
+    sac_hidden_size: int = param(64, 'SAC: units per hidden layer of actor and critics (ReLU; '
+                                     'critics add dropout and layer norm; DroQ: 256)', low=1,
+                                 high=4096)
     sac_initial_temperature: float = param(0.1, 'SAC: initial entropy temperature (then '
                                                 'learned toward entropy -1)', low=1e-6,
                                            high=100.0)

@@ -16,6 +16,10 @@ transitions, so it can learn at every control step instead of only after a horiz
 * Temperature: learned (log), toward the target entropy -1 (minus the action size).
 * Bootstrapping: a time-limit truncation bootstraps from the final state; only a termination
   uses 0 (the transition's ``terminated`` flag).
+* Reward: the task's reward (the same tree, preset and step as PPO's) times the fixed
+  ``sac_reward_scale``. Not PPO's running normalization: a replay buffer would then hold
+  transitions of different scales side by side (and the normalized rewards, ~0.25 a step, left
+  the entropy bonus dominant: the first try's training episodes kept an action std of 0.8).
 
 Why DroQ and not REDQ: REDQ reaches the same sample efficiency with 10 critics and a random
 subset of 2 in each target; DroQ needs 2 critics, so each of the many gradient steps costs a
