@@ -173,6 +173,9 @@ class AgentParams:
         if self.minibatch_size > self.horizon:
             reasons.append(f'minibatch_size: {self.minibatch_size} exceeds horizon '
                            f'{self.horizon}')
+        if self.algorithm == 'sac' and self.sac_learning_starts > self.sac_replay_size:
+            reasons.append(f'sac_learning_starts: {self.sac_learning_starts} exceeds '
+                           f'sac_replay_size {self.sac_replay_size} (SAC would never learn)')
         if self.evaluation_only and not self.resume_from:
             reasons.append('evaluation_only: needs resume_from (the policy to evaluate)')
         if self.evaluation_only and self.evaluation_episodes == 0:

@@ -21,7 +21,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import make_partner, run_episode
 from hrc_agent_node.sac import SAC, squashed_log_prob
 from hrc_common.contract import SimLimits
-from hrc_common.params import with_overrides
+from hrc_common.params import checked, ParameterError, with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 # Small networks and few gradient steps keep these tests fast; the defaults are DroQ's.
@@ -206,3 +206,10 @@ def test_offline_case_2_session_with_sac_writes_a_checkpoint(tmp_path, capsys):
     checkpoint = read_checkpoint(path)
     assert checkpoint['core']['sac']['gradient_steps'] > 0
     assert checkpoint['core']['phase'] == 'done'
+
+
+def test_a_replay_buffer_smaller_than_the_warm_up_is_refused():
+    with pytest.raises(ParameterError, match='sac_learning_starts: 300 exceeds sac_replay_size '
+                                             '200'):
+        checked(sac_params(sac_learning_starts=300, sac_replay_size=200))
+    checked(sac_params(algorithm='ppo', sac_learning_starts=300, sac_replay_size=200))
