@@ -8,9 +8,9 @@ A checkpoint is one ``torch.save`` file holding::
     network         observation size and network shape (checked before loading weights)
     core            AgentCore.state_dict(): policy and value state_dicts, optimizer, generator
                     states (exploration noise, minibatch order), reward scaler, rollout buffer,
-                    (under ``algorithm: sac`` the key ``sac`` replaces ``ppo``: actor, critics,
-                    temperature, optimizers, generators, replay buffer; see sac.STATE_LAYOUT)
-                    strategy progress, counters, evaluation results so far, phase
+                    strategy progress, counters, evaluation results so far, phase; under
+                    ``algorithm: sac`` the key ``sac`` replaces ``ppo`` (actor, critics,
+                    temperature, optimizers, generators, replay buffer: sac.STATE_LAYOUT)
 
 Only tensors and plain containers (dict, list, tuple, str, int, float, bool, None): the file
 is read with ``torch.load(weights_only=True)``, whose unpickler builds nothing else, so a

@@ -15,8 +15,8 @@ import torch
 
 from hrc_agent_node import offline
 from hrc_agent_node.agent_core import AgentCore
-from hrc_agent_node.checkpoint import (CheckpointError, load_into, read_checkpoint,
-                                       save_checkpoint)
+from hrc_agent_node.checkpoint import (CheckpointError, load_into, make_checkpoint,
+                                       read_checkpoint, save_checkpoint)
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import make_partner, run_episode
 from hrc_agent_node.sac import SAC, squashed_log_prob
@@ -181,6 +181,17 @@ def test_checkpoint_of_the_other_learner_is_refused(tmp_path):
     with pytest.raises(CheckpointError, match='written by the sac learner but this agent runs '
                                               'ppo'):
         load_into(AgentCore(sac_params(algorithm='ppo')), sac_path)
+
+
+def test_a_sac_checkpoint_of_the_wrong_layout_is_refused_with_every_reason(tmp_path):
+    checkpoint = make_checkpoint(AgentCore(sac_params()))
+    del checkpoint['core']['sac']['replay']
+    checkpoint['core']['sac']['updates'] = 'many'
+    torch.save(checkpoint, tmp_path / 'bad.pt')
+    with pytest.raises(CheckpointError) as error:
+        load_into(AgentCore(sac_params()), tmp_path / 'bad.pt')
+    assert "checkpoint.core.sac lacks 'replay'" in str(error.value)
+    assert 'checkpoint.core.sac.updates must be int, got str' in str(error.value)
 
 
 def test_a_new_reward_empties_the_replay_buffer():
