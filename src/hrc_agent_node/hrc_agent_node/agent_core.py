@@ -69,6 +69,7 @@ import numpy as np
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.learner import make_learner
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
+from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import SimLimits
@@ -239,10 +240,16 @@ class AgentCore:
         self.progress = StrategyProgress(self.case, self.tree, p.convergence_window,
                                          p.satisfied_window)
         self.observation_size = 7 if p.observe_rates else 4
-        self.ppo = PPO(self.observation_size, p, p.seed)
+        # algorithm: the policy learner acts and learns; PPO learns from self.buffer (rollouts)
+        # through self.learner (synchronous or background updates), SAC from its own replay
+        # buffer inside act() (sac.py). self.ppo names the PPO learner (None under SAC).
+        self.off_policy = p.algorithm == 'sac'
+        self.policy_learner = SAC(self.observation_size, p, p.seed) if self.off_policy \
+            else PPO(self.observation_size, p, p.seed)
+        self.ppo = None if self.off_policy else self.policy_learner
         self.reward_scaler = RewardScaler(p.gamma, p.normalize_rewards)
         self.buffer = RolloutBuffer()
-        # Runs the updates: synchronous (deterministic) unless set_learner_mode('background').
+        # Runs the PPO updates: synchronous (deterministic) unless set_learner_mode('background').
         self.learner = make_learner('synchronous', self.ppo)
         self.phase = 'evaluation' if p.evaluation_only else 'training'
         self.episode = 0                    # index of the current (or next) episode
@@ -280,8 +287,8 @@ class AgentCore:
 
     @property
     def buffered_samples(self) -> int:
-        """Return how many training samples wait for the next PPO update."""
-        return len(self.buffer)
+        """Return how many training samples wait for the next PPO update (SAC: replay size)."""
+        return len(self.policy_learner.replay) if self.off_policy else len(self.buffer)
 
     @property
     def preset(self) -> str:
@@ -360,6 +367,8 @@ class AgentCore:
         ``horizon_or_episode_end``: it holds any sample, or a background update started inside
         the episode has not been swapped in yet.
         """
+        if self.off_policy:
+            return self.policy_learner.update_due    # SAC: see sac.py
         if self.params.update_rule == 'episode_end_after_horizon':
             return len(self.buffer) >= self.params.horizon
         return len(self.buffer) > 0 or self.learner.busy
@@ -383,8 +392,8 @@ class AgentCore:
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is running: change the learner between '
                                'episodes')
-        if mode == self.learner.mode:
-            return
+        if mode == self.learner.mode or self.off_policy:
+            return       # SAC learns inside act() itself (sac_update_at), never in a thread
         self._settle_learner()
         self.learner = make_learner(mode, self.ppo)
 
@@ -506,9 +515,17 @@ class AgentCore:
         previous = self._close_pending(state) if log.next_step > 0 else None
         plan = log.plan
         observation = self.observation(state, human_action)
-        update = self._step_boundary(log, observation)
-        raw, action, log_prob, value = self.ppo.act(observation,
-                                                    deterministic=plan.deterministic)
+        update = None
+        if self.off_policy:
+            if previous is not None and not plan.deterministic:
+                # SAC: the previous step's transition is complete; under sac_update_at step
+                # it learns from it here, before choosing this step's action.
+                self.policy_learner.observe(log.observations[-1], log.robot_actions[-1],
+                                            log.rewards[-1], observation, terminated=False)
+        else:
+            update = self._step_boundary(log, observation)
+        raw, action, log_prob, value = self.policy_learner.act(
+            observation, deterministic=plan.deterministic)
         record = StepRecord(plan.episode, int(state.step), human_action, action, raw,
                             self.wrench_of(action), value, log_prob, plan.deterministic)
         log.pending = record
@@ -622,7 +639,13 @@ class AgentCore:
                   for subtask_id, total in log.error_sums.items()}
         converged, event = False, ''
         if not plan.evaluation:
-            if not plan.judging and steps > log.segment_start:
+            if not plan.judging and steps and self.off_policy:
+                # SAC: the last transition; truncation bootstraps from the final state.
+                self.policy_learner.observe(log.observations[-1], log.robot_actions[-1],
+                                            log.rewards[-1],
+                                            self.observation(final_state, final_human_action),
+                                            terminated)
+            elif not plan.judging and steps > log.segment_start:
                 # Truncation (time limit) bootstraps from V(final state), observed with the
                 # human action of the final state; termination from 0. The samples since the
                 # last cut inside the episode (all of them when there was none) go to the buffer.
@@ -685,6 +708,8 @@ class AgentCore:
         if tuple(previous_step.robot_subtasks) != tuple(self.progress.step.robot_subtasks):
             self.buffer.clear()
             self.reward_scaler.reset()
+            if self.off_policy:
+                self.policy_learner.clear_replay()
         self.judging_due = False
         self.episodes_since_judging = 0
 
@@ -704,6 +729,12 @@ class AgentCore:
         """
         if self.phase != 'updating':
             raise RuntimeError(f'no update is due in phase {self.phase!r}')
+        if self.off_policy:
+            self.last_update = stats = self.policy_learner.update()
+            self.phase = 'training'
+            if self.judged_on_evaluation and self.params.judging_interval == 0:
+                self.judging_due = True
+            return stats
         # A background update started inside the episode first; then the samples since.
         stats = self._settle_learner()
         if len(self.buffer) > 0:
@@ -791,7 +822,8 @@ class AgentCore:
             raise RuntimeError('checkpoints are taken between episodes, not during one')
         if self.learner.busy:
             raise RuntimeError('an update is running: checkpoints follow update()')
-        return {'ppo': self.ppo.state_dict(), 'reward_scaler': self.reward_scaler.state_dict(),
+        return {self.params.algorithm: self.policy_learner.state_dict(),   # 'ppo' or 'sac'
+                'reward_scaler': self.reward_scaler.state_dict(),
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
                              'human_involved_episodes': self.human_involved_episodes,
@@ -805,7 +837,8 @@ class AgentCore:
 
     def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
         """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""
-        self.ppo.load_state_dict(state['ppo'], policy_only=policy_only)
+        self.policy_learner.load_state_dict(state[self.params.algorithm],
+                                            policy_only=policy_only)
         counters = state['counters']
         self.episode = int(counters['episode'])
         self.total_episodes = int(counters['total_episodes'])

@@ -8,7 +8,9 @@ A checkpoint is one ``torch.save`` file holding::
     network         observation size and network shape (checked before loading weights)
     core            AgentCore.state_dict(): policy and value state_dicts, optimizer, generator
                     states (exploration noise, minibatch order), reward scaler, rollout buffer,
-                    strategy progress, counters, evaluation results so far, phase
+                    strategy progress, counters, evaluation results so far, phase; under
+                    ``algorithm: sac`` the key ``sac`` replaces ``ppo`` (actor, critics,
+                    temperature, optimizers, generators, replay buffer: sac.STATE_LAYOUT)
 
 Only tensors and plain containers (dict, list, tuple, str, int, float, bool, None): the file
 is read with ``torch.load(weights_only=True)``, whose unpickler builds nothing else, so a
@@ -26,6 +28,7 @@ import warnings
 import torch
 
 from hrc_agent_node.ppo import BUFFER_FIELDS
+from hrc_agent_node.sac import STATE_LAYOUT as SAC_STATE_LAYOUT
 from hrc_common.contract import atomic_write
 from hrc_common.params import as_dict
 
@@ -55,6 +58,21 @@ LAYOUT = {
 }
 
 
+def layout_of(algorithm: str) -> dict:
+    """Return :data:`LAYOUT` for the checkpoint of a learner (``ppo`` or ``sac``)."""
+    if algorithm != 'sac':
+        return LAYOUT
+    core = {key: value for key, value in LAYOUT['core'].items() if key != 'ppo'}
+    return {**LAYOUT, 'core': {'sac': SAC_STATE_LAYOUT, **core}}
+
+
+def algorithm_of(checkpoint: dict) -> str:
+    """Return the learner a checkpoint was written by (files without the field: ppo)."""
+    config = checkpoint.get('config')
+    params = config.get('params') if isinstance(config, dict) else None
+    return params.get('algorithm', 'ppo') if isinstance(params, dict) else 'ppo'
+
+
 class CheckpointError(ValueError):
     """A checkpoint cannot be read or does not fit this agent; the message says why."""
 
@@ -62,7 +80,8 @@ class CheckpointError(ValueError):
 def network_signature(core) -> dict:
     """Return what the networks' shapes depend on."""
     params = core.params
-    return {'observation_size': core.observation_size, 'hidden_size': params.hidden_size,
+    hidden_size = params.sac_hidden_size if params.algorithm == 'sac' else params.hidden_size
+    return {'observation_size': core.observation_size, 'hidden_size': hidden_size,
             'hidden_layers': params.hidden_layers, 'observe_rates': params.observe_rates}
 
 
@@ -139,7 +158,7 @@ def read_checkpoint(path) -> dict:
     if version != FORMAT_VERSION:
         raise CheckpointError(f'checkpoint {path} has format version {version}; this agent '
                               f'reads version {FORMAT_VERSION}')
-    problems = layout_problems(checkpoint, LAYOUT)
+    problems = layout_problems(checkpoint, layout_of(algorithm_of(checkpoint)))
     if problems:
         raise CheckpointError(f'checkpoint {path} is malformed: ' + '; '.join(problems))
     return checkpoint
@@ -158,6 +177,9 @@ def check_compatible(checkpoint: dict, core, path='checkpoint', resume: bool = T
             problems.append(f'{key} is {checkpoint["network"].get(key)!r} in the checkpoint '
                             f'but {value!r} here')
     config = checkpoint['config']
+    if algorithm_of(checkpoint) != core.params.algorithm:
+        problems.append(f'it was written by the {algorithm_of(checkpoint)} learner but this '
+                        f'agent runs {core.params.algorithm} (algorithm)')
     if config.get('robot_dof') != core.robot_dof:
         problems.append(f'the policy drives {config.get("robot_dof")!r} but the robot drives '
                         f'{core.robot_dof!r} in case {core.case_id}')

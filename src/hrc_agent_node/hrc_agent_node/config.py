@@ -130,6 +130,45 @@ class AgentParams:
     normalize_advantages: bool = param(True, 'Normalize advantages per minibatch')
     normalize_rewards: bool = param(True, 'Divide rewards by the running std of the discounted '
                                           'return for training (reported rewards stay raw)')
+    # --- learner: PPO (the paper's) or SAC (sac.py; the sac_* fields apply to it alone)
+    algorithm: str = param('ppo', "Learner: ppo = the paper's PPO (Table I fields above); sac = "
+                                  'Soft Actor-Critic with DroQ critics (sac_* fields; '
+                                  'hidden_layers, the reward and the judging rule shared)',
+                           choices=('ppo', 'sac'))
+    sac_update_at: str = param('step', 'SAC: step = learn as each transition arrives (inside '
+                                       'the act/end_episode call of the step; delays that '
+                                       "step's action in realtime); episode_end = the episode's "
+                                       'owed gradient steps run in the update between episodes',
+                               choices=('step', 'episode_end'))
+    sac_updates_per_step: int = param(10, 'SAC: critic gradient steps per stored transition '
+                                          '(update-to-data ratio; DroQ: 20, halved for the 2 '
+                                          'shared cores); one actor step follows them',
+                                      low=1, high=1000)
+    sac_batch_size: int = param(128, 'SAC: transitions per gradient step (DroQ: 256)', low=1,
+                                high=100000)
+    sac_replay_size: int = param(100000, 'SAC: replay buffer capacity (transitions; 500 '
+                                         'episodes of 200 steps)', low=1, high=10000000)
+    sac_learning_starts: int = param(200, 'SAC: stored transitions before the first gradient '
+                                          'step (one 40 s episode)', low=1, high=10000000)
+    sac_learning_rate: float = param(0.0003, 'SAC: Adam learning rate of actor, critics and '
+                                             'temperature (DroQ)', low=1e-7, high=1.0)
+    sac_gamma: float = param(0.99, 'SAC: discount factor (PPO keeps gamma)', low=0.0,
+                             high=1.0)
+    sac_reward_scale: float = param(0.1, "SAC: the task's reward times this is learned from "
+                                         '(fixed; normalize_rewards is for PPO); 0.1 keeps a '
+                                         'step below 1.2', low=1e-6, high=1e6)
+    sac_tau: float = param(0.005, 'SAC: target critics move this fraction toward the critics '
+                                  'each gradient step', low=0.0, high=1.0)
+    sac_critics: int = param(2, 'SAC: Q-functions in the ensemble (targets take their '
+                                'minimum)', low=1, high=20)
+    sac_dropout: float = param(0.01, 'SAC: dropout probability in the critics (DroQ: 0.01)',
+                               low=0.0, high=0.9)
+    sac_hidden_size: int = param(64, 'SAC: units per hidden layer of actor and critics (ReLU; '
+                                     'critics add dropout and layer norm; DroQ: 256)', low=1,
+                                 high=4096)
+    sac_initial_temperature: float = param(0.1, 'SAC: initial entropy temperature (then '
+                                                'learned toward entropy -1)', low=1e-6,
+                                           high=100.0)
     # --- observation {B_y, P_z, S_x, a_h} (+ rates), each divided by its scale
     observe_rates: bool = param(True, "Add dB_y/dt, dP_z/dt, dS_x/dt to the paper's "
                                       'observation (the state is not Markov without them)')
@@ -156,6 +195,9 @@ class AgentParams:
         if self.minibatch_size > self.horizon:
             reasons.append(f'minibatch_size: {self.minibatch_size} exceeds horizon '
                            f'{self.horizon}')
+        if self.algorithm == 'sac' and self.sac_learning_starts > self.sac_replay_size:
+            reasons.append(f'sac_learning_starts: {self.sac_learning_starts} exceeds '
+                           f'sac_replay_size {self.sac_replay_size} (SAC would never learn)')
         if self.evaluation_only and not self.resume_from:
             reasons.append('evaluation_only: needs resume_from (the policy to evaluate)')
         if self.evaluation_only and self.evaluation_episodes == 0:
