@@ -23,6 +23,7 @@ import subprocess
 
 import pytest
 
+from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_common.testing import executable_path
 
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
@@ -133,3 +134,29 @@ def test_every_case_is_the_same_in_the_graph_and_the_engine(tmp_path, ros_domain
             '--set', 'agent.minibatch_size=8']
     graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
     assert_same(graph_bag, engine_bag, (0, 1, 2))
+
+
+UPDATE_INSIDE_ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id',
+                      'same', '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=30',
+                      '--set', 'agent.minibatch_size=16',
+                      '--set', 'agent.update_rule=horizon_or_episode_end']
+
+
+@pytest.mark.slow
+def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(
+        tmp_path, ros_domain_id, read_rosbag):
+    """Under ``update_rule: horizon_or_episode_end`` with horizon 30 (issue 22).
+
+    The first episode's rollout is cut at step 30, the update runs before the action for that
+    state (in the agent node and in the engine alike), the rest of the episode acts with the
+    new weights and updates again at its end.
+    """
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, UPDATE_INSIDE_ARGS, read_rosbag)
+    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
+    steps = graph_messages['/hrc/agent/step'][0]
+    assert len(steps) == 40 and not steps[0]['deterministic']
+    # Two updates each: inside episode 0 (step 30) and at its end (10 samples); the earlier
+    # rule would have made one, at the end.
+    for run_dir in (tmp_path / 'graph', tmp_path / 'engine'):
+        final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
+        assert final['core']['ppo']['updates'] == 2, run_dir
