@@ -29,30 +29,52 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.partners import ScriptedPartner, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
-from hrc_sim_node.protocol import per_dof, roles
+from hrc_sim_node.commands import wrench_on
+from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
+from hrc_sim_node.stepper import SimStepper
 
 
 def run_episode(core: AgentCore, sim, partner, on_step=None):
     """Run one episode of ``core`` on ``sim`` (a SliderPendulumBall); return its EpisodeResult.
 
-    ``on_step(state, decision, human_action)`` is called after each decision, if given.
+    The sim's step protocol in lockstep, as the in-process engine runs it
+    (``hrc_sim_node.stepper.SimStepper.run_period``): the partner answers the period's state
+    and, at the human's rate (``sim.params.human_period``), each state within the period; the
+    robot's action holds for the period. ``on_step(state, decision, human_action)`` is called
+    after each decision, if given (the partner's answer to the period's state).
     """
     plan = core.start_episode()
     if hasattr(partner, 'start_episode'):
         partner.start_episode(plan.episode)
-    state = sim.reset(plan.seed)
-    human_subtasks = core.human_subtasks
-    while not (state.truncated or state.terminated):
-        human_action = float(partner(state, human_subtasks)) \
-            if plan.human_involved and partner is not None else 0.0
-        decision = core.act(state, human_action if core.needs_human_action else None)
+    params = sim.params
+    limits = SimLimits.of(params)
+    protocol = StepProtocol(ProtocolSettings(
+        control_period=params.control_period, max_force=params.max_force,
+        max_torque=params.max_torque, robot_dof=core.robot_dof,
+        human_period=params.human_period))
+    protocol.set_roles(core.robot_dof, plan.human_involved)
+    stepper = SimStepper(sim, protocol)
+    human_subtasks, human_dof = core.human_subtasks, core.human_dof
+    human_scale, robot_scale = limits.full_scale(human_dof), limits.full_scale(core.robot_dof)
+
+    def human_command(state) -> float:
+        if not plan.human_involved or partner is None:
+            return 0.0
+        return float(partner(state, human_subtasks))
+
+    advanced = stepper.start_episode(plan.episode, plan.seed)
+    while not advanced.episode_over:
+        state = advanced.state
+        human_action = human_command(state)
+        decision = core.act(advanced.observed,
+                            human_action if core.needs_human_action else None)
         if on_step is not None:
             on_step(state, decision, human_action)
-        # The sim's per-DOF dispatch (hrc_sim_node.protocol), on normalized commands.
-        command = per_dof({'robot': decision.action, 'human': human_action},
-                          roles(core.robot_dof))
-        state = sim.step_normalized(command['translation'], command['rotation'])
-    return core.end_episode(state)
+        advanced = stepper.run_period(
+            wrench_on(core.robot_dof, decision.action * robot_scale),
+            wrench_on(human_dof, human_action * human_scale),
+            lambda middle: wrench_on(human_dof, human_command(middle.state) * human_scale))
+    return core.end_episode(advanced.observed)
 
 
 def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=None,
@@ -119,7 +141,7 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
     from hrc_joystick_node.sim_human import load_profile
 
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
-                                 limits.control_period, population_every)
+                                 limits.human_step, population_every)
 
 
 def main(argv=None) -> int:

@@ -230,9 +230,7 @@ class InProcessSession:
         state (only its wrench is published for those, as the human node does) while the
         robot's answer holds for the period.
         """
-        from hrc_sim_node.commands import HUMAN, ROBOT
-
-        core, protocol, stepper = self.core, self.protocol, self.stepper
+        core, stepper = self.core, self.stepper
         started = time.perf_counter()
         plan = core.start_episode()
         self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
@@ -255,26 +253,20 @@ class InProcessSession:
             self._write('/hrc/human/action',
                         messages.human_action(stamp, plan.episode, state.step, answer))
             self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(stamp, human_wrench))
-            now = time.monotonic()
-            protocol.on_command(ROBOT, stamp, robot_wrench, now)
-            order = protocol.on_command(HUMAN, stamp, human_wrench, now).order
-            while True:
-                if order is None:  # cannot happen: every awaited actor answered
-                    raise RuntimeError(f'step {state.step}: the protocol did not step')
-                advanced = stepper.apply(order)
-                if advanced.period_end:
-                    break
-                answer = self.human.answer(plan.episode, advanced.state, advanced.stamp,
-                                           advanced.slice)
-                human_wrench = messages.wrench_on(answer.dof, answer.wrench)
-                self._write('/hrc/human/cmd_wrench',
-                            messages.wrench_stamped(advanced.stamp, human_wrench))
-                order = protocol.on_command(HUMAN, advanced.stamp, human_wrench,
-                                            time.monotonic()).order
+            advanced = stepper.run_period(
+                robot_wrench, human_wrench,
+                lambda middle, episode=plan.episode: self._answer_slice(episode, middle))
             self._publish_state(advanced)
             self.steps += 1
         self.episode_seconds.append(time.perf_counter() - started)
         self._finish_episode(advanced.observed, advanced.stamp)
+
+    def _answer_slice(self, episode: int, middle):
+        """Return the human's answer to a slice state (its wrench published, as the node does)."""
+        answer = self.human.answer(episode, middle.state, middle.stamp, middle.slice)
+        wrench = messages.wrench_on(answer.dof, answer.wrench)
+        self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(middle.stamp, wrench))
+        return wrench
 
     def _publish_state(self, advanced) -> int:
         """Write the state of a control step (an hrc_sim_node.stepper.Advanced)."""

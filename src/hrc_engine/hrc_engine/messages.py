@@ -6,10 +6,9 @@ human: HumanAction, WrenchStamped), so a bag of the engine holds the same fields
 the graph. ``hrc_bag.session_writer`` encodes them to CDR.
 """
 
-from dataclasses import dataclass, field
-
-from hrc_common.contract import DOF_INDEX, episode_kind, InputSource, Phase, wrench_axis
-from hrc_sim_node.commands import HUMAN, ROBOT
+from hrc_common.contract import DOF_INDEX, episode_kind, InputSource, Phase
+# Wrench values live with the sim's command rules; wrench_on is used here and re-exported.
+from hrc_sim_node.commands import HUMAN, ROBOT, Wrench, wrench_on  # noqa: F401
 from hrc_sim_node.protocol import stamp_fields
 
 FRAME = 'world'
@@ -21,31 +20,6 @@ def header(stamp: int) -> dict:
     """Return a std_msgs/Header for a stamp in ns (frame 'world')."""
     sec, nanosec = stamp_fields(stamp)
     return {'stamp': {'sec': sec, 'nanosec': nanosec}, 'frame_id': FRAME}
-
-
-@dataclass
-class Vector3:
-    """geometry_msgs/Vector3 as plain values."""
-
-    x: float = 0.0
-    y: float = 0.0
-    z: float = 0.0
-
-
-@dataclass
-class Wrench:
-    """geometry_msgs/Wrench as plain values (what the sim's protocol reads)."""
-
-    force: Vector3 = field(default_factory=Vector3)
-    torque: Vector3 = field(default_factory=Vector3)
-
-
-def wrench_on(dof: str, value: float) -> Wrench:
-    """Return a wrench with ``value`` (N or N*m) on the component driving ``dof``."""
-    wrench = Wrench()
-    part, axis = wrench_axis(dof)
-    setattr(getattr(wrench, part), axis, float(value))
-    return wrench
 
 
 def wrench_stamped(stamp: int, wrench: Wrench) -> dict:

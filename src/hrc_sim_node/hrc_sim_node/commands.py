@@ -20,6 +20,34 @@ HUMAN = 'human'
 ACTORS = (ROBOT, HUMAN)
 
 
+@dataclass
+class Vector3:
+    """geometry_msgs/Vector3 as plain values."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+
+
+@dataclass
+class Wrench:
+    """geometry_msgs/Wrench as plain values (what :func:`read_command` reads).
+
+    For the loops that run without messages (the in-process engine, the offline runner).
+    """
+
+    force: Vector3 = field(default_factory=Vector3)
+    torque: Vector3 = field(default_factory=Vector3)
+
+
+def wrench_on(dof: str, value: float) -> Wrench:
+    """Return a wrench with ``value`` (N or N*m) on the component driving ``dof``."""
+    wrench = Wrench()
+    part, axis = wrench_axis(dof)
+    setattr(getattr(wrench, part), axis, float(value))
+    return wrench
+
+
 @dataclass(frozen=True)
 class Command:
     """The outcome of reading one command: what is applied and what was wrong with it."""

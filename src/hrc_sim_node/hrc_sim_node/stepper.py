@@ -24,6 +24,8 @@ slice it is the held command itself, exactly as before human slices existed.
 from dataclasses import dataclass, field
 import typing
 
+from hrc_sim_node.commands import HUMAN, ROBOT
+
 
 @dataclass
 class Advanced:
@@ -96,3 +98,25 @@ class SimStepper:
         applied, self._human_applied = self._human_applied, []
         stamp = self.protocol.next_stamp(state.step, bool(state.truncated or state.terminated))
         return Advanced(state, stamp, True, 0, dict(order.missing), applied)
+
+    def run_period(self, robot_wrench, human_wrench, answer_slice) -> Advanced:
+        """Lockstep, in one process: the period's state answered, to the next period's state.
+
+        ``robot_wrench``, ``human_wrench``: both actors' answers to the period's state
+        (Wrench-like); ``answer_slice(advanced)`` returns the human's answer to a slice state
+        (called only at the human's rate, while the human is involved). The robot's answer
+        holds for the period. The in-process engine, the offline runner and the Gymnasium
+        environments step through this, as the sim node and the human node do over DDS.
+        """
+        protocol = self.protocol
+        stamp = protocol.awaited
+        protocol.on_command(ROBOT, stamp, robot_wrench, 0.0)
+        order = protocol.on_command(HUMAN, stamp, human_wrench, 0.0).order
+        while True:
+            if order is None:  # cannot happen: every awaited actor answered
+                raise RuntimeError(f'step {protocol.step}: the protocol did not step')
+            advanced = self.apply(order)
+            if advanced.period_end:
+                return advanced
+            order = protocol.on_command(HUMAN, advanced.stamp, answer_slice(advanced),
+                                        0.0).order
