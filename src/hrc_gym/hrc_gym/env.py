@@ -130,6 +130,21 @@ class SliderPendulumBallEnv(gymnasium.Env):
         return float(self.human.answer(self._episode, state.step, self._stamp_ns,
                                        state).command)
 
+    def _answer_slice(self, state, slice_index: int, held: float) -> float:
+        """Return the human's command for a state within the period (the human's rate).
+
+        The simulated human acts on it (the human node's core, as in the engines); a cloned
+        model acts once a control period, the rate it was recorded at, and holds (``held``).
+        """
+        if not self.task.human_involved or self.human is None:
+            return 0.0
+        if self._human_model is not None:
+            return held
+        slices = self.task.physics.params.human_slices
+        stamp = self._stamp_ns + slice_index * (self._period_ns // slices)
+        return float(self.human.answer(self._episode, state.step, stamp, state,
+                                       slice_index=slice_index).command)
+
     def step(self, action):
         """Advance one control period with the robot's command (the human acts alongside)."""
         if self.task.state is None:
@@ -138,7 +153,9 @@ class SliderPendulumBallEnv(gymnasium.Env):
             raise RuntimeError('the episode is over: call reset()')
         command = float(np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[0], -1.0, 1.0))
         human_command = self._human_command()
-        self.task.advance({ROBOT: command, HUMAN: human_command})
+        self.task.advance({ROBOT: command, HUMAN: human_command},
+                          lambda state, slice_index: self._answer_slice(
+                              state, slice_index, human_command))
         self._published()
         components, reward = self.task.reward(ROBOT)
         self._return += reward

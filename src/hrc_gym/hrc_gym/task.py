@@ -27,9 +27,10 @@ from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
-from hrc_common.dof import ROTATION, TRANSLATION
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-from hrc_sim_node.protocol import HUMAN, per_dof, roles, ROBOT
+from hrc_sim_node.commands import wrench_on
+from hrc_sim_node.protocol import HUMAN, ProtocolSettings, roles, ROBOT, StepProtocol
+from hrc_sim_node.stepper import SimStepper
 
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
@@ -157,22 +158,42 @@ class TaskRun:
 
     def reset(self, seed: int):
         """Start an episode from the physics seeded with ``seed``; return the state."""
-        self.state = self.physics.reset(int(seed))
+        params = self.physics.params
+        protocol = StepProtocol(ProtocolSettings(
+            control_period=params.control_period, max_force=params.max_force,
+            max_torque=params.max_torque, robot_dof=self.dofs[ROBOT],
+            human_period=params.human_period))
+        protocol.set_roles(self.dofs[ROBOT], self.human_involved)
+        self.stepper = SimStepper(self.physics, protocol)
+        self.state = self.stepper.start_episode(0, int(seed)).state
         self._error_sums = {subtask_id: 0.0 for subtask_id in self.tree.subtasks}
         self._states_reached = 0
         return self.state
 
-    def advance(self, commands: dict):
+    def advance(self, commands: dict, answer_slice=None):
         """Apply {actor: normalized command} for one control period; return the state reached.
 
-        A human that is not involved in the step is held at 0 (as the sim does).
+        Through the sim's step protocol (``SimStepper.run_period``, as the engines): at the
+        human's rate (``human_period``) ``answer_slice(state, slice_index)`` gives the human's
+        normalized command for each state within the period; without it the human's command
+        holds for the period (an external agent acts once a step). A human that is not
+        involved in the step is held at 0 (as the sim does).
         """
         if not self.human_involved:
             commands = dict(commands, **{HUMAN: 0.0})
-        # The sim's own per-DOF dispatch (hrc_sim_node.protocol.per_dof).
-        wrench = per_dof({actor: float(command) for actor, command in commands.items()},
-                         self.dofs)
-        self.state = self.physics.step_normalized(wrench[TRANSLATION], wrench[ROTATION])
+        scale = {actor: self.limits.full_scale(dof) for actor, dof in self.dofs.items()}
+        human = float(commands.get(HUMAN, 0.0))
+
+        def slice_wrench(middle):
+            value = human if answer_slice is None else float(
+                answer_slice(middle.state, middle.slice))
+            return wrench_on(self.dofs[HUMAN], value * scale[HUMAN])
+
+        advanced = self.stepper.run_period(
+            wrench_on(self.dofs[ROBOT], float(commands.get(ROBOT, 0.0)) * scale[ROBOT]),
+            wrench_on(self.dofs[HUMAN], human * scale[HUMAN]), slice_wrench)
+        self.state = advanced.state
+        self.human_applied = advanced.human_applied   # N or N*m, per slice of the period
         for subtask_id in self.tree.subtasks:
             self._error_sums[subtask_id] += self.tree.error(subtask_id, self.state)
         self._states_reached += 1

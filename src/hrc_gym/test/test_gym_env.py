@@ -1,6 +1,8 @@
 """The Gymnasium and PettingZoo environments: API checks, seeding, reward identity, bad input."""
 
 import functools
+import hashlib
+import struct
 import warnings
 
 import gymnasium
@@ -13,6 +15,7 @@ import hrc_gym
 from hrc_common.params import ParameterError
 from hrc_gym.compare import train_ours
 from hrc_gym.env import SliderPendulumBallEnv
+from hrc_sim_node.physics import PhysicsParams
 
 
 def _checked(env):
@@ -204,3 +207,40 @@ def test_a_cloned_human_model_file_drives_the_human(tmp_path):
         env.close()
     with pytest.raises(ParameterError):
         SliderPendulumBallEnv(case=6, human=f'model:{tmp_path / "missing.pt"}')
+
+
+# Case 6 with the simulated person, 8 s episodes, seed 5, actions from default_rng(1): a digest
+# of every reward, human action and observation of two episodes, taken at 0aecc4c (before the
+# human had its own rate and before issue 21's person; the same numbers now: paper_v1).
+BEFORE_HUMAN_SLICES = '18d27c8c896a9e7f3b76771ce1902857b92d1ee37f90454c9facbd7233f8f0bb'
+
+
+def episodes_digest(env) -> str:
+    digest = hashlib.sha256()
+    env.reset(seed=5)
+    rng = np.random.default_rng(1)
+    for _ in range(2):
+        done = False
+        while not done:
+            observation, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, 1))
+            digest.update(struct.pack('<dd', float(reward), float(info['human_action'])))
+            digest.update(np.asarray(observation, dtype=np.float64).tobytes())
+            done = terminated or truncated
+        env.reset()
+    return digest.hexdigest()
+
+
+def test_the_human_acts_at_its_rate_and_the_old_rate_reproduces_the_old_episodes():
+    old = SliderPendulumBallEnv(case=6, human='paper_v1', preset='tuned',
+                                physics_params=PhysicsParams(human_period=0.2,
+                                                             episode_duration=8.0))
+    assert episodes_digest(old) == BEFORE_HUMAN_SLICES
+    env = SliderPendulumBallEnv(case=6, human='paper_v1', preset='tuned',
+                                physics_params=PhysicsParams(episode_duration=8.0))
+    env.reset(seed=5)
+    for _ in range(5):
+        env.step(np.zeros(1))
+    # the simulated person acted in every 20 ms slice: ten commands applied in the period
+    applied = env.task.human_applied
+    assert len(applied) == 10 and len(set(applied)) > 1, applied
+    assert episodes_digest(env) != BEFORE_HUMAN_SLICES
