@@ -293,8 +293,9 @@ class HumanNode(Node):
     def on_stick_moved(self) -> None:
         """Drain the device (it has events) and forward the stick's new position."""
         try:
-            if self.device is not None and self.device.present:
-                self.device.poll()
+            # The one path that reads the device: a vanished device is logged and reported
+            # there (a direct poll here swallowed the 'vanished' warning of an unplug).
+            self.check_inputs()
             self._forward()
         finally:
             self._stick_read.set()
