@@ -356,13 +356,19 @@ class Progress:
                 Phase.TRAINING, Phase.UPDATING):
             self.person_joined = now
             alone = ''
+            lonely = status.total_episodes - status.human_involved_episodes
             if self.alone_since is not None:
                 # Counted from this one status, not from the first lonely one this runner saw:
                 # a busy runner may miss statuses (the agent keeps only the newest), and every
                 # episode so far without the person was the robot's own.
-                alone = (f'; the robot practised alone: '
-                         f'{status.total_episodes - status.human_involved_episodes} episodes '
+                alone = (f'; the robot practised alone: {lonely} episodes '
                          f'in {now - self.alone_since[0]:.0f} s')
+            elif lonely > 0:
+                # This runner's session reader matched the agent only after the robot's lonely
+                # episodes (a short lockstep phase on a busy machine): their time is bounded by
+                # the session's so far.
+                alone = (f'; the robot practised alone: {lonely} episodes '
+                         f'in at most {now - self.started:.0f} s')
             self._print(f'[session] the person joins now, at episode '
                         f'{status.total_episodes + 1}, {now - self.started:.0f} s after the '
                         f'start{alone}', permanent=True)
