@@ -67,6 +67,32 @@ class Published:
         return sum(len(messages) for messages in self.by_topic.values())
 
 
+
+class ManualClock:
+    """A monotonic clock a test sets by hand (``clock.now = 2.5``), for an EpisodeRecorder."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def __call__(self):
+        return self.now
+
+
+class RecorderFeeder:
+    """Feed messages into an EpisodeRecorder as the node would, with increasing log times."""
+
+    def __init__(self, recorder):
+        self.recorder = recorder
+        self.log_time = 1_000_000_000
+
+    def send(self, topic, message):
+        self.log_time += 1_000_000
+        type_name = type_name_of(message)
+        self.recorder.record(RawMessage(topic, type_name, serialize_message(message),
+                                        self.log_time, self.log_time - 500),
+                             boundary_event(type_name, message))
+
+
 def type_name_of(message) -> str:
     """Return ``pkg/msg/Type`` of a ROS message object."""
     return f'{type(message).__module__.split(".")[0]}/msg/{type(message).__name__}'

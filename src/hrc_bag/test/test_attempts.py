@@ -10,16 +10,15 @@ person's time and the errors from the same attempt (the one that finished) and s
 
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 import pytest
-from rclpy.serialization import serialize_message
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.format import EPISODE_RECORD, RawMessage, TopicDescription
+from hrc_bag.format import EPISODE_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import ATTEMPTS_KEY, boundary_event, EpisodeRecorder
+from hrc_bag.recording import ATTEMPTS_KEY, EpisodeRecorder
 from hrc_bag.report.loading import load_session
 from hrc_bag.report.metrics import human_time
-from hrc_bag.synthetic import type_name_of
+from hrc_bag.synthetic import ManualClock, RecorderFeeder
 
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
            'durability': 'volatile'}
@@ -28,26 +27,11 @@ RERUN_STEPS = 10        # the re-run, to its final state (steps 0..9)
 PERIOD_NS = 200_000_000  # 0.2 s control period, in the stamps
 
 
-class Clock:
-    now = 0.0
-
-    def __call__(self):
-        return self.now
+Clock = ManualClock
 
 
-class Session:
-    """Feeds the recorder as the node would (increasing log times)."""
-
-    def __init__(self, recorder):
-        self.recorder = recorder
-        self.log_time = 1_000_000_000
-
-    def send(self, topic, message):
-        self.log_time += 1_000_000
-        type_name = type_name_of(message)
-        self.recorder.record(RawMessage(topic, type_name, serialize_message(message),
-                                        self.log_time, self.log_time - 500),
-                             boundary_event(type_name, message))
+class Session(RecorderFeeder):
+    """Feeds the recorder as the node would (increasing log times), an episode at a time."""
 
     def episode(self, episode, steps, final, summary, human=True):
         for step in range(steps):

@@ -17,7 +17,8 @@ from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, EpisodeRecorder
-from hrc_bag.synthetic import record_in_process, strategy_plan, type_name_of
+from hrc_bag.synthetic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
+                               type_name_of)
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
@@ -47,27 +48,8 @@ def test_bad_parameters_are_rejected_with_a_reason(changes, reason):
     assert reasons and all(reason in text for text in reasons), reasons
 
 
-class FakeClock:
-    def __init__(self):
-        self.now = 0.0
-
-    def __call__(self):
-        return self.now
-
-
-class Feeder:
-    """Feed messages into a recorder as the node would, with increasing log times."""
-
-    def __init__(self, recorder):
-        self.recorder = recorder
-        self.log_time = 1_000_000_000
-
-    def send(self, topic, message):
-        self.log_time += 1_000_000
-        type_name = type_name_of(message)
-        self.recorder.record(RawMessage(topic, type_name, serialize_message(message),
-                                        self.log_time, self.log_time - 500),
-                             boundary_event(type_name, message))
+FakeClock = ManualClock
+Feeder = RecorderFeeder
 
 
 def make_recorder(tmp_path, clock, **changes):
