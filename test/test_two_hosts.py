@@ -35,6 +35,7 @@ STEPS = 20                       # control steps per episode (episode_duration 4
 EPISODES = 3
 REPO = pathlib.Path(__file__).resolve().parents[1]
 JS_EVENT_AXIS = 0x02
+COMMAND_TOPIC = '/hrc/human/cmd_wrench'
 DISPLAY_PORT = 8765   # inside the station namespace: its own port space
 # The person's browser, reduced to what matters here: read the display's state events and
 # print (episode, step, display send time, arrival time) per state, wall ms.
@@ -88,6 +89,18 @@ class StickFeeder(threading.Thread):
         os.close(self.fd)
 
 
+def wait_for_line(log, text: str, timeout: float) -> None:
+    """Wait until the open log file holds ``text``; fail with the log's end if it never does."""
+    deadline = time.monotonic() + timeout
+    while True:
+        log.seek(0)
+        content = log.read()
+        if text in content:
+            return
+        assert time.monotonic() < deadline, f'no {text!r} within {timeout} s:\n{content[-3000:]}'
+        time.sleep(0.2)
+
+
 def stop(processes):
     """Stop each running process in turn: SIGINT, then SIGKILL after 15 s."""
     for process in processes:
@@ -131,6 +144,12 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
                 env.update(lab.ros_environment(host, domain_id))
                 env.pop('ROS_LOCALHOST_ONLY', None)
                 env.pop('FASTRTPS_DEFAULT_PROFILES_FILE', None)   # the loopback-only profile
+                if node == 'agent':
+                    # The session starts once the trainer's recorder has matched the station's
+                    # command writer: discovery across a lossy link can lag the rest of the
+                    # graph (a CI run recorded no human command at all on the Wi-Fi link).
+                    wait_for_line(logs['recorder'], f'{COMMAND_TOPIC}: 1 publisher(s) matched',
+                                  timeout=60)
                 logs[node] = open(tmp_path / f'{label}-{node}.log', 'w+')
                 argv = [str(executable_path(package, executable)), '--ros-args', '-r',
                         f'__node:={node}', '--params-file', str(params_path)]
@@ -164,7 +183,10 @@ def run_two_host_session(tmp_path: pathlib.Path, profile: netlab.LinkProfile, do
     for line in page.read().splitlines():
         fields = line.split()
         if len(fields) == 4 and fields[0].isdigit():
-            shown[(int(fields[0]), int(fields[1]))] = (float(fields[2]), float(fields[3]))
+            # the page shows each state at the human's rate (one event per slice of the
+            # period, same episode and step): its latency is that of the period's first one
+            shown.setdefault((int(fields[0]), int(fields[1])),
+                             (float(fields[2]), float(fields[3])))
     return {'counts': counts, 'bag': tmp_path / 'bags' / settings.session_id, 'shown': shown}
 
 
@@ -178,7 +200,7 @@ def figures(bag: dict, shown: dict) -> dict:
         stamp = (state.header.stamp.sec, state.header.stamp.nanosec)
         state_times.setdefault(stamp, time_ns)
     ages = []
-    for time_ns, command in bag['timed']['/hrc/human/cmd_wrench']:
+    for time_ns, command in bag['timed'].get(COMMAND_TOPIC, []):
         stamp = (command.header.stamp.sec, command.header.stamp.nanosec)
         if stamp in state_times:
             ages.append((time_ns - state_times[stamp]) / 1e6)

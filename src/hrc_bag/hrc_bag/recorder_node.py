@@ -36,6 +36,8 @@ SUMMARY = ('Record the hrc topics into one rosbag2-compatible MCAP file per epis
            '<output_dir>/<session_id>/, with a metadata.yaml that ros2 bag play and rosbags '
            'read. Exit code 3 when the bags cannot be written.')
 EXIT_RECORDING_FAILED = 3
+# s: how often the recorder checks which publishers its subscriptions have matched.
+MATCH_REPORT_PERIOD_S = 0.5
 
 # Types of the hrc graph's topics (by default name), so they are subscribed before anyone
 # publishes; and the QoS contract their publishers offer.
@@ -87,6 +89,11 @@ class RecorderNode(Node):
                                                       self._discover)
         self._tick_timer = self.create_timer(min(0.05, self.params.flush_period / 2),
                                              self.core.tick)
+        # How many publishers each recording subscription has matched, said when it changes: a
+        # writer this node has not matched yet (discovery across a lossy link can lag the rest
+        # of the graph) is a topic missing from the bag, and the log is where a lab sees it.
+        self._matched_publishers = {}
+        self._match_timer = self.create_timer(MATCH_REPORT_PERIOD_S, self._report_matches)
 
     @staticmethod
     def _load_session_config(path: str) -> tuple:
@@ -123,6 +130,15 @@ class RecorderNode(Node):
         self.get_logger().info(
             f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
             f'{qos.durability.name.lower()})')
+
+    def _report_matches(self) -> None:
+        """Log each subscription whose count of matched publishers changed."""
+        for topic, subscription in self._subscriptions_by_topic.items():
+            count = subscription.get_publisher_count()
+            if count != self._matched_publishers.get(topic, 0):
+                self.get_logger().info(f'{self.resolve_topic_name(topic)}: {count} '
+                                       f'publisher(s) matched')
+            self._matched_publishers[topic] = count
 
     def _discover(self) -> None:
         """Subscribe to the waiting topics whose publishers have shown up."""
