@@ -160,3 +160,33 @@ def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(
     for run_dir in (tmp_path / 'graph', tmp_path / 'engine'):
         final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
         assert final['core']['ppo']['updates'] == 2, run_dir
+
+
+@pytest.mark.slow
+def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(
+        tmp_path, ros_domain_id, read_rosbag):
+    """The joystick path (deadzone, enable button, scaling) driven by a scripted stick.
+
+    ``human.input: script``: the stick's position comes from a file in simulation time, so the
+    person's kind of input runs without wall time; its changes fall inside control periods
+    (every 0.06 s), so the slices of a period carry different commands.
+    """
+    script = tmp_path / 'stick.csv'
+    rows = ['time,axis,enable'] + [
+        f'{index * 0.06:.2f},{((index * 7) % 21 - 10) / 10.0:.1f},{int(index % 9 != 4)}'
+        for index in range(40)]
+    script.write_text('\n'.join(rows) + '\n')
+    args = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
+            '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
+            '--set', 'agent.minibatch_size=8', '--human', 'script',
+            '--set', f'human.script_file={script}', '--set', 'human.enable_button=0']
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
+    actions = [action for episode in (0, 1, 2)
+               for action in graph_messages['/hrc/human/action'][episode]]
+    assert actions and {action['source'] for action in actions} == {3}, [
+        action for action in actions[:2]]   # SOURCE_REPLAY
+    # the script's changes inside a period reach the physics: periods with unequal slices
+    mixed = [state for state in graph_messages['/hrc/state'][0][1:]
+             if len(set(state['human_applied'])) > 1]
+    assert len(mixed) >= 5, graph_messages['/hrc/state'][0][1]

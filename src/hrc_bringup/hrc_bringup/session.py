@@ -97,8 +97,9 @@ def parse_args(argv=None):
                         help='lockstep: as fast as the graph allows (headless); realtime: '
                         'every 0.2 s of wall time (a person at the joystick)')
     parser.add_argument('--human', dest='human_input', default='sim',
-                        choices=('sim', 'auto', 'device', 'joy'),
-                        help='human input (default sim: the simulated human)')
+                        choices=('sim', 'auto', 'device', 'joy', 'script'),
+                        help='human input (default sim: the simulated human; script: a '
+                        'scripted stick in simulation time, --set human.script_file=PATH)')
     parser.add_argument('--profile', dest='human_profile', default='',
                         help='simulated-human profile (params/sim_human.yaml)')
     parser.add_argument('--episodes', dest='training_episodes', type=int, default=0,

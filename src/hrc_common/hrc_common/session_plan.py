@@ -4,11 +4,12 @@ Used by the session runner and the experiment (``hrc_bringup``) and by the in-pr
 (``hrc_engine``), so it lives below both.
 
 A session is one paper case run with one seed. The plan starts from each node's parameter file
-(``params/<node>.yaml``), applies the session-level settings so that every node agrees (case,
-seed, roles, clock mode, session id; the sim's limits and control period are not copied: the
-actors read them from the sim at run time), then the user's overrides
-(``--set node.name=value``), and writes one ROS 2 parameter file with a section per node plus a
-``session.yaml`` describing the whole session (it travels in every bag).
+(``params/<node>.yaml``), applies the user's overrides (``--set node.name=value``), then the
+session-level settings so that every node agrees (case, seed, roles, clock mode, session id,
+human input; the sim's limits and control period are not copied: the actors read them from the
+sim at run time): an override those settings overrule is refused with the option to use
+(``--set agent.seed=3`` -> ``--seed``). It writes one ROS 2 parameter file with a section per
+node plus a ``session.yaml`` describing the whole session (it travels in every bag).
 """
 
 from dataclasses import asdict, dataclass, field
@@ -77,7 +78,7 @@ def new_session_id(settings: SessionSettings, now=None) -> str:
 def parse_override(text: str):
     """Parse ``node.name=value`` (value in YAML syntax) into (node, name, value)."""
     if '=' not in text or '.' not in text.split('=', 1)[0]:
-        raise ValueError(f'--set {text!r}: expected node.parameter=value, e.g. agent.seed=3')
+        raise ValueError(f'--set {text!r}: expected node.parameter=value, e.g. agent.horizon=256')
     key, raw = text.split('=', 1)
     node, name = key.split('.', 1)
     return node, name, yaml.safe_load(raw) if raw != '' else ''
@@ -131,6 +132,32 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
         node, name = key.split('.', 1)
         if node in parameters:
             parameters[node][name] = value
+    _apply_settings(settings, parameters)
+    # What the session sets itself wins over --set (the nodes must agree); a --set it overrules
+    # is refused with the option to use, never dropped silently.
+    reasons = []
+    for key, value in settings.overrides.items():
+        node, name = key.split('.', 1)
+        if node in parameters and parameters[node].get(name) != value:
+            reasons.append(f'--set {key}={value!r}: the session sets {key} itself '
+                           f'({parameters[node].get(name)!r})'
+                           + (f'; use {SETTING_OPTIONS[name]}' if name in SETTING_OPTIONS
+                              else ''))
+    if reasons:
+        raise ValueError('session settings rejected: ' + '; '.join(reasons))
+    return parameters
+
+
+# The session-level option that sets a node parameter the session owns (for the refusal).
+SETTING_OPTIONS = {'seed': '--seed', 'mode': '--mode', 'case': '--case', 'input': '--human',
+                   'profile': '--profile', 'robot_dof': '--case', 'dof': '--case',
+                   'session_id': '--session-id', 'max_training_episodes': '--episodes',
+                   'evaluation_episodes': '--eval-episodes', 'resume_from': '--resume-from',
+                   'checkpoint_dir': '--runs-dir', 'output_dir': '--bags-dir'}
+
+
+def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
+    """Write what the session settings decide into the nodes' parameters (in place)."""
     sim, agent, human = parameters['sim'], parameters['agent'], parameters['human']
 
     # One value for what several nodes must agree on (seeds and modes come from the settings).
@@ -165,7 +192,6 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
         recorder['session_id'] = settings.session_id
         recorder['output_dir'] = settings.bags_dir
         agent['wait_for_subscribers'] = ['human', 'recorder']
-    return parameters
 
 
 def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path):

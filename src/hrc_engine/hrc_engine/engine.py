@@ -59,6 +59,7 @@ class EngineConfig:
     record: bool = True                 # write the bags
     checkpoints: bool = True            # write latest.pt after each episode, final.pt
     human_profile: str = ''             # simulated-human profile ('' = human.yaml's)
+    human_input: str = 'sim'            # sim | model | script: inputs without wall time
     overrides: dict = field(default_factory=dict)   # {'sim.episode_duration': 8.0, ...}
     params_dir: str = ''                # '' = ./params in a checkout, else the installed ones
     resume_from: str = ''               # a checkpoint to continue from
@@ -93,7 +94,7 @@ def compose_parameters(config: EngineConfig) -> tuple:
     from hrc_common.session_plan import compose, new_session_id, SessionSettings
 
     settings = SessionSettings(
-        case=config.case, seed=config.seed, mode='lockstep', human_input='sim',
+        case=config.case, seed=config.seed, mode='lockstep', human_input=config.human_input,
         human_profile=config.human_profile, training_episodes=config.training_episodes,
         evaluation_episodes=config.evaluation_episodes, session_id=config.session_id,
         bags_dir=config.bags_dir, runs_dir=config.runs_dir, record=config.record,

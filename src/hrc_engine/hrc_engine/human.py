@@ -29,9 +29,10 @@ class SimulatedHumanSide:
     """The human node's core (``input: sim``), driven by calls instead of messages."""
 
     def __init__(self, parameters: dict, limits):
-        if parameters.get('input', 'sim') not in ('sim', 'model'):
-            raise ValueError(f"the in-process engine runs the simulated human or a cloned model "
-                             f"only (human.input 'sim' or 'model'), got "
+        if parameters.get('input', 'sim') not in ('sim', 'model', 'script'):
+            raise ValueError(f"the in-process engine runs the simulated human, a cloned model "
+                             f"or a scripted stick only (human.input 'sim', 'model' or "
+                             f"'script'), got "
                              f"{parameters.get('input')!r}")
         self.core = core_from_parameters(parameters, limits)
 

@@ -35,6 +35,11 @@ def parse_args(argv=None) -> EngineConfig:
     parser.add_argument('--no-record', action='store_true', help='write no bags')
     parser.add_argument('--no-checkpoints', action='store_true', help='write no checkpoints')
     parser.add_argument('--human-profile', default='', help='simulated-human profile')
+    parser.add_argument('--human', dest='human_input', default='sim',
+                        choices=('sim', 'model', 'script'),
+                        help='human input without wall time (default sim: the simulated '
+                        'human; model: a cloned model, --set human.model_file=PATH; script: a '
+                        'scripted stick, --set human.script_file=PATH)')
     parser.add_argument('--params-dir', default='', help='parameter files (default: ./params '
                         'in a checkout, else the installed ones)')
     parser.add_argument('--resume-from', default='', help='continue from this checkpoint')
@@ -57,6 +62,7 @@ def parse_args(argv=None) -> EngineConfig:
         evaluation_episodes=options.eval_episodes, session_id=options.session_id,
         bags_dir=options.bags_dir, runs_dir=options.runs_dir, record=not options.no_record,
         checkpoints=not options.no_checkpoints, human_profile=options.human_profile,
+        human_input=options.human_input,
         overrides=overrides, params_dir=options.params_dir,
         resume_from=options.resume_from, quiet=options.json), options.json
 

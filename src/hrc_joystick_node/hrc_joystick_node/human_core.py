@@ -38,16 +38,18 @@ from hrc_common.contract import InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import param, ParameterError
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
-                                      MODEL, PAUSE, SIM, stick_command, StickReading, ZERO)
+                                      MODEL, PAUSE, SCRIPT, SIM, stick_command, StickReading,
+                                      ZERO)
 from hrc_joystick_node.population import person_or_profile
 from hrc_joystick_node.sim_human import (BALL, HumanProfile, normalize_subtasks, OWN_SUBTASK,
                                          SimulatedHuman)
+from hrc_joystick_node.stick_script import StickScript, StickScriptError
 
 # HumanAction.SOURCE_* by input name; a cloned model is a simulated human (its detail names
-# the file).
+# the file); a scripted stick is a stick trace replayed (its detail names the script).
 SOURCE_CODE = {name: int(source) for name, source in (
     (DEVICE, InputSource.DEVICE), (JOY, InputSource.JOY), (SIM, InputSource.SIMULATED),
-    (MODEL, InputSource.SIMULATED), (ZERO, InputSource.NONE))}
+    (MODEL, InputSource.SIMULATED), (SCRIPT, InputSource.REPLAY), (ZERO, InputSource.NONE))}
 
 
 @dataclass
@@ -56,7 +58,9 @@ class HumanParams:
 
     input: str = param('auto', 'where the command comes from: auto = the device if it opens, '
                        'else /joy if a publisher is seen; sim = the simulated human; model = '
-                       'a cloned human model (model_file)', choices=INPUT_MODES)
+                       'a cloned human model (model_file); script = a scripted stick '
+                       '(script_file: the joystick path in simulation time, deterministic)',
+                       choices=INPUT_MODES)
     device: str = param('/dev/input/js0', 'Linux joystick device (or a FIFO/file carrying its '
                         'js_event stream)')
     axis: int = param(1, 'joystick axis that drives the command, same index on the device and '
@@ -102,12 +106,18 @@ class HumanParams:
                       high=2 ** 31 - 1)
     model_file: str = param('', 'cloned human-model checkpoint (.pt, hrc_joystick_node.'
                             'human_model) used with input model')
+    script_file: str = param('', 'stick script (CSV "time,axis[,enable]", time in s from each '
+                             "episode's start; hrc_joystick_node.stick_script) used with input "
+                             'script')
 
     def check(self):
         """Return the reasons the parameters do not fit together."""
+        reasons = []
         if self.input == MODEL and not self.model_file:
-            return ['model_file: input model needs a checkpoint path']
-        return []
+            reasons.append('model_file: input model needs a checkpoint path')
+        if self.input == SCRIPT and not self.script_file:
+            reasons.append('script_file: input script needs a stick script (CSV) path')
+        return reasons
 
 
 class HumanAnswer(typing.NamedTuple):
@@ -193,6 +203,12 @@ class HumanCore:
             from hrc_joystick_node.human_model import load_human_model
 
             load_human_model(params.model_file)
+        self.script = None
+        if params.input == SCRIPT:   # a bad script is refused now, with every reason
+            try:
+                self.script = StickScript.load(params.script_file)
+            except StickScriptError as error:
+                raise ParameterError(f'script_file: {error}')
         self.limits: typing.Optional[SimLimits] = None
         self.sim_human = None   # created when the sim's control period is known (set_limits)
         self._sim_episode = None
@@ -347,6 +363,15 @@ class HumanCore:
                                                   params.enable_button >= 0, params.deadzone,
                                                   params.invert)
             return command, engaged, active, reading.name + (f' ({why})' if why else '')
+        if active == SCRIPT:
+            step, slice_index = moment   # the stick where the script has it at this moment
+            sample = self.script.at(step * self.limits.control_period
+                                    + slice_index * self.limits.human_step)
+            command, engaged, why = stick_command(sample.axis, sample.enable,
+                                                  params.enable_button >= 0, params.deadzone,
+                                                  params.invert)
+            return command, engaged, SCRIPT, f'script {self.script.name}' + (
+                f' ({why})' if why else '')
         last = self.last_answer
         if (active == MODEL and moment[1] > 0 and last is not None and last.source == MODEL
                 and (last.episode, last.step) == (episode, moment[0])):

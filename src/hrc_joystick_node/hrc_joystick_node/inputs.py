@@ -6,6 +6,8 @@ Inputs (parameter ``input``):
 * ``joy``: ``sensor_msgs/Joy`` on ``/joy`` as a stock ``joy``/``joy_linux`` node publishes it;
 * ``sim``: the simulated human (:mod:`hrc_joystick_node.sim_human`);
 * ``model``: a human model cloned from recordings (:mod:`hrc_joystick_node.human_model`);
+* ``script``: a scripted stick, a stick trajectory in simulation time read from a file
+  (:mod:`hrc_joystick_node.stick_script`): the joystick path without a person or wall time;
 * ``auto``: the device if it opens, else ``/joy`` if a publisher is seen; re-evaluated
   continuously, so a device that appears later takes over.
 
@@ -28,7 +30,10 @@ AUTO = 'auto'
 ZERO = 'zero'
 PAUSE = 'pause'
 MODEL = 'model'
-INPUT_MODES = (AUTO, DEVICE, JOY, SIM, MODEL)
+SCRIPT = 'script'
+INPUT_MODES = (AUTO, DEVICE, JOY, SIM, MODEL, SCRIPT)
+# Inputs that are always there (no device to open, no stream to lose).
+ALWAYS_PRESENT = (SIM, MODEL, SCRIPT)
 FALLBACKS = (PAUSE, ZERO, SIM)
 OK, MISSING, LOST = 'ok', 'missing', 'lost'
 
@@ -124,8 +129,8 @@ class InputSelector:
             raise ValueError(f'on_input_lost must be one of {FALLBACKS}, got {on_input_lost!r}')
         self.mode = mode
         self.on_input_lost = on_input_lost
-        self.active = None  # DEVICE, JOY, SIM, MODEL or ZERO
-        self.state = OK if mode in (SIM, MODEL) else MISSING  # OK, MISSING or LOST
+        self.active = None  # DEVICE, JOY, SIM, MODEL, SCRIPT or ZERO
+        self.state = OK if mode in ALWAYS_PRESENT else MISSING  # OK, MISSING or LOST
         self.reason = ''
         self.lost_count = 0  # times a joystick input went away
         self._had_real_input = False
@@ -147,7 +152,7 @@ class InputSelector:
     def update(self, device_present: bool, device_status: str, joy_alive: bool,
                joy_status: str) -> typing.Optional[str]:
         """Re-evaluate; return a log line when the active input or its state changed."""
-        if self.mode in (SIM, MODEL):
+        if self.mode in ALWAYS_PRESENT:
             choice, reason = self.mode, f'input is {self.mode}'
         elif self.mode == DEVICE:
             choice, reason = (DEVICE, device_status) if device_present else (None,

@@ -9,7 +9,7 @@ import pytest
 from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
-from hrc_joystick_node.inputs import DEVICE, JOY, MODEL, SIM, StickReading, ZERO
+from hrc_joystick_node.inputs import DEVICE, JOY, MODEL, SCRIPT, SIM, StickReading, ZERO
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman
 
@@ -77,7 +77,7 @@ def test_source_codes_are_the_message_constants():
 
     assert SOURCE_CODE == {DEVICE: HumanAction.SOURCE_DEVICE, JOY: HumanAction.SOURCE_JOY,
                            SIM: HumanAction.SOURCE_SIMULATED, MODEL: HumanAction.SOURCE_SIMULATED,
-                           ZERO: HumanAction.SOURCE_NONE}
+                           SCRIPT: HumanAction.SOURCE_REPLAY, ZERO: HumanAction.SOURCE_NONE}
 
 
 def test_the_simulated_human_answers_on_the_simulation_clock_and_repeats_do_not_advance_it():
