@@ -23,7 +23,7 @@ setup(
     description='Session and experiment runners of the hrc graph.',
     license='Apache-2.0',
     entry_points={'console_scripts': [
-        'session = hrc_bringup.session:main',
-        'experiment = hrc_bringup.experiment:main',
+        # the one command line (hrc --help); the nodes keep their own executables
+        'hrc = hrc_bringup.cli:main',
     ]},
 )

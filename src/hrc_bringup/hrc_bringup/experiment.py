@@ -144,7 +144,7 @@ def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
     reservation = DomainReservation()
     try:
-        command = [str(executable_path('hrc_bringup', 'session')), '--case', str(task.case),
+        command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(task.case),
                    '--seed', str(task.seed), '--session-id', task.session_id,
                    '--bags-dir', str(bags_dir), '--no-report',
                    '--runs-dir', str(pathlib.Path(task.runs_dir) / task.session_id),

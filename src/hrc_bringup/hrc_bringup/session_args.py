@@ -17,16 +17,20 @@ MAX_DOMAIN_ID = 232
 def parse_args(argv=None):
     """Parse the command line into (SessionSettings, options)."""
     parser = argparse.ArgumentParser(
-        prog='session', description='Run one hrc session (one case, one seed): sim, agent, '
+        prog='hrc session', description='Run one hrc session (one case, one seed): sim, agent, '
         'human and recorder as supervised processes, then the report.')
     parser.add_argument('--case', type=int, default=2, help='paper case 1..6 (default 2)')
     parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
+    parser.add_argument('--engine', choices=('graph',), default='graph',
+                        help='graph (default): the nodes as processes over DDS; for one '
+                        'process see: hrc session --engine inprocess --help')
     parser.add_argument('--mode', choices=('lockstep', 'realtime'), default='lockstep',
                         help='lockstep: as fast as the graph allows (headless); realtime: '
                         'every 0.2 s of wall time (a person at the joystick)')
     parser.add_argument('--human', dest='human_input', default='sim',
-                        choices=('sim', 'auto', 'device', 'joy'),
-                        help='human input (default sim: the simulated human)')
+                        choices=('sim', 'auto', 'device', 'joy', 'model'),
+                        help='human input (default sim: the simulated human; model: a cloned '
+                        'human model, --set human.model_file=PATH)')
     parser.add_argument('--profile', dest='human_profile', default='',
                         help='simulated-human profile (params/sim_human.yaml)')
     parser.add_argument('--episodes', dest='training_episodes', type=int, default=0,
@@ -119,6 +123,9 @@ def parse_args(argv=None):
     if not settings.session_id:
         settings.session_id = new_session_id(settings)
     reasons = settings.check()
+    if settings.human_input == 'model' and not overrides.get('human.model_file'):
+        reasons.append('--human model needs --set human.model_file=PATH (a cloned human '
+                       'model, hrc partners clone)')
     if settings.subject_id and settings.subject_id.lower() in settings.session_id.lower():
         # Bag and run folders are named after the session id: no personal data in file names.
         reasons.append('the session id must not contain the subject id (it names files)')
@@ -190,5 +197,5 @@ def resume_command(options, session_id: str, checkpoint: pathlib.Path) -> str:
         if arg.startswith(('--resume-from=', '--session-id=')):
             continue
         args.append(arg)
-    return shlex.join(['ros2', 'run', 'hrc_bringup', 'session', *args, '--session-id',
+    return shlex.join(['hrc', 'session', *args, '--session-id',
                        session_id, '--resume-from', str(checkpoint)])

@@ -14,8 +14,8 @@ def report(settings: SessionSettings, run_dir: pathlib.Path) -> None:
     """Run the report CLI on the session's bags and print its Table II."""
     bag_dir = pathlib.Path(settings.bags_dir) / settings.session_id
     out_dir = run_dir / 'report'
-    result = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')), str(bag_dir),
-                             '--out', str(out_dir)], capture_output=True, text=True)
+    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'bag', 'report',
+                             str(bag_dir), '--out', str(out_dir)], capture_output=True, text=True)
     print(result.stdout, end='')
     for line in result.stderr.splitlines():     # the report's notices and reasons
         print(f'[session] {line}', file=sys.stderr, flush=True)
