@@ -96,21 +96,46 @@ def test_every_ros2_run_of_the_readme_runs():
     assert result.returncode == 0, result.stderr
 
 
+def readme_hrc_verbs() -> list:
+    """Return the verb of every `hrc <verb> ...` command line of README.md, without repeats."""
+    from hrc_bringup.cli import find_verb
+    found = []
+    for line in (REPOSITORY / 'README.md').read_text().splitlines():
+        for words in re.findall(r'(?:^|[\s`$(])hrc ((?:[a-z]+ ?){1,2})', line):
+            verb, _, problem = find_verb(words.split())
+            assert verb is not None, f'README.md: {line.strip()}: {problem}'
+            if verb.name not in found:
+                found.append(verb.name)
+    return found
+
+
+@pytest.mark.slow
+def test_every_hrc_verb_of_the_readme_runs_from_a_fresh_shell():
+    """`hrc` is on PATH after `source scripts/env.sh` (any folder); every verb's --help runs."""
+    verbs = readme_hrc_verbs()
+    assert len(verbs) >= 10, verbs
+    script = 'command -v hrc && hrc --help >/dev/null && ' + ' && '.join(
+        f'hrc {verb} --help | grep -q "^example:"' for verb in verbs)
+    result = fresh_shell(script, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[0].endswith('/lib/hrc_bringup/hrc'), result.stdout
+
+
 @pytest.mark.slow
 def test_the_resume_command_the_runner_prints_runs(tmp_path):
-    from hrc_bringup import session
+    from hrc_bringup import session_args
     argv = ['--case', '3', '--seed', '2', '--episodes', '4', '--session-id', 'old']
-    _, options = session.parse_args(argv)
-    command = session.resume_command(options, 'case3-seed2-x', tmp_path / 'latest.pt')
+    _, options = session_args.parse_args(argv)
+    command = session_args.resume_command(options, 'case3-seed2-x', tmp_path / 'latest.pt')
     words = shlex.split(command)
-    assert words[:4] == ['ros2', 'run', 'hrc_bringup', 'session']
-    settings, _ = session.parse_args(words[4:])
+    assert words[:2] == ['hrc', 'session']
+    settings, _ = session_args.parse_args(words[2:])
     assert (settings.case, settings.seed) == (3, 2)
     assert settings.resume_from == str(tmp_path / 'latest.pt')
     assert settings.session_id == 'case3-seed2-x'
     result = fresh_shell(command + ' --help')
     assert result.returncode == 0, result.stderr
-    assert 'usage: session' in result.stdout
+    assert 'usage: hrc session' in result.stdout
 
 
 def readme_node_lines() -> list:

@@ -22,7 +22,7 @@ SHORT = ['--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
 
 def session_command(tmp_path, domain_id, *args):
     """Return the session runner command line for a test session under tmp_path."""
-    return [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
+    return [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
             '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
             '--session-id', 'test', *SHORT, *args]
 

@@ -245,7 +245,7 @@ class RayExecutor:
 def parse_args(argv=None):
     """Parse and check the command line (exit 2 with every reason)."""
     parser = argparse.ArgumentParser(
-        prog='experiment', description='Run paper cases x seeds (x simulated-human profiles) '
+        prog='hrc experiment', description='Run paper cases x seeds (x simulated-human profiles) '
         'headless, each session a task on a local process pool or a Ray cluster, then write '
         'the study of all sessions (hrc_study).')
     parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6],

@@ -492,7 +492,7 @@ def detect(watcher: JoystickWatcher, options, console: Console) -> tuple:
 def parse_args(argv=None):
     """Parse the command line."""
     parser = argparse.ArgumentParser(
-        prog='joystick_setup', description='Set up the joystick for the human node: list '
+        prog='hrc joystick setup', description='Set up the joystick for the human node: list '
         'devices, watch axes and buttons live, pick the axis, inversion, deadzone and enable '
         'button, and write the parameter file the human node reads.')
     parser.add_argument('device', nargs='?', default=None,

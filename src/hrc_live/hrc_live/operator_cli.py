@@ -25,7 +25,7 @@ EXIT_NO_AGENT = 4
 def parse_args(argv=None):
     """Parse the command line."""
     parser = argparse.ArgumentParser(
-        prog='operator', description='Pause, resume or abort the running hrc session, or show '
+        prog='hrc operator', description='Pause, resume or abort the running hrc session, or show '
         'its status. Pause and resume take effect at the next episode boundary; abort is '
         'immediate (zero commands, bags closed, resumable from the last checkpoint).')
     parser.add_argument('command', choices=('pause', 'resume', 'abort', 'status'))

@@ -23,9 +23,10 @@ from hrc_live.study import (assign_orders, by_subject, consent_problem, load_ind
 
 def parse_args(argv=None):
     """Parse the command line."""
-    parser = argparse.ArgumentParser(prog='study', description='Pseudonymous subject registry, '
-                                     'counterbalanced case orders and the per-subject session '
-                                     'index of an hrc study (no names are stored).')
+    parser = argparse.ArgumentParser(prog='hrc study', description='Pseudonymous subject '
+                                     'registry, counterbalanced case orders and the '
+                                     'per-subject session index of an hrc study (no names are '
+                                     'stored).')
     parser.add_argument('--study-dir', default='study', help='folder of the study files')
     commands = parser.add_subparsers(dest='command', required=True)
     add = commands.add_parser('register', help='add a subject or record a new consent answer')
@@ -57,9 +58,9 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
     """
     lines = []
     for position, case in enumerate(subject.order, start=1):
-        command = ['ros2', 'run', 'hrc_bringup', 'session', '--case', str(case), '--mode',
-                   'realtime', '--human', human, '--display', '--tlx', '--subject-id',
-                   subject.id, '--study-dir', study_dir]
+        command = ['hrc', 'session', '--case', str(case), '--mode', 'realtime', '--human',
+                   human, '--display', '--tlx', '--subject-id', subject.id, '--study-dir',
+                   study_dir]
         if practice:
             command += ['--practice', str(practice)]
         if not agent_defaults:

@@ -24,7 +24,7 @@ DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episode
 
 def parse_arguments(argv):
     """Return the parsed command line; exit 2 with every reason on bad input."""
-    parser = argparse.ArgumentParser(prog='hrc_results', description=DESCRIPTION)
+    parser = argparse.ArgumentParser(prog='hrc results', description=DESCRIPTION)
     parser.add_argument('paths', nargs='+', help='experiment folders (bags/<experiment>) or '
                         'session folders')
     parser.add_argument('--out', default='docs', help='folder of results.md (default docs)')
