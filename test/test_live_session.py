@@ -65,7 +65,7 @@ class Watcher:
 
 
 def operator(domain_id, command):
-    """Run ``ros2 run hrc_live operator <command>``; return (exit code, output)."""
+    """Run ``hrc operator <command>``; return (exit code, output)."""
     result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'operator', command,
                              '--domain-id', str(domain_id), '--timeout', '30'],
                             capture_output=True, text=True, timeout=120)

@@ -1,6 +1,6 @@
 """The whole graph as separate processes over DDS: sessions run by the session runner.
 
-Each test runs `ros2 run hrc_bringup session` (the same executable a user runs) on its own
+Each test runs `hrc session` (the same executable a user runs) on its own
 ROS_DOMAIN_ID with short episodes (8 s = 40 control steps) so that the suite stays quick, then
 checks what a user would: the exit, every step answered, the bags read by an independent reader
 (rosbags) with exact counts, and the report.

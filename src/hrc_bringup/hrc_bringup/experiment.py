@@ -1,10 +1,10 @@
 """Experiment runner: paper cases x seeds (x simulated-human profiles), headless, then the study.
 
-    ros2 run hrc_bringup experiment --seeds 10                       # local process pool
-    ros2 run hrc_bringup experiment --seeds 10 --profiles paper paper_symmetric:5
-    ros2 run hrc_bringup experiment --seeds 10 --ray                 # a local Ray instance
-    ros2 run hrc_bringup experiment --seeds 10 --ray-address auto    # an existing Ray cluster
-    ros2 run hrc_bringup experiment --seeds 2 --engine graph         # the ROS graph per session
+    hrc experiment --seeds 10                       # local process pool
+    hrc experiment --seeds 10 --profiles paper paper_symmetric:5
+    hrc experiment --seeds 10 --ray                 # a local Ray instance
+    hrc experiment --seeds 10 --ray-address auto    # an existing Ray cluster
+    hrc experiment --seeds 2 --engine graph         # the ROS graph per session
 
 Each session (case, seed, profile) is one task submitted to an executor: a local process pool
 (the embedded default, no Ray needed) or Ray, with declared resources (``--cpus-per-session``).
@@ -377,7 +377,7 @@ def make_executor(options):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_bringup experiment``."""
+    """Entry point of ``hrc experiment``."""
     options = parse_args(argv)
     name = options.name or time.strftime('experiment-%Y%m%d-%H%M%S')
     bags_dir = pathlib.Path(options.bags_dir) / name
@@ -431,7 +431,7 @@ def main(argv=None) -> int:
                     if outcome['exit_code'] not in (0, None))
     skipped = sorted(outcome['session_id'] for outcome in outcomes
                      if outcome['exit_code'] is None)
-    record = {'command': 'ros2 run hrc_bringup experiment '
+    record = {'command': 'hrc experiment '
                          + ' '.join(shlex.quote(arg) for arg in options.argv),
               'engine': options.engine, 'executor': description, 'sessions': len(tasks),
               'failed': failed, 'skipped': skipped, 'wall_seconds': wall, 'started': started_at,

@@ -145,7 +145,7 @@ class InputGuard:
             reason = f'joystick disconnected: {reason}'
         self.lost = reason
         print(f'[session] {reason}: pausing the session now (the agent stops mid-episode, '
-              f'the sim holds, zero commands); resume with "ros2 run hrc_live operator '
+              f'the sim holds, zero commands); resume with "hrc operator '
               f'resume" or the console once it is back', flush=True)
         self.lost_pub.publish(self._string(data=reason))
         if self.abort_client.service_is_ready():

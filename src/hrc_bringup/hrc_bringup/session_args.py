@@ -75,7 +75,7 @@ def parse_args(argv=None):
                         'their degree of freedom (realtime, no robot), recorded as the session '
                         '<session-id>-practice and counted apart (default 0)')
     parser.add_argument('--study-dir', default='',
-                        help='the study folder (ros2 run hrc_live study): the subject must be '
+                        help='the study folder (hrc study): the subject must be '
                         'registered there with consent yes; the session is added to its '
                         'per-subject index')
     parser.add_argument('--remote', dest='remote_nodes', action='append', default=[],

@@ -1,10 +1,10 @@
 """The study's command line: register subjects, assign case orders, plan sessions, list the index.
 
-    ros2 run hrc_live study register P07 --consent yes            # consent dated today
-    ros2 run hrc_live study assign                                 # Williams square over 1..6
-    ros2 run hrc_live study assign --cases 1 2 5                   # the researcher's set
-    ros2 run hrc_live study plan P07                               # the session commands
-    ros2 run hrc_live study index                                  # sessions per subject
+    hrc study register P07 --consent yes            # consent dated today
+    hrc study assign                                 # Williams square over 1..6
+    hrc study assign --cases 1 2 5                   # the researcher's set
+    hrc study plan P07                               # the session commands
+    hrc study index                                  # sessions per subject
 
 Everything lives in ``--study-dir`` (default ``study``): ``subjects.yaml`` and ``index.yaml``,
 mode 0600 (hrc_live.study). Exit codes: 0 done, 2 bad usage or a rejected entry (every reason
@@ -72,7 +72,7 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_live study``."""
+    """Entry point of ``hrc study``."""
     options = parse_args(sys.argv[1:] if argv is None else argv)
     try:
         subjects = load_registry(options.study_dir)
