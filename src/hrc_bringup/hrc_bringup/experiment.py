@@ -51,6 +51,8 @@ from hrc_common.executables import executable_path
 from hrc_common.session_plan import package_version, parse_overrides
 from hrc_engine.engine import EngineConfig, run_session
 
+from hrc_bringup.time_left import TimeLeft
+
 ENGINES = ('inprocess', 'graph')
 
 
@@ -399,6 +401,7 @@ def main(argv=None) -> int:
           f'{profiles}), engine '
           f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
     outcomes = []
+    progress = TimeLeft(len(tasks), 'sessions')
 
     def on_done(outcome):
         archive = outcome.pop('bag_archive', None)
@@ -409,9 +412,9 @@ def main(argv=None) -> int:
         if outcome['exit_code'] is None:
             return   # skipped (--stop-after): listed at the end
         status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
-        print(f'[experiment] {outcome["session_id"]} on {outcome["host"]} in '
-              f'{outcome["seconds"]:.0f} s ({len(outcomes)}/{len(tasks)}): {status}',
-              flush=True)
+        progress.show(len(outcomes), f'[experiment] {outcome["session_id"]} on '
+                      f'{outcome["host"]} in {outcome["seconds"]:.0f} s ({len(outcomes)}/'
+                      f'{len(tasks)}): {status}')
 
     def interrupt(signum, frame):
         raise KeyboardInterrupt
@@ -421,9 +424,11 @@ def main(argv=None) -> int:
     try:
         executor.run(tasks, on_done)
     except KeyboardInterrupt:
+        progress.close()
         print('[experiment] interrupted: sessions in progress stopped', flush=True)
         executor.close(abort=True)
         return 130
+    progress.close()
     description = executor.describe()
     executor.close()
     wall = time.monotonic() - start
