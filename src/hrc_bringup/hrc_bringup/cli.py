@@ -216,8 +216,9 @@ def usage() -> str:
 
 def refuse(where: str, reasons: list) -> int:
     """Print every reason on stderr, one a line, and return the exit code of bad arguments."""
+    prefix = f'{PROG} {where}' if where else PROG
     for reason in reasons:
-        print(f'{PROG} {where}: {reason}'.replace(f'{PROG} : ', f'{PROG}: '), file=sys.stderr)
+        print(f'{prefix}: {reason}', file=sys.stderr)
     return EXIT_BAD_ARGUMENTS
 
 
@@ -244,13 +245,15 @@ def run_verb(verb: Verb, rest: list) -> int:
     """Run the verb; on --help, its help followed by its example."""
     wants_help = any(argument in ('-h', '--help') for argument in rest)
     # argparse names a parser without its own prog after argv[0]: make that the verb.
-    sys.argv[0] = f'{PROG} {verb.name}'
+    program, sys.argv[0] = sys.argv[0], f'{PROG} {verb.name}'
     try:
         code = verb.run(list(rest))
     except SystemExit as exit_:     # argparse's --help and errors
         code = exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)
         if exit_.code is not None and not isinstance(exit_.code, int):
             print(exit_.code, file=sys.stderr)
+    finally:
+        sys.argv[0] = program
     if wants_help and code == 0:
         print(f'\nexample:\n  {verb.example}', flush=True)
     return code or 0
@@ -274,6 +277,7 @@ def main(argv=None) -> int:
     except BrokenPipeError:     # `hrc ... | head`: the reader left, nothing to report
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+
 
 if __name__ == '__main__':
     sys.exit(main())
