@@ -156,7 +156,7 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
 
     timer = StateTimer(domain_id)
     name = f'graph-{time.time_ns()}'
-    command = [str(executable_path('hrc_bringup', 'session')), '--case', str(case),
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(case),
                '--seed', str(seed), '--episodes', str(episodes), '--eval-episodes', '0',
                '--domain-id', str(domain_id), '--no-report', '--bags-dir', str(work / 'bags'),
                '--runs-dir', str(work / 'runs'), '--session-id', name]

@@ -81,7 +81,7 @@ def main() -> int:
     thread = threading.Thread(target=spin, daemon=True)
     thread.start()
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bench-rt-'))
-    command = [str(executable_path('hrc_bringup', 'session')), '--case', str(args.case),
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(args.case),
                '--mode', 'realtime', '--episodes', str(args.episodes), '--eval-episodes', '0',
                '--domain-id', str(args.domain_id), '--no-record', '--no-report',
                '--runs-dir', str(work / 'runs'), '--session-id', 'bench-realtime']

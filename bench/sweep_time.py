@@ -47,7 +47,8 @@ def one_session(case: int, seed: int, work: str) -> tuple:
 def graph_session_seconds(case: int, seed: int, work: pathlib.Path, domain_id: int) -> float:
     """Return the wall time of one lockstep graph session (``session``, bags recorded)."""
     from hrc_common.executables import executable_path
-    command = [str(executable_path('hrc_bringup', 'session')), '--case', str(case), '--seed',
+    command = [str(executable_path('hrc_bringup', 'hrc')),
+               'session', '--case', str(case), '--seed',
                str(seed), '--domain-id', str(domain_id), '--no-report', '--bags-dir',
                str(work / 'graph-bags'), '--runs-dir', str(work / 'graph-runs'),
                '--session-id', f'graph-case{case}-seed{seed}']

@@ -14,6 +14,12 @@ source "$_hrc_top/.venv/bin/activate"
 export AMENT_PREFIX_PATH=$VIRTUAL_ENV${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}
 # shellcheck disable=SC1091
 source "$_hrc_top/install/setup.bash"
+# The `hrc` command (hrc_bringup/cli.py): its install folder holds only that executable, so
+# putting it on PATH adds nothing else. `ros2 run hrc_bringup hrc` runs the same.
+case ":$PATH:" in
+  *":$_hrc_top/install/hrc_bringup/lib/hrc_bringup:"*) ;;
+  *) export PATH="$_hrc_top/install/hrc_bringup/lib/hrc_bringup:$PATH" ;;
+esac
 export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
 # LOCALHOST limits discovery to this host, but Fast DDS would still bind its receive ports to
 # 0.0.0.0: the loopback profile binds them to 127.0.0.1 (params/fastdds/loopback.xml says what

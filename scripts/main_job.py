@@ -1,18 +1,19 @@
 #!/usr/bin/env python3
 """The main job of `make run`: one headless session with the simulated human.
 
-Runs `ros2 run hrc_bringup session` for case 2 (the paper's "learn the task first" case with
+Runs `hrc session` for case 2 (the paper's "learn the task first" case with
 the robot on rotation), lockstep, seed 0, on a private ROS domain, with the `tuned` reward
 preset (the paper's sigma = 1 in SI units gives almost no learning signal for the slider and
 the ball: see src/hrc_agent_node/README.md) and at most 300 training episodes, then prints its
-Table II row and where the bags and figures are. Extra arguments are passed to the session
-runner and win over these, e.g. `make run ARGS="--case 4 --set agent.preset=paper"`.
+Table II row and where the bags and figures are. Extra arguments are passed to `hrc session`
+and win over these, e.g. `make run ARGS="--case 4 --set agent.preset=paper"` (or
+`ARGS="--engine inprocess"`: the same session in one process).
 """
 
 import os
 import sys
 
-from hrc_bringup import session
+from hrc_bringup import cli
 
 
 def main() -> int:
@@ -20,7 +21,7 @@ def main() -> int:
     os.environ.setdefault('ROS_DOMAIN_ID', '77')
     defaults = ['--case', '2', '--seed', '0', '--mode', 'lockstep', '--human', 'sim',
                 '--episodes', '300', '--eval-episodes', '5', '--set', 'agent.preset=tuned']
-    return session.main(defaults + sys.argv[1:])
+    return cli.main(['session', *defaults, *sys.argv[1:]])
 
 
 if __name__ == '__main__':

@@ -74,12 +74,12 @@ def run_both(tmp_path, domain_id: int, args: list, read_rosbag) -> tuple:
     """Run the session of ``args`` through the graph and the engine; return both bags."""
     graph_dir, engine_dir = tmp_path / 'graph', tmp_path / 'engine'
     graph = subprocess.run(
-        [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
+        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
          '--bags-dir', str(graph_dir / 'bags'), '--runs-dir', str(graph_dir / 'runs'),
          '--no-report', *args], capture_output=True, text=True, timeout=300)
     assert graph.returncode == 0, graph.stdout + graph.stderr
     engine = subprocess.run(
-        [str(executable_path('hrc_engine', 'inprocess_session')),
+        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--engine', 'inprocess',
          '--bags-dir', str(engine_dir / 'bags'), '--runs-dir', str(engine_dir / 'runs'),
          *args], capture_output=True, text=True, timeout=300)
     assert engine.returncode == 0, engine.stdout + engine.stderr

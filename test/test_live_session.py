@@ -65,8 +65,8 @@ class Watcher:
 
 
 def operator(domain_id, command):
-    """Run ``ros2 run hrc_live operator <command>``; return (exit code, output)."""
-    result = subprocess.run([str(executable_path('hrc_live', 'operator')), command,
+    """Run ``hrc operator <command>``; return (exit code, output)."""
+    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'operator', command,
                              '--domain-id', str(domain_id), '--timeout', '30'],
                             capture_output=True, text=True, timeout=120)
     return result.returncode, result.stdout + result.stderr
@@ -116,8 +116,8 @@ def watcher(rclpy_context):
 def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, ros_domain_id,
                                                                      watcher,
                                                                      read_rosbag):
-    session = str(executable_path('hrc_bringup', 'session'))
-    command = [session, '--domain-id', str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'),
+    session = [str(executable_path('hrc_bringup', 'hrc')), 'session']
+    command = [*session, '--domain-id', str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'),
                '--runs-dir', str(tmp_path / 'runs'), '--session-id', 'live', *LIVE,
                '--episodes', '20', '--eval-episodes', '0', '--subject-id', SUBJECT,
                '--notes', NOTES]
@@ -184,8 +184,8 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     checkpoint = tmp_path / 'runs' / 'checkpoints' / 'live' / 'latest.pt'
     assert checkpoint.is_file()
     resume_line = next(line.strip() for line in text.splitlines()
-                       if line.strip().startswith('ros2 run hrc_bringup session'))
-    resume_args = shlex.split(resume_line)[4:]
+                       if line.strip().startswith('hrc session'))
+    resume_args = shlex.split(resume_line)[2:]
     assert resume_args[-4:] == ['--session-id', 'live', '--resume-from', str(checkpoint)]
     assert resume_args.count('--subject-id') == 1 and NOTES in resume_args
 
@@ -221,7 +221,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     # Resume from the checkpoint, one more training episode: the counters continue.
     watcher.wait(lambda: False, timeout=1.0)  # take in what is left of the first run
     first_state = len(watcher.states)
-    code, text = run_to_the_end(watcher, [session, *resume_args, '--episodes',
+    code, text = run_to_the_end(watcher, [*session, *resume_args, '--episodes',
                                           str(finished + 1)], tmp_path / 'resumed.log')
     assert code == 0, text
     assert 'the agent finished the session' in text
@@ -256,7 +256,7 @@ def loose_task_tree(folder) -> str:
 
 
 def case2_command(tmp_path, domain_id, *extra):
-    return [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
+    return [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
             '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
             '--session-id', 'case2', '--case', '2', '--mode', 'realtime',
             '--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',
@@ -535,7 +535,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
 
 # --------------------------------------------------------------------------- issue 25
 def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path):
-    result = subprocess.run([str(executable_path('hrc_bringup', 'session')), '--domain-id',
+    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
                              '233', '--runs-dir', str(tmp_path / 'runs'), '--bags-dir',
                              str(tmp_path / 'bags')], capture_output=True, text=True,
                             timeout=120)
@@ -547,7 +547,7 @@ def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp
 def test_a_robot_that_does_not_converge_is_said_and_the_pages_addresses_printed(
         tmp_path, ros_domain_id, watcher):
     """Case 2 with a cap of 2 episodes: the robot alone never converges (paper tolerances)."""
-    command = [str(executable_path('hrc_bringup', 'session')), '--domain-id',
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
                str(ros_domain_id), '--bags-dir', str(tmp_path / 'bags'), '--runs-dir',
                str(tmp_path / 'runs'), '--session-id', 'nc', '--case', '2',
                '--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',

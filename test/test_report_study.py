@@ -184,7 +184,8 @@ BAD_INDEXES = {
 def test_a_bad_index_is_refused_with_every_reason(tmp_path, kind):
     document, reasons = BAD_INDEXES[kind]
     (tmp_path / 'index.yaml').write_text(yaml.safe_dump(document))
-    command = [str(executable_path('hrc_bag', 'hrc_report')), '--study-dir', str(tmp_path),
+    command = [str(executable_path('hrc_bringup', 'hrc')),
+               'bag', 'report', '--study-dir', str(tmp_path),
                '--out', str(tmp_path / 'out')]
     done = subprocess.run(command, capture_output=True, text=True, timeout=120)
     assert done.returncode == 1, done.stdout
@@ -195,7 +196,8 @@ def test_a_bad_index_is_refused_with_every_reason(tmp_path, kind):
 
 
 def test_no_index_is_a_bad_argument_and_a_bad_tlx_answer_is_refused(study_folder, tmp_path):
-    command = [str(executable_path('hrc_bag', 'hrc_report')), '--study-dir', str(tmp_path),
+    command = [str(executable_path('hrc_bringup', 'hrc')),
+               'bag', 'report', '--study-dir', str(tmp_path),
                '--out', str(tmp_path / 'out')]
     done = subprocess.run(command, capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and 'Traceback' not in done.stderr

@@ -89,28 +89,67 @@ def test_shim_errors_are_clear():
 @pytest.mark.slow
 def test_every_ros2_run_of_the_readme_runs():
     commands = readme_ros2_run_commands()
-    assert len(commands) >= 10, commands
+    assert len(commands) >= 6, commands   # the nodes; every other command is a verb of hrc
     script = ' && '.join(f'ros2 run {package} {executable} --help >/dev/null'
                          for package, executable in commands)
     result = fresh_shell(script, timeout=600)
     assert result.returncode == 0, result.stderr
 
 
+def readme_hrc_verbs() -> list:
+    """Return the verb of every `hrc ...` command of README.md, without repeats.
+
+    A command is inline code that starts with ``hrc `` or a line of a code block that does
+    (after an optional ``$ ``); every one must name a verb, except placeholders (``hrc <verb>``),
+    ``hrc --help`` and the README's example of a misspelt verb.
+    """
+    from hrc_bringup.cli import find_verb
+    found, in_code = [], False
+    for line in (REPOSITORY / 'README.md').read_text().splitlines():
+        if line.startswith('```'):
+            in_code = not in_code
+            continue
+        stripped = line.strip().removeprefix('$ ')
+        commands = re.findall(r'`hrc ([^`]*)`', line) + (
+            [stripped[4:]] if in_code and stripped.startswith('hrc ') else [])
+        for command in commands:
+            if command.startswith(('<', '-', 'sesion ')):
+                continue
+            words = re.match(r'[a-z]+(?: [a-z]+)?', command)
+            verb, _, problem = find_verb(words.group(0).split() if words else [command])
+            assert verb is not None, f'README.md: {line.strip()}: {problem}'
+            if verb.name not in found:
+                found.append(verb.name)
+    return found
+
+
+@pytest.mark.slow
+def test_every_hrc_verb_of_the_readme_runs_from_a_fresh_shell():
+    """`hrc` is on PATH after `source scripts/env.sh` (any folder); every verb's --help runs."""
+    verbs = readme_hrc_verbs()
+    assert len(verbs) >= 10, verbs
+    script = 'command -v hrc && hrc --help >/dev/null && ' + ' && '.join(
+        f'hrc {verb} --help | grep -q "^example:"' for verb in verbs)
+    result = fresh_shell(script, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[0].endswith('/lib/hrc_bringup/hrc'), result.stdout
+
+
 @pytest.mark.slow
 def test_the_resume_command_the_runner_prints_runs(tmp_path):
-    from hrc_bringup import session
+    from hrc_bringup import session_args
     argv = ['--case', '3', '--seed', '2', '--episodes', '4', '--session-id', 'old']
-    _, options = session.parse_args(argv)
-    command = session.resume_command(options, 'case3-seed2-x', tmp_path / 'latest.pt')
+    _, options = session_args.parse_args(argv)
+    command = session_args.resume_command(options, 'case3-seed2-x', tmp_path / 'latest.pt')
     words = shlex.split(command)
-    assert words[:4] == ['ros2', 'run', 'hrc_bringup', 'session']
-    settings, _ = session.parse_args(words[4:])
+    assert words[:2] == ['hrc', 'session']
+    settings, _ = session_args.parse_args(words[2:])
     assert (settings.case, settings.seed) == (3, 2)
     assert settings.resume_from == str(tmp_path / 'latest.pt')
     assert settings.session_id == 'case3-seed2-x'
     result = fresh_shell(command + ' --help')
     assert result.returncode == 0, result.stderr
-    assert 'usage: session' in result.stdout
+    assert 'usage: hrc session' in result.stdout
 
 
 def readme_node_lines() -> list:

@@ -1,6 +1,6 @@
 """The whole graph as separate processes over DDS: sessions run by the session runner.
 
-Each test runs `ros2 run hrc_bringup session` (the same executable a user runs) on its own
+Each test runs `hrc session` (the same executable a user runs) on its own
 ROS_DOMAIN_ID with short episodes (8 s = 40 control steps) so that the suite stays quick, then
 checks what a user would: the exit, every step answered, the bags read by an independent reader
 (rosbags) with exact counts, and the report.
@@ -22,7 +22,7 @@ SHORT = ['--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
 
 def session_command(tmp_path, domain_id, *args):
     """Return the session runner command line for a test session under tmp_path."""
-    return [str(executable_path('hrc_bringup', 'session')), '--domain-id', str(domain_id),
+    return [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
             '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
             '--session-id', 'test', *SHORT, *args]
 

@@ -5,7 +5,7 @@ used to print the report's stderr only when it failed.
 """
 
 from hrc_bag.synthetic import record_in_process, strategy_plan
-from hrc_bringup.session import report
+from hrc_bringup.session_report import report
 from hrc_common.session_plan import SessionSettings
 import pytest
 
@@ -24,7 +24,7 @@ def test_the_runner_prints_the_reports_notices(tmp_path, capsys):
     report(settings, tmp_path / 'run')
     printed = capsys.readouterr()
     assert '| Learn together (baseline) | Case 5 |' in printed.out
-    assert '[session] hrc_report:' in printed.err
+    assert '[session] hrc bag report:' in printed.err
     assert 'a file was not closed (recorder killed?)' in printed.err
     assert 'using the MCAP files of the folder' in printed.err
     assert (tmp_path / 'run' / 'report' / 'table2.md').is_file()

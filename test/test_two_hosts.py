@@ -277,7 +277,7 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
     feeder = StickFeeder(fifo)
     feeder.start()
     session_id = 'twohost-drop'
-    runner_args = [str(executable_path('hrc_bringup', 'session')), '--case', '5', '--mode',
+    runner_args = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', '5', '--mode',
                    'realtime', '--human', 'device', '--remote', 'human', '--episodes', '3',
                    '--eval-episodes', '0', '--session-id', session_id, '--bags-dir',
                    str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
@@ -331,7 +331,8 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
             resumed = ''
             for _ in range(20):
                 result = subprocess.run(lab.command('trainer', [
-                    str(executable_path('hrc_live', 'operator')), 'resume', '--domain-id',
+                    str(executable_path('hrc_bringup', 'hrc')),
+                    'operator', 'resume', '--domain-id',
                     str(ros_domain_id), '--timeout', '20']), env=env('trainer'),
                     capture_output=True, text=True, timeout=60)
                 resumed = result.stdout + result.stderr

@@ -24,7 +24,5 @@ setup(
     license='Apache-2.0',
     entry_points={'console_scripts': [
         'agent_node = hrc_agent_node.agent_node:main',
-        'task_tree = hrc_agent_node.tree_tool:main',
-        'offline_session = hrc_agent_node.offline:main',
     ]},
 )

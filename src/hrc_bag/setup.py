@@ -22,7 +22,6 @@ setup(
         'console_scripts': [
             'recorder_node = hrc_bag.recorder_node:main',
             'replay_node = hrc_bag.replay_node:main',
-            'hrc_report = hrc_bag.report_cli:main',
         ],
     },
 )

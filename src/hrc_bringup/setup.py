@@ -12,7 +12,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        # Every node's parameter file, for `ros2 run hrc_bringup session` outside a checkout.
+        # Every node's parameter file, for `hrc session` outside a checkout.
         ('share/' + package_name + '/params',
          glob.glob(os.path.join('..', '..', 'params', '*.yaml'))),
     ],
@@ -23,7 +23,7 @@ setup(
     description='Session and experiment runners of the hrc graph.',
     license='Apache-2.0',
     entry_points={'console_scripts': [
-        'session = hrc_bringup.session:main',
-        'experiment = hrc_bringup.experiment:main',
+        # the one command line (hrc --help); the nodes keep their own executables
+        'hrc = hrc_bringup.cli:main',
     ]},
 )

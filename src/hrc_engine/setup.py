@@ -16,7 +16,6 @@ setup(
     maintainer_email='hrc@example.org',
     description='The in-process engine of hrc: a whole headless session in one process.',
     license='Apache-2.0',
-    entry_points={'console_scripts': [
-        'inprocess_session = hrc_engine.inprocess_session:main',
-    ]},
+    # its commands are verbs of `hrc` (hrc_bringup/cli.py)
+    entry_points={'console_scripts': []},
 )

@@ -16,7 +16,6 @@ setup(
     maintainer_email='hrc@example.org',
     description='The slider-pendulum-ball task as a Gymnasium and a PettingZoo environment.',
     license='Apache-2.0',
-    entry_points={'console_scripts': [
-        'compare_ppo = hrc_gym.bench.compare_ppo:main',
-    ]},
+    # no console script: the PPO comparison is a benchmark (python -m hrc_gym.bench.compare_ppo)
+    entry_points={'console_scripts': []},
 )

@@ -21,8 +21,5 @@ setup(
     license='Apache-2.0',
     entry_points={'console_scripts': [
         'display_node = hrc_live.display_node:main',
-        'joystick_setup = hrc_live.joystick_setup:main',
-        'operator = hrc_live.operator_cli:main',
-        'study = hrc_live.study_cli:main',
     ]},
 )

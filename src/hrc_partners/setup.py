@@ -17,11 +17,7 @@ setup(
     description='Human models cloned from recordings, cross-play, role allocation advisor.',
     license='Apache-2.0',
     entry_points={
-        'console_scripts': [
-            'clone_human = hrc_partners.clone_cli:main',
-            'crossplay = hrc_partners.crossplay_cli:main',
-            'train_partners_agents = hrc_partners.training:main',
-            'role_advisor = hrc_partners.advisor_cli:main',
-        ],
+        # its commands are verbs of `hrc` (hrc_bringup/cli.py)
+        'console_scripts': [],
     },
 )

@@ -18,8 +18,7 @@ setup(
                 'document and the strategy chooser.',
     license='Apache-2.0',
     entry_points={
-        'console_scripts': [
-            'hrc_results = hrc_study.results_cli:main',
-        ],
+        # its commands are verbs of `hrc` (hrc_bringup/cli.py)
+        'console_scripts': [],
     },
 )

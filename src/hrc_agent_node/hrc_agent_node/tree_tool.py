@@ -7,14 +7,14 @@ from hrc_agent_node.config import CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.strategies import CasesError, load_cases
 from hrc_agent_node.task_tree import TaskTree, TaskTreeError
 
-SUMMARY = ('usage: task_tree [--tree FILE] [--cases FILE] [--preset NAME] [--case N] '
+SUMMARY = ('usage: hrc tree [--tree FILE] [--cases FILE] [--preset NAME] [--case N] '
            '[--step K] [--png FILE]\n\nPrint the task decomposition tree (validated) as text and '
            'optionally draw it as a PNG; with --case, show the roles and the training steps.')
 
 
 def main(argv=None) -> int:
     """Validate, print and draw a task tree; exit 1 with the reasons if it is invalid."""
-    parser = argparse.ArgumentParser(prog='task_tree', usage=SUMMARY.splitlines()[0][7:],
+    parser = argparse.ArgumentParser(prog='hrc tree', usage=SUMMARY.splitlines()[0][7:],
                                      description=SUMMARY.split('\n\n', 1)[1])
     parser.add_argument('--tree', default=None, help='task tree YAML (default: installed)')
     parser.add_argument('--cases', default=None, help='cases YAML (default: installed)')

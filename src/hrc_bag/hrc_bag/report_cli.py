@@ -1,4 +1,4 @@
-"""``hrc_report``: Table II and Fig. 5-7 from recorded sessions (no ROS graph needed)."""
+"""``hrc bag report``: Table II and Fig. 5-7 from recorded sessions (no ROS graph needed)."""
 
 import argparse
 import sys
@@ -22,7 +22,7 @@ DESCRIPTION = ('Analyse recorded hrc sessions: writes table2.md, table2.csv, ses
 
 def parse_arguments(argv):
     """Return the parsed command line."""
-    parser = argparse.ArgumentParser(prog='hrc_report', description=DESCRIPTION)
+    parser = argparse.ArgumentParser(prog='hrc bag report', description=DESCRIPTION)
     parser.add_argument('paths', nargs='*',
                         help='session folders (bags/<session_id>), folders of session folders '
                              '(bags/), or single episode files (optional with --study-dir)')
@@ -38,7 +38,7 @@ def parse_arguments(argv):
 
 
 def _log(text):
-    print(f'hrc_report: {text}', file=sys.stderr)
+    print(f'hrc bag report: {text}', file=sys.stderr)
 
 
 def _log_lines(error) -> None:

@@ -197,7 +197,8 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
     assert SESSION_RECORD in scan.metadata
 
     # the report runs on the session as it is
-    report = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')), str(folder),
+    report = subprocess.run([str(executable_path('hrc_bringup', 'hrc')),
+                             'bag', 'report', str(folder),
                              '--out', str(tmp_path / 'report')], capture_output=True,
                             text=True, timeout=120)
     assert report.returncode == 0, report.stderr

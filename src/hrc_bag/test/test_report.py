@@ -126,7 +126,7 @@ def test_figure_data(bags):
 
 def test_cli_writes_the_report_and_refuses_an_empty_folder(bags, tmp_path):
     folder, _ = bags
-    command = [str(executable_path('hrc_bag', 'hrc_report'))]
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'bag', 'report']
     done = subprocess.run(command + [str(folder / 'case5_seed1'), '--out', str(tmp_path / 'a')],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -174,7 +174,8 @@ def test_an_unusable_metadata_yaml_falls_back_to_the_mcap_files(bags, tmp_path, 
 
 def test_the_cli_refuses_files_that_are_not_mcap_with_the_reason(bags, tmp_path):
     import os
-    command = [str(executable_path('hrc_bag', 'hrc_report')), '--out', str(tmp_path / 'out')]
+    command = [str(executable_path('hrc_bringup', 'hrc')),
+               'bag', 'report', '--out', str(tmp_path / 'out')]
     empty = tmp_path / 'empty.mcap'
     empty.write_bytes(b'')
     text = tmp_path / 'text.mcap'

@@ -1,10 +1,10 @@
 """Experiment runner: paper cases x seeds (x simulated-human profiles), headless, then the study.
 
-    ros2 run hrc_bringup experiment --seeds 10                       # local process pool
-    ros2 run hrc_bringup experiment --seeds 10 --profiles paper paper_symmetric:5
-    ros2 run hrc_bringup experiment --seeds 10 --ray                 # a local Ray instance
-    ros2 run hrc_bringup experiment --seeds 10 --ray-address auto    # an existing Ray cluster
-    ros2 run hrc_bringup experiment --seeds 2 --engine graph         # the ROS graph per session
+    hrc experiment --seeds 10                       # local process pool
+    hrc experiment --seeds 10 --profiles paper paper_symmetric:5
+    hrc experiment --seeds 10 --ray                 # a local Ray instance
+    hrc experiment --seeds 10 --ray-address auto    # an existing Ray cluster
+    hrc experiment --seeds 2 --engine graph         # the ROS graph per session
 
 Each session (case, seed, profile) is one task submitted to an executor: a local process pool
 (the embedded default, no Ray needed) or Ray, with declared resources (``--cpus-per-session``).
@@ -50,6 +50,8 @@ from hrc_common.domains import DomainReservation
 from hrc_common.executables import executable_path
 from hrc_common.session_plan import package_version, parse_overrides
 from hrc_engine.engine import EngineConfig, run_session
+
+from hrc_bringup.time_left import TimeLeft
 
 ENGINES = ('inprocess', 'graph')
 
@@ -144,7 +146,7 @@ def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
     reservation = DomainReservation()
     try:
-        command = [str(executable_path('hrc_bringup', 'session')), '--case', str(task.case),
+        command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(task.case),
                    '--seed', str(task.seed), '--session-id', task.session_id,
                    '--bags-dir', str(bags_dir), '--no-report',
                    '--runs-dir', str(pathlib.Path(task.runs_dir) / task.session_id),
@@ -245,7 +247,7 @@ class RayExecutor:
 def parse_args(argv=None):
     """Parse and check the command line (exit 2 with every reason)."""
     parser = argparse.ArgumentParser(
-        prog='experiment', description='Run paper cases x seeds (x simulated-human profiles) '
+        prog='hrc experiment', description='Run paper cases x seeds (x simulated-human profiles) '
         'headless, each session a task on a local process pool or a Ray cluster, then write '
         'the study of all sessions (hrc_study).')
     parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6],
@@ -377,7 +379,7 @@ def make_executor(options):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_bringup experiment``."""
+    """Entry point of ``hrc experiment``."""
     options = parse_args(argv)
     name = options.name or time.strftime('experiment-%Y%m%d-%H%M%S')
     bags_dir = pathlib.Path(options.bags_dir) / name
@@ -399,6 +401,7 @@ def main(argv=None) -> int:
           f'{profiles}), engine '
           f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
     outcomes = []
+    progress = TimeLeft(len(tasks), 'sessions')
 
     def on_done(outcome):
         archive = outcome.pop('bag_archive', None)
@@ -409,9 +412,9 @@ def main(argv=None) -> int:
         if outcome['exit_code'] is None:
             return   # skipped (--stop-after): listed at the end
         status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
-        print(f'[experiment] {outcome["session_id"]} on {outcome["host"]} in '
-              f'{outcome["seconds"]:.0f} s ({len(outcomes)}/{len(tasks)}): {status}',
-              flush=True)
+        progress.show(len(outcomes), f'[experiment] {outcome["session_id"]} on '
+                      f'{outcome["host"]} in {outcome["seconds"]:.0f} s ({len(outcomes)}/'
+                      f'{len(tasks)}): {status}')
 
     def interrupt(signum, frame):
         raise KeyboardInterrupt
@@ -421,9 +424,11 @@ def main(argv=None) -> int:
     try:
         executor.run(tasks, on_done)
     except KeyboardInterrupt:
+        progress.close()
         print('[experiment] interrupted: sessions in progress stopped', flush=True)
         executor.close(abort=True)
         return 130
+    progress.close()
     description = executor.describe()
     executor.close()
     wall = time.monotonic() - start
@@ -431,7 +436,7 @@ def main(argv=None) -> int:
                     if outcome['exit_code'] not in (0, None))
     skipped = sorted(outcome['session_id'] for outcome in outcomes
                      if outcome['exit_code'] is None)
-    record = {'command': 'ros2 run hrc_bringup experiment '
+    record = {'command': 'hrc experiment '
                          + ' '.join(shlex.quote(arg) for arg in options.argv),
               'engine': options.engine, 'executor': description, 'sessions': len(tasks),
               'failed': failed, 'skipped': skipped, 'wall_seconds': wall, 'started': started_at,

@@ -102,7 +102,7 @@ def ray_cluster():
 
 
 def _run_experiment(tmp_path, name, *extra) -> dict:
-    command = [str(executable_path('hrc_bringup', 'experiment')), *TINY, '--name', name,
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'experiment', *TINY, '--name', name,
                '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
                *extra]
     result = subprocess.run(command, capture_output=True, text=True, timeout=150, env=RAY_ENV)
@@ -131,7 +131,8 @@ def test_sweep_on_a_two_node_ray_cluster_equals_the_local_pool(tmp_path, ray_clu
 
 
 def test_bad_arguments_exit_2_with_every_reason(tmp_path):
-    result = subprocess.run([str(executable_path('hrc_bringup', 'experiment')), '--cases', '9',
+    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'experiment',
+                             '--cases', '9',
                              '--seeds', '0', '--ray', '--ray-address', 'auto', '--set', 'x',
                              '--bags-dir', str(tmp_path)], capture_output=True, text=True,
                             timeout=60)

@@ -1,6 +1,6 @@
-"""``ros2 run hrc_engine inprocess_session``: one headless session in one process, no DDS.
+"""``hrc session --engine inprocess``: one headless session in one process, no DDS.
 
-The same session as ``ros2 run hrc_bringup session --mode lockstep`` (same parameter files,
+The same session as ``hrc session --mode lockstep`` (the graph) (same parameter files,
 same ``--set`` overrides, same bags and report), computed in one process from the nodes'
 cores: several times faster, and nothing to start or stop. A person at a joystick, realtime,
 live display or replay need the graph.
@@ -19,9 +19,9 @@ from hrc_engine.engine import EngineConfig, run_session
 def parse_args(argv=None) -> EngineConfig:
     """Parse the command line into an EngineConfig (exit code 2 with every reason if bad)."""
     parser = argparse.ArgumentParser(
-        prog='inprocess_session', description='Run one hrc session (one case, one seed) in '
-        'one process: physics, step protocol, PPO agent, simulated human, evaluation, '
-        'checkpoints and the bags of the graph, without ROS communication.')
+        prog='hrc session --engine inprocess', description='Run one hrc session (one case, '
+        'one seed) in one process: physics, step protocol, PPO agent, simulated human, '
+        'evaluation, checkpoints and the bags of the graph, without ROS communication.')
     parser.add_argument('--case', type=int, default=2, help='paper case 1..6 (default 2)')
     parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
     parser.add_argument('--episodes', type=int, default=0,
@@ -34,12 +34,17 @@ def parse_args(argv=None) -> EngineConfig:
                         help='session.yaml and checkpoints in <runs-dir>/ (default runs)')
     parser.add_argument('--no-record', action='store_true', help='write no bags')
     parser.add_argument('--no-checkpoints', action='store_true', help='write no checkpoints')
-    parser.add_argument('--human-profile', default='', help='simulated-human profile')
+    parser.add_argument('--profile', dest='human_profile', default='',
+                        help='simulated-human profile (params/sim_human.yaml)')
+    # The flags of the graph's session: the values without wall time are accepted, so one
+    # command line works with either engine; any other value is refused with the reason.
     parser.add_argument('--human', dest='human_input', default='sim',
-                        choices=('sim', 'model', 'script'),
-                        help='human input without wall time (default sim: the simulated '
-                        'human; model: a cloned model, --set human.model_file=PATH; script: a '
-                        'scripted stick, --set human.script_file=PATH)')
+                        help='sim (default: the simulated human), model (a cloned model, '
+                        '--set human.model_file=PATH) or script (a scripted stick, --set '
+                        'human.script_file=PATH); a person at a device or /joy needs --engine '
+                        'graph')
+    parser.add_argument('--mode', default='lockstep', help='lockstep only (realtime needs '
+                        '--engine graph)')
     parser.add_argument('--params-dir', default='', help='parameter files (default: ./params '
                         'in a checkout, else the installed ones)')
     parser.add_argument('--resume-from', default='', help='continue from this checkpoint')
@@ -53,10 +58,18 @@ def parse_args(argv=None) -> EngineConfig:
         overrides = parse_overrides(options.set)
     except ValueError as error:
         reasons.append(str(error))
+    if options.human_input not in ('sim', 'model', 'script'):
+        reasons.append(f'--human {options.human_input}: the in-process engine runs the '
+                       'simulated human, a cloned model or a scripted stick only (--human sim, '
+                       'model or script); use --engine graph')
+    if options.mode != 'lockstep':
+        reasons.append(f'--mode {options.mode}: the in-process engine runs lockstep only; '
+                       'use --engine graph')
     if options.episodes < 0:
         reasons.append(f'--episodes must be >= 0, got {options.episodes}')
     if reasons:
-        parser.exit(2, 'inprocess_session: ' + '; '.join(reasons) + '\n')
+        parser.exit(2, ''.join(f'hrc session --engine inprocess: {reason}\n'
+                                for reason in reasons))
     return EngineConfig(
         case=options.case, seed=options.seed, training_episodes=options.episodes,
         evaluation_episodes=options.eval_episodes, session_id=options.session_id,
@@ -73,7 +86,7 @@ def main(argv=None) -> int:
     try:
         result = run_session(config)
     except (ParameterError, ValueError, OSError) as error:
-        print(f'inprocess_session: {error}', file=sys.stderr)
+        print(f'hrc session --engine inprocess: {error}', file=sys.stderr)
         return 2
     if as_json:
         print(json.dumps(vars(result), indent=2, default=str))
@@ -87,8 +100,8 @@ def main(argv=None) -> int:
           f'{result.wall_seconds:.1f} s ({result.steps / result.wall_seconds:.0f} steps/s)')
     print(f'[inprocess_session] evaluation: {metrics or "none"}')
     if result.bag_dir:
-        print(f'[inprocess_session] bags in {result.bag_dir}; report: ros2 run hrc_bag '
-              f'hrc_report {result.bag_dir}')
+        print(f'[inprocess_session] bags in {result.bag_dir}; report: hrc bag report '
+              f'{result.bag_dir}')
     return 0
 
 

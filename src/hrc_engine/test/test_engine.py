@@ -78,7 +78,8 @@ def test_the_bags_carry_the_graphs_qos_and_the_report_reads_them(tmp_path, read_
         assert topics[topic]['type_description_hash'].startswith('RIHS01_')
     bag = read_rosbag(tmp_path / 'bags' / 'tiny')
     assert len(bag['/hrc/state']) == 3 * 11 and len(bag['/hrc/agent/step']) == 30
-    report = subprocess.run([str(executable_path('hrc_bag', 'hrc_report')), result.bag_dir,
+    report = subprocess.run([str(executable_path('hrc_bringup', 'hrc')),
+                             'bag', 'report', result.bag_dir,
                              '--out', str(tmp_path / 'report')],
                             capture_output=True, text=True, timeout=120)
     assert report.returncode == 0, report.stdout + report.stderr

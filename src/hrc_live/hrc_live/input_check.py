@@ -74,7 +74,7 @@ def device_missing_message(path: str, why: str, seen: list) -> str:
             f'Fix: plug the joystick in (ls -l /dev/input/js* lists it); if it is there but '
             f'cannot be opened, add yourself to its group (sudo usermod -aG input $USER, then '
             f'log in again); if it has another name, pass it with --set '
-            f'human.device=/dev/input/jsN or the file joystick_setup writes (--params FILE); '
+            f'human.device=/dev/input/jsN or the file hrc joystick setup writes (--params FILE); '
             f'to run with the simulated human instead, use --human sim.')
 
 

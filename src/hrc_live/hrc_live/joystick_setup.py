@@ -1,8 +1,8 @@
 """Joystick set-up helper: find the device, watch it live, pick the axis, write the human's YAML.
 
-    ros2 run hrc_live joystick_setup --list
-    ros2 run hrc_live joystick_setup /dev/input/js0 --output joystick.yaml      # guided
-    ros2 run hrc_live joystick_setup /dev/input/js0 --non-interactive --detect 5
+    hrc joystick setup --list
+    hrc joystick setup /dev/input/js0 --output joystick.yaml      # guided
+    hrc joystick setup /dev/input/js0 --non-interactive --detect 5
 
 Guided (a terminal): a refreshed line shows every axis and button at every step; the operator
 pushes the chosen stick in the direction that should mean "+" (slider up, right end of the
@@ -492,7 +492,7 @@ def detect(watcher: JoystickWatcher, options, console: Console) -> tuple:
 def parse_args(argv=None):
     """Parse the command line."""
     parser = argparse.ArgumentParser(
-        prog='joystick_setup', description='Set up the joystick for the human node: list '
+        prog='hrc joystick setup', description='Set up the joystick for the human node: list '
         'devices, watch axes and buttons live, pick the axis, inversion, deadzone and enable '
         'button, and write the parameter file the human node reads.')
     parser.add_argument('device', nargs='?', default=None,
@@ -530,7 +530,7 @@ def parse_args(argv=None):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_live joystick_setup``; 0 = file written, 1 = failed."""
+    """Entry point of ``hrc joystick setup``; 0 = file written, 1 = failed."""
     options = parse_args(argv)
     console = Console()
     if options.list:

@@ -1,9 +1,9 @@
 """Operator controls of a running session: pause, resume, abort, status.
 
-    ros2 run hrc_live operator pause      # at the end of the running episode
-    ros2 run hrc_live operator resume
-    ros2 run hrc_live operator abort      # now: zero commands, bags closed, resumable
-    ros2 run hrc_live operator status
+    hrc operator pause      # at the end of the running episode
+    hrc operator resume
+    hrc operator abort      # now: zero commands, bags closed, resumable
+    hrc operator status
 
 ``pause``/``resume``/``abort`` call the agent's ``std_srvs/Trigger`` services
 (``hrc_common.session_control``) and print the agent's answer; ``status`` prints the newest
@@ -25,7 +25,7 @@ EXIT_NO_AGENT = 4
 def parse_args(argv=None):
     """Parse the command line."""
     parser = argparse.ArgumentParser(
-        prog='operator', description='Pause, resume or abort the running hrc session, or show '
+        prog='hrc operator', description='Pause, resume or abort the running hrc session, or show '
         'its status. Pause and resume take effect at the next episode boundary; abort is '
         'immediate (zero commands, bags closed, resumable from the last checkpoint).')
     parser.add_argument('command', choices=('pause', 'resume', 'abort', 'status'))
@@ -83,7 +83,7 @@ def wait_for_status(node, executor, timeout: float):
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_live operator``."""
+    """Entry point of ``hrc operator``."""
     options = parse_args(sys.argv[1:] if argv is None else argv)
     import rclpy
     from rclpy.context import Context

@@ -1,10 +1,10 @@
 """The study's command line: register subjects, assign case orders, plan sessions, list the index.
 
-    ros2 run hrc_live study register P07 --consent yes            # consent dated today
-    ros2 run hrc_live study assign                                 # Williams square over 1..6
-    ros2 run hrc_live study assign --cases 1 2 5                   # the researcher's set
-    ros2 run hrc_live study plan P07                               # the session commands
-    ros2 run hrc_live study index                                  # sessions per subject
+    hrc study register P07 --consent yes            # consent dated today
+    hrc study assign                                 # Williams square over 1..6
+    hrc study assign --cases 1 2 5                   # the researcher's set
+    hrc study plan P07                               # the session commands
+    hrc study index                                  # sessions per subject
 
 Everything lives in ``--study-dir`` (default ``study``): ``subjects.yaml`` and ``index.yaml``,
 mode 0600 (hrc_live.study). Exit codes: 0 done, 2 bad usage or a rejected entry (every reason
@@ -23,9 +23,10 @@ from hrc_live.study import (assign_orders, by_subject, consent_problem, load_ind
 
 def parse_args(argv=None):
     """Parse the command line."""
-    parser = argparse.ArgumentParser(prog='study', description='Pseudonymous subject registry, '
-                                     'counterbalanced case orders and the per-subject session '
-                                     'index of an hrc study (no names are stored).')
+    parser = argparse.ArgumentParser(prog='hrc study', description='Pseudonymous subject '
+                                     'registry, counterbalanced case orders and the '
+                                     'per-subject session index of an hrc study (no names are '
+                                     'stored).')
     parser.add_argument('--study-dir', default='study', help='folder of the study files')
     commands = parser.add_subparsers(dest='command', required=True)
     add = commands.add_parser('register', help='add a subject or record a new consent answer')
@@ -57,9 +58,9 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
     """
     lines = []
     for position, case in enumerate(subject.order, start=1):
-        command = ['ros2', 'run', 'hrc_bringup', 'session', '--case', str(case), '--mode',
-                   'realtime', '--human', human, '--display', '--tlx', '--subject-id',
-                   subject.id, '--study-dir', study_dir]
+        command = ['hrc', 'session', '--case', str(case), '--mode', 'realtime', '--human',
+                   human, '--display', '--tlx', '--subject-id', subject.id, '--study-dir',
+                   study_dir]
         if practice:
             command += ['--practice', str(practice)]
         if not agent_defaults:
@@ -71,7 +72,7 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
 
 
 def main(argv=None) -> int:
-    """Entry point of ``ros2 run hrc_live study``."""
+    """Entry point of ``hrc study``."""
     options = parse_args(sys.argv[1:] if argv is None else argv)
     try:
         subjects = load_registry(options.study_dir)

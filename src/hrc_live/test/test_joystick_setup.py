@@ -21,7 +21,7 @@ from hrc_sim_node.physics import PhysicsParams
 import pytest
 import yaml
 
-HELPER = str(executable_path('hrc_live', 'joystick_setup'))
+HELPER = [str(executable_path('hrc_bringup', 'hrc')), 'joystick', 'setup']
 # Rest positions (raw) of four axes as a slightly worn gamepad reports them, six buttons up.
 REST = (0, 1200, 0, -300)
 
@@ -46,7 +46,7 @@ def fifo(tmp_path):
 
 def run_helper(*args, until=None, then=b'', timeout=60):
     """Run the helper; when it prints a line starting with ``until``, write ``then``."""
-    process = subprocess.Popen([HELPER, *map(str, args)], stdout=subprocess.PIPE,
+    process = subprocess.Popen([*HELPER, *map(str, args)], stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
     output = []
     for raw in process.stdout:
@@ -111,13 +111,13 @@ def test_flags_override_detection_and_nothing_moved_is_an_error(fifo, tmp_path):
 def test_lists_devices_and_says_when_there_are_none(tmp_path):
     for name in ('js0', 'js1'):
         os.mkfifo(tmp_path / name)
-    result = subprocess.run([HELPER, '--list', '--devices', str(tmp_path / 'js*')],
+    result = subprocess.run([*HELPER, '--list', '--devices', str(tmp_path / 'js*')],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 0
     assert result.stdout.splitlines() == [
         f'{tmp_path / "js0"}: (no name: not a joystick device)',
         f'{tmp_path / "js1"}: (no name: not a joystick device)']
-    result = subprocess.run([HELPER, '--list', '--devices', str(tmp_path / 'nothing*')],
+    result = subprocess.run([*HELPER, '--list', '--devices', str(tmp_path / 'nothing*')],
                             capture_output=True, text=True, timeout=60)
     assert result.returncode == 1 and 'no joystick devices' in result.stdout
 
@@ -127,7 +127,7 @@ def test_guided_set_up_at_a_terminal_with_live_values_a_redo_and_a_check(fifo, t
     os.write(writer, initial_state())
     output_file = tmp_path / 'joystick.yaml'
     terminal, helper_side = pty.openpty()  # the helper asks questions only at a terminal
-    process = subprocess.Popen([HELPER, str(path), '-o', str(output_file)],
+    process = subprocess.Popen([*HELPER, str(path), '-o', str(output_file)],
                                stdin=helper_side, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT)
     os.close(helper_side)
@@ -234,7 +234,7 @@ def test_the_human_node_reads_the_written_file_and_the_stick(fifo, tmp_path, sta
 
 
 def test_help_lists_the_options():
-    result = subprocess.run([HELPER, '--help'], capture_output=True, text=True, timeout=60)
+    result = subprocess.run([*HELPER, '--help'], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0
     for option in ('--list', '--axis', '--invert', '--deadzone', '--enable-button',
                    '--non-interactive', '--detect', '--output'):

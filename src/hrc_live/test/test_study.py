@@ -93,7 +93,7 @@ def test_cli_register_assign_plan(tmp_path, capsys):
     assert main(['--study-dir', study, 'plan', 'P01', '--practice', '2']) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0] == '# condition 1 of 2: case 2'
-    assert lines[1].startswith('ros2 run hrc_bringup session --case 2 --mode realtime')
+    assert lines[1].startswith('hrc session --case 2 --mode realtime')
     assert '--subject-id P01' in lines[1] and '--practice 2' in lines[1]
     # Issue 25: the study's settings in every condition, so the robot converges alone and the
     # person trains with it; --agent-defaults gives the earlier commands.

@@ -1,7 +1,7 @@
 """``hrc_results``: docs/results.md and its figures from the bags of an experiment.
 
-    ros2 run hrc_study hrc_results bags/<experiment> --out docs/
-    ros2 run hrc_study hrc_results bags/<experiment> --out /tmp/r --priorities human=3,time=1
+    hrc results bags/<experiment> --out docs/
+    hrc results bags/<experiment> --out /tmp/r --priorities human=3,time=1
 
 Writes ``<out>/results.md`` and ``<out>/results/`` (Fig. 5-7, convergence curves,
 sessions.csv), prints the findings, the targets and the strategy ranking. Exit codes: 0 done,
@@ -24,7 +24,7 @@ DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episode
 
 def parse_arguments(argv):
     """Return the parsed command line; exit 2 with every reason on bad input."""
-    parser = argparse.ArgumentParser(prog='hrc_results', description=DESCRIPTION)
+    parser = argparse.ArgumentParser(prog='hrc results', description=DESCRIPTION)
     parser.add_argument('paths', nargs='+', help='experiment folders (bags/<experiment>) or '
                         'session folders')
     parser.add_argument('--out', default='docs', help='folder of results.md (default docs)')
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     if not sessions:
         log('no session with episode summaries in ' + ', '.join(arguments.paths))
         return 1
-    command = 'ros2 run hrc_study hrc_results ' + ' '.join(shlex.quote(arg) for arg in argv)
+    command = 'hrc results ' + ' '.join(shlex.quote(arg) for arg in argv)
     try:
         result = write_results(sessions, arguments.out, command,
                                read_experiment(arguments.paths), arguments.weights,

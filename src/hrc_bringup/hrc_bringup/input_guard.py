@@ -1,0 +1,253 @@
+"""The input guard of a session with a person: pause at once when their input is lost.
+
+Never a silent stand-in: in realtime with ``--human device``, ``joy`` or ``auto`` the runner
+does not start until the input is there (:func:`wait_for_input` lists the joystick devices it
+sees and how to fix it); the human node holds zero and asks to pause when its input is lost
+(``on_input_lost: pause``, its ``/hrc/human/input`` status) and :class:`InputGuard` then pauses
+the session at once (the agent is stopped mid-episode: zero commands, the sim holds; the page,
+the console and ``hrc operator status`` say "joystick disconnected"); after the human node
+reports the input back the operator resumes and the agent continues from the last finished
+episode.
+"""
+
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from hrc_common import qos, topics
+from hrc_common.contract import ACTIVE_PHASES, Phase
+from hrc_common.session_control import ABORT_SERVICE, OPERATOR_SERVICES
+from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
+                                  joy_missing_message, joystick_devices, lost_reason)
+from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+
+# Seconds the runner keeps serving the operator services after a resume it answered.
+SERVICE_RETIRE_S = 1.0
+# Link watchdog: a gap between states longer than this (s) is a break or a pause, not a loss;
+# the human node's input status comes at least every second, so this long without it (s) means
+# its station is unreachable.
+STATE_GAP_S = 0.5
+STATUS_SILENCE_S = 2.5
+
+
+class InputGuard:
+    """Pauses the session at once when the person's input is lost; resumes on the operator's word.
+
+    Watches ``/hrc/human/action``: an answer holding zero because the input is lost
+    (:func:`hrc_live.input_check.lost_reason`) while the person is involved makes the runner
+    stop the agent mid-episode (its abort service: zero commands, the sim holds, the last
+    checkpoint kept), say "joystick disconnected" on ``/hrc/session/input_lost`` (the pages) and
+    on ``/hrc/session`` (phase paused, for ``operator status``), and serve the operator services
+    itself until the operator resumes after the input is back; then the agent is started again
+    from the last finished episode.
+    """
+
+    def __init__(self, node, kind: str, device: str, link_timeout: float = 1.0):
+        self.node, self.kind, self.device = node, kind, device
+        self.lost = ''                  # why the input is lost ('' = it is not)
+        # The link watchdog (two hosts, docs/two_hosts.md): monotonic s of the newest state,
+        # of the newest answer from the person's side and of the human node's newest status.
+        self.link_timeout = link_timeout
+        self.last_state_at = self.last_action_at = self.input_status_at = None
+        self.states_flow_since = None   # states run again after a gap (break, pause) since
+        self.involved = False           # the person acts in the current training step
+        self.agent_down = False         # the agent was stopped for the loss and has exited
+        self.resume_requested = False
+        self.abort_requested = False
+        self.last_status = None
+        self._services = []
+        self._practice_told = False
+        self._retire_at = 0.0
+        self._status_pub = None
+        self._string = String
+        self._trigger = Trigger
+        self._session_status = SessionStatus
+        self._topics, self._qos = topics, qos
+        self.lost_pub = node.create_publisher(String, INPUT_LOST_TOPIC, qos.SESSION_QOS)
+        self.lost_pub.publish(String(data=''))
+        self.abort_client = node.create_client(Trigger, ABORT_SERVICE)
+        node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
+                                 qos.HUMAN_ACTION_QOS)
+        node.create_subscription(TaskState, topics.STATE, self._on_state, qos.STATE_QOS)
+        node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
+                                 qos.SESSION_QOS)
+        # The human node's input status (src/hrc_joystick_node/README.md): pause_requested
+        # when its joystick is missing or lost, state 'ok' when it is back.
+        self.input_status = {}          # the newest status's key-values, plus 'message'
+        node.create_subscription(DiagnosticStatus, topics.HUMAN_INPUT, self._on_input_status,
+                                 qos.SESSION_QOS)
+
+    def present(self) -> tuple:
+        """Return (present, why) of the person's input now.
+
+        The human node's word when it has spoken (its input status), else the runner's own
+        look at the device or at /joy's publishers (before the human node runs).
+        """
+        if self.input_status:
+            silent = time.monotonic() - self.input_status_at
+            if silent > STATUS_SILENCE_S:   # it speaks at least every second when reachable
+                return False, (f'no word from the human node for {silent:.1f} s: the network '
+                               f"link to the person's station or the human node is down")
+            ok = self.input_status.get('state') == 'ok'
+            return ok, self.input_status.get('message', '')
+        present, why = device_presence(self.device)
+        if self.kind == 'device' or present:
+            return present, why if present else device_missing_message(
+                self.device, why, joystick_devices())
+        publishers = self.node.count_publishers(self._topics.JOY)
+        if self.kind == 'joy' or publishers:
+            return publishers > 0, joy_missing_message(publishers)
+        return False, (device_missing_message(self.device, why, joystick_devices()) + ' Or: '
+                       + joy_missing_message(publishers))
+
+    def _on_status(self, status):
+        if self._status_pub is None:   # the agent's, not our own stand-in status
+            self.last_status = status
+            self.involved = bool(status.human_involved)
+            # The person's step begins while their input is already gone: pause now.
+            if self.involved and self.input_status.get('pause_requested') == 'true':
+                self._lose(self.input_status.get('message') or 'the human node asks to pause')
+
+    def _on_input_status(self, status):
+        values = {item.key: item.value for item in status.values}
+        values['message'] = status.message
+        self.input_status = values
+        self.input_status_at = time.monotonic()
+        if values.get('pause_requested') == 'true' and self.involved:
+            self._lose(status.message or 'the human node asks to pause')
+
+    def _on_state(self, state):
+        now = time.monotonic()
+        if self.last_state_at is None or now - self.last_state_at > STATE_GAP_S:
+            self.states_flow_since = now
+        self.last_state_at = now
+
+    def _on_action(self, action):
+        self.last_action_at = time.monotonic()
+        reason = lost_reason(action.source, action.source_detail, self.involved)
+        if reason:
+            self._lose(reason)
+
+    def _lose(self, reason: str) -> None:
+        """Pause the session at once: the person's input is lost while they act."""
+        if self.lost or (self.last_status is not None
+                         and self.last_status.phase not in ACTIVE_PHASES):
+            return  # already paused, or nothing runs (done, aborted, paused by the operator)
+        if self.last_status is not None and self.last_status.strategy == 'practice':
+            if not self._practice_told:  # no agent to stop: say it, the human node holds 0
+                self._practice_told = True
+                print(f'[session] practice: {reason}; the human node holds zero, the practice '
+                      f'goes on', flush=True)
+            return
+        if not reason.startswith('joystick disconnected'):
+            reason = f'joystick disconnected: {reason}'
+        self.lost = reason
+        print(f'[session] {reason}: pausing the session now (the agent stops mid-episode, '
+              f'the sim holds, zero commands); resume with "hrc operator '
+              f'resume" or the console once it is back', flush=True)
+        self.lost_pub.publish(self._string(data=reason))
+        if self.abort_client.service_is_ready():
+            self.abort_client.call_async(self._trigger.Request())
+
+    def on_agent_exit(self) -> None:
+        """Stand in for the agent stopped for the loss: operator services, phase paused."""
+        self.agent_down = True
+        if self._services:  # lost again before the last stand-in services were retired
+            return self._publish_paused()
+        self._services = [self.node.create_service(self._trigger, OPERATOR_SERVICES[name],
+                                                    getattr(self, f'_serve_{name}'))
+                          for name in ('pause', 'resume', 'abort')]
+        self._publish_paused()
+
+    def _publish_paused(self) -> None:
+        """Say on /hrc/session (for ``operator status``) that the session is paused, and why."""
+        self._status_pub = self.node.create_publisher(self._session_status,
+                                                      self._topics.SESSION,
+                                                      self._qos.SESSION_QOS)
+        if self.last_status is not None:
+            status = self.last_status
+            status.phase = int(Phase.PAUSED)
+            status.message = f'{self.lost}: paused; resume after it is back'
+
+            self._status_pub.publish(status)
+
+    def _serve_pause(self, request, response):
+        response.success, response.message = True, f'already paused: joystick disconnected ' \
+            f'({self.lost})'
+        return response
+
+    def _serve_resume(self, request, response):
+        present, why = self.present()
+        if not present:
+            response.success = False
+            response.message = f'the joystick is still disconnected: {why}'
+            return response
+        self.resume_requested = True
+        response.success = True
+        response.message = ('resuming: the agent continues from the last finished episode '
+                            '(the interrupted one runs again)')
+        return response
+
+    def _serve_abort(self, request, response):
+        self.abort_requested = True
+        response.success, response.message = True, 'aborted while paused (joystick ' \
+            'disconnected); resume from the last checkpoint'
+        return response
+
+    def resumed(self) -> None:
+        """Stop standing in for the agent (it is starting again)."""
+        if self._status_pub is not None:
+            self.node.destroy_publisher(self._status_pub)
+            self._status_pub = None
+        # The services go a moment later: the answer to the resume call must reach the caller
+        # first (the new agent takes seconds to serve them itself).
+        self._retire_at = time.monotonic() + SERVICE_RETIRE_S
+        self.lost, self.agent_down, self.resume_requested = '', False, False
+        self.lost_pub.publish(self._string(data=''))
+
+    def watch_link(self) -> None:
+        """Pause when states run but the person's side has not answered for link_timeout s.
+
+        Over two hosts a dropped network link silences the human node without any word from
+        it; the sim then counts the person's commands missing. That is a lost input like an
+        unplugged joystick: pause the same way, and resume only on the operator's word.
+        """
+        now = time.monotonic()
+        if (not self.involved or self.lost or self.last_status is None
+                or self.last_status.phase not in (Phase.TRAINING, Phase.EVALUATION)
+                or self.last_state_at is None or now - self.last_state_at > STATE_GAP_S):
+            return      # nothing runs now, or the person does not act, or already paused
+        since = now - max(self.last_action_at or 0.0, self.states_flow_since)
+        if since > self.link_timeout:
+            self._lose(f"no answer from the person's side for {since:.1f} s while the "
+                       f'episode runs (network link to the station or human node down)')
+
+    def tick(self) -> None:
+        """Retire the stand-in operator services once their last answer is out."""
+        self.watch_link()
+        if self._services and not self.agent_down and time.monotonic() > self._retire_at:
+            for service in self._services:
+                self.node.destroy_service(service)
+            self._services = []
+
+
+def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: list) -> bool:
+    """Wait until the person's input is there; say what is missing and how to fix it."""
+    deadline = time.monotonic() + timeout
+    said = ''
+    while True:
+        present, why = guard.present()
+        if present:
+            if said:
+                print(f'[session] the input is there now: {why}', flush=True)
+            return True
+        if why != said:
+            print(f"[session] waiting for the person's input (up to {timeout:.0f} s): {why}",
+                  flush=True)
+            said = why
+        if time.monotonic() > deadline or stop_reason:
+            print(f'[session] not started: {why}', file=sys.stderr, flush=True)
+            return False
+        executor.spin_once(timeout_sec=0.2)

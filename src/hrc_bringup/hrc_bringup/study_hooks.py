@@ -1,0 +1,75 @@
+"""What a session with a subject adds for the study: its index entry, NASA-TLX, owner-only."""
+
+import pathlib
+import sys
+import time
+
+from hrc_common.session_plan import SessionSettings
+from hrc_live.study import append_index, IndexEntry, load_registry, position_of
+import yaml
+
+
+def owner_only(settings: SessionSettings, parameters: dict) -> None:
+    """Make every output of a session with a subject id owner-only (issue 25).
+
+    The umask set at the start makes new files 0600 and folders 0700; a few writers set their
+    mode themselves (hrc_common.contract.atomic_write: 0644 by default, e.g. the checkpoints),
+    so the session's folders (run, bags, checkpoints; the practice's too) are gone over once
+    more at the end: files 0600, folders 0700.
+    """
+    roots = []
+    for session_id in (settings.session_id, settings.session_id + '-practice'):
+        roots += [pathlib.Path(settings.runs_dir) / session_id,
+                  pathlib.Path(settings.bags_dir) / session_id,
+                  pathlib.Path(parameters['agent']['checkpoint_dir']) / session_id]
+    for root in roots:
+        if not root.is_dir() or root.is_symlink():
+            continue
+        for path in [root, *root.rglob('*')]:
+            if path.is_symlink():
+                continue
+            try:
+                path.chmod(0o700 if path.is_dir() else 0o600)
+            except OSError as error:
+                print(f'[session] could not make {path} owner-only: {error}', file=sys.stderr)
+
+
+def index_session(settings: SessionSettings, options, kind: str, started: str,
+                  code: int) -> None:
+    """Add the session to the study's per-subject index (with --study-dir)."""
+    if not options.study_dir:
+        return
+    session_id = settings.session_id + ('-practice' if kind == 'practice' else '')
+    run_dir = pathlib.Path(settings.runs_dir) / session_id
+    tlx = run_dir.parent / settings.session_id / 'tlx.yaml'
+    entry = IndexEntry(
+        subject_id=settings.subject_id, session_id=session_id, case=settings.case, kind=kind,
+        position=position_of(load_registry(options.study_dir), settings.subject_id,
+                             settings.case),
+        started=started, ended=time.strftime('%Y-%m-%dT%H:%M:%S'), exit_code=int(code),
+        bags=str((pathlib.Path(settings.bags_dir) / session_id).resolve()),
+        run_dir=str(run_dir.resolve()),
+        tlx_file=str(tlx.resolve()) if options.tlx and kind == 'condition' else '')
+    path = append_index(options.study_dir, entry)
+    print(f'[session] {kind} {session_id} added to the study index {path}', flush=True)
+
+
+def wait_for_tlx(path: pathlib.Path, session_id: str, executor, timeout: float,
+                 stop_reason: list) -> bool:
+    """Keep the page up until the person sent the NASA-TLX of this session (or timeout)."""
+    print(f'[session] waiting up to {timeout:.0f} s for the NASA-TLX on the page (Ctrl-C '
+          f'skips it)', flush=True)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not stop_reason:
+        try:
+            answers = yaml.safe_load(path.read_text()) or []
+        except (OSError, yaml.YAMLError):
+            answers = []
+        if any(isinstance(answer, dict) and answer.get('session_id') == session_id
+               for answer in answers):
+            print(f'[session] NASA-TLX stored in {path}', flush=True)
+            return True
+        executor.spin_once(timeout_sec=0.2)
+    stop_reason.clear()  # Ctrl-C here only skips the questionnaire
+    print('[session] no NASA-TLX answer: the session ends without it', flush=True)
+    return False
