@@ -9,7 +9,7 @@ Each verb runs the ``main(argv)`` of the module that owns the job (the session r
 package, the report of hrc_bag, the study tools of hrc_live, ...); ``hrc <verb> --help`` prints
 that verb's own help followed by an example. The flags that several verbs take are spelled the
 same everywhere: ``--case``, ``--seed``, ``--engine graph|inprocess``, ``--human
-sim|auto|device|joy|model``, ``--profile`` (a simulated-human profile), ``--set
+sim|auto|device|joy|model|script``, ``--profile`` (a simulated-human profile), ``--set
 NODE.PARAM=VALUE``. The nodes keep their own executables (``ros2 run hrc_sim_node sim_node``
 ...). Benchmarks are scripts, not verbs (``bench/``, ``python -m hrc_gym.bench.compare_ppo``).
 
@@ -207,7 +207,7 @@ def usage() -> str:
         lines += textwrap.wrap(f'  {verb.name:<{width}}  {verb.summary}', width=USAGE_WIDTH,
                                subsequent_indent=' ' * (width + 4))
     lines += ['', 'flags spelled the same by every verb that takes them: --case N, --seed N, '
-              '--engine graph|inprocess,', '--human sim|auto|device|joy|model, --profile '
+              '--engine graph|inprocess,', '--human sim|auto|device|joy|model|script, --profile '
               'NAME (simulated human), --set NODE.PARAM=VALUE.',
               'The nodes keep their executables: ros2 run <package> <node> (sim_node, '
               'agent_node, human_node,', 'recorder_node, replay_node, display_node).']

@@ -71,7 +71,8 @@ def test_session_engine_inprocess_refuses_what_only_the_graph_does_every_reason(
     code, _, err = run(capsys, 'session', '--engine', 'inprocess', '--human', 'joy', '--mode',
                        'realtime', '--episodes', '-1')
     assert code == 2
-    assert '--human joy: the in-process engine runs the simulated human only' in err
+    assert '--human joy: the in-process engine runs the simulated human, a cloned model or a ' \
+        'scripted stick only' in err
     assert '--mode realtime: the in-process engine runs lockstep only' in err
     assert '--episodes must be >= 0' in err
     assert 'Traceback' not in err
