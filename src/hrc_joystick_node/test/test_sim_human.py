@@ -29,12 +29,17 @@ def test_the_profiles_the_issue_asks_for_exist_and_are_valid():
     assert {'novice', 'skilled', 'paper', 'paper_symmetric'} <= set(PROFILES)
     for name, profile in PROFILES.items():
         assert profile.description, f'{name} has no description'
-        if name.endswith('_symmetric'):
+        if '_symmetric' in name:
             continue  # the control profiles (test_human_model.py)
         # The paper's observation: the beam angle is judged worse than the slider height, as
         # seen on the monitor: a misjudged angle moves the end of the 0.5 m beam this far (m).
-        assert profile.pendulum_noise * 0.5 > 2 * profile.slider_noise, name
+        # The misjudged reference (the horizontal) more than twice; the momentary noise more
+        # than twice up to version 2, still worse on the screen in version 3 (`paper`: 5 mm at
+        # the beam's end against 3 mm; sim_human.py, "Version 2 and version 3").
         assert profile.pendulum_bias * 0.5 > 2 * profile.slider_bias, name
+        assert profile.pendulum_noise * 0.5 > profile.slider_noise, name
+        if name != 'paper':
+            assert profile.pendulum_noise * 0.5 > 2 * profile.slider_noise, name
 
 
 def test_installed_profiles_are_the_repository_ones():
@@ -213,6 +218,43 @@ def test_the_version_1_profiles_reproduce_the_old_commands_exactly(name, dof):
     assert command_digest(PROFILES[f'{name}_v1'], dof, stamps=True) == expected
     # ... and the current profile of that name is a different person.
     assert command_digest(PROFILES[name], dof) != expected
+
+
+# The same digests of the paper people of stop 26 (commit 1241f4c, profiles paper and
+# paper_symmetric before version 3), at the 0.2 s call period and at 0.02 s (the default human
+# period); person 4 of that paper population. The *_v2 profiles reproduce them.
+VERSION_2_COMMANDS = {
+    ('paper', 'rotation'): 'c6dd489d6c332761', ('paper', 'translation'): 'e583a3cbad201c07',
+    ('paper_symmetric', 'rotation'): 'fbea328c931c5369',
+    ('paper_symmetric', 'translation'): '2668386029bca4d6',
+}
+VERSION_2_AT_HUMAN_RATE = '55c7fc5e1e968b5d'  # paper, rotation, one episode at 0.02 s
+VERSION_2_PERSON_4 = '669261592797f6ad'
+
+
+@pytest.mark.parametrize('name, dof', sorted(VERSION_2_COMMANDS))
+def test_the_version_2_profiles_reproduce_the_stop_26_commands_exactly(name, dof):
+    expected = VERSION_2_COMMANDS[(name, dof)]
+    assert command_digest(PROFILES[f'{name}_v2'], dof) == expected
+    assert command_digest(PROFILES[f'{name}_v2'], dof, stamps=True) == expected
+    # ... and version 3 (the current profile of that name) is a different person.
+    assert command_digest(PROFILES[name], dof) != expected
+
+
+def test_the_version_2_paper_person_reproduces_at_the_human_rate_and_in_the_population():
+    import hashlib
+    from hrc_joystick_node.population import sample_person
+
+    def digest(profile, period):
+        human = SimulatedHuman(profile, 'rotation', seed=3, control_period=period)
+        human.reset(0)
+        commands = [human.act(state, ['pendulum', 'ball'])
+                    for state in synthetic_states(period=period)]
+        return hashlib.sha256(repr(commands).encode()).hexdigest()[:16]
+
+    assert digest(PROFILES['paper_v2'], 0.02) == VERSION_2_AT_HUMAN_RATE
+    assert digest(sample_person(PROFILES['paper_v2'], 4), 0.2) == VERSION_2_PERSON_4
+    assert digest(PROFILES['paper'], 0.02) != VERSION_2_AT_HUMAN_RATE
 
 
 @pytest.mark.parametrize('name', sorted(VERSION_1_PERSON_4))

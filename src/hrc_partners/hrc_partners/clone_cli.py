@@ -7,6 +7,9 @@ Reads every session under the paths, keeps the steps a person drove (joystick, /
 simulated human), holds out the named subjects or sessions (default: the last session, when
 there are at least two), trains on the rest and reports the held-out action error and the
 response lag (cross-correlation) of the person and of the clone on the held-out episodes.
+``--targets applied`` (default) learns from every command the sim applied in each period (one
+per slice at the human's own rate, ``TaskState.human_applied``); ``--targets command`` from
+the one ``HumanAction`` per step, as before (``hrc_partners.cloning``).
 Exit 2 with every reason for bad input.
 """
 
@@ -34,6 +37,9 @@ def parse_args(argv):
     parser.add_argument('--hidden', type=int, nargs='+', default=[32, 32])
     parser.add_argument('--epochs', type=int, default=600)
     parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--targets', choices=['applied', 'command'], default='applied',
+                        help='learn from the commands the sim applied in each period (one per '
+                        "slice at the human's rate) or from the HumanAction of each step")
     parser.add_argument('--json', action='store_true', help='print the report as JSON')
     return parser.parse_args(argv)
 
@@ -79,7 +85,7 @@ def clone(args, log=print) -> dict:
         raise ParameterError('every session is held out: nothing left to train on')
     settings = cloning.CloneSettings(history_steps=args.history_steps,
                                      hidden=tuple(args.hidden), epochs=args.epochs,
-                                     seed=args.seed)
+                                     seed=args.seed, targets=args.targets)
     config, state_dict, train_rmse = cloning.train_clone(train, settings)
     period = train[0].control_period
     config.update(dof=dof, control_period=period, description=(
@@ -87,6 +93,7 @@ def clone(args, log=print) -> dict:
         f'{", ".join(sorted({s for item in train for s in item.sources}))})'))
     save_human_model(args.out, config, state_dict)
     report = {'model': str(args.out), 'dof': dof, 'control_period': period,
+              'targets': settings.targets,
               'training_sessions': [item.session_id for item in train],
               'held_out_sessions': [item.session_id for item in test],
               'training_steps': sum(item.steps for item in train),
@@ -94,7 +101,7 @@ def clone(args, log=print) -> dict:
     if test:
         network = build_network(config)
         network.load_state_dict(state_dict)
-        error = cloning.action_error(network, test, settings.history_steps)
+        error = cloning.action_error(network, test, settings.history_steps, settings.targets)
         traces = [trace for item in test for trace in item.episodes]
         report['held_out'] = {
             'steps': error.steps, 'rmse': error.rmse, 'mae': error.mae,
@@ -112,7 +119,9 @@ def describe(report: dict) -> str:
     lines = [f'clone_human: {report["model"]} ({report["dof"]}, {report["control_period"]} s)',
              f'  trained on {len(report["training_sessions"])} sessions '
              f'({report["training_steps"]} driven steps): {", ".join(report["training_sessions"])}'
-             f'; training RMSE {report["training_rmse"]:.4f}']
+             f'; training RMSE {report["training_rmse"]:.4f}; learned from the '
+             + ('commands applied in each period' if report.get('targets') == 'applied'
+                else 'HumanAction of each step')]
     held = report.get('held_out')
     if held is None:
         lines.append('  no held-out session: no held-out error (give at least two sessions)')

@@ -6,6 +6,16 @@ episode's first state), and the subtasks asked of the person (slider, pendulum, 
 to the stick command in [-1, 1]. :func:`features` builds exactly the inputs
 ``ClonedHuman.act`` builds at run time, so what is trained is what runs.
 
+**What it learns from** (``CloneSettings.targets``): ``applied`` (default) -- every command the
+sim applied in the period after each state (``EpisodeTrace.applied``: at the human's own rate,
+one per slice, e.g. ten at 0.02 s), each a training pair with that state's inputs; ``command``
+-- the ``HumanAction`` answering the state (the person's first command of the period), as
+before issue 21's targets (with one command per period, as recorded at ``human_period`` 0.2 s,
+both are the same). The clone acts once a control period and holds its command over the
+slices (``ClonedHuman``), so in least squares it learns the mean of what the person applied
+in the period, not the snapshot at its start; the held-out error is measured against the same
+targets.
+
 Modelling choices (not facts): a deterministic policy fitted by mean squared error (the
 person's motor noise and lapses are not modelled: the clone is their mean response, so it is
 steadier than they are); ``history_steps`` 6 (1.2 s at 0.2 s) covers reaction delays of 0.1 to
@@ -30,6 +40,7 @@ import torch
 
 CONTROLLED = {'rotation': STATE_FIELDS.index('pendulum_angle'),
               'translation': STATE_FIELDS.index('slider_position')}
+TARGETS = ('applied', 'command')   # what a clone learns from (module docstring)
 
 
 @dataclass
@@ -42,6 +53,7 @@ class CloneSettings:
     learning_rate: float = 3e-3   # Adam step size
     weight_decay: float = 1e-5    # L2 penalty (Adam's weight_decay)
     seed: int = 0                 # torch seed of the initial weights
+    targets: str = 'applied'      # TARGETS: the applied slice commands, or the HumanAction
 
 
 def subtask_flags(subtasks) -> typing.List[float]:
@@ -59,17 +71,34 @@ def features(states: numpy.ndarray, subtasks, history_steps: int) -> numpy.ndarr
     return numpy.concatenate(columns + [flags], axis=1)
 
 
-def dataset(demonstrations, history_steps: int) -> typing.Tuple[numpy.ndarray, numpy.ndarray]:
-    """Return (inputs, commands) of every driven step of ``demonstrations``."""
-    inputs, targets = [], []
+def step_targets(trace, targets: str = 'applied') -> typing.List[numpy.ndarray]:
+    """Return, per step of ``trace``, the commands learned from (``targets``, see TARGETS)."""
+    if targets not in TARGETS:
+        raise ValueError(f'targets: expected one of {TARGETS}, got {targets!r}')
+    if targets == 'applied' and len(trace.applied) == len(trace.commands):
+        return [numpy.asarray(values, dtype=float) for values in trace.applied]
+    return [numpy.array([float(command)]) for command in trace.commands]
+
+
+def dataset(demonstrations, history_steps: int,
+            targets: str = 'applied') -> typing.Tuple[numpy.ndarray, numpy.ndarray]:
+    """Return (inputs, commands) of every driven step of ``demonstrations``.
+
+    One row per command learned from: with ``targets`` 'applied' a step at the human's rate
+    gives one row per applied slice command, all with the step's inputs.
+    """
+    inputs, commands = [], []
     for demonstration in demonstrations:
         for trace in demonstration.episodes:
             rows = features(trace.states, trace.subtasks, history_steps)
-            inputs.append(rows[trace.driving])
-            targets.append(trace.commands[trace.driving])
+            per_step = step_targets(trace, targets)
+            for step in numpy.flatnonzero(trace.driving):
+                values = per_step[step]
+                inputs.append(numpy.repeat(rows[step:step + 1], len(values), axis=0))
+                commands.append(values)
     if not inputs:
         return numpy.zeros((0, input_size(history_steps))), numpy.zeros(0)
-    return numpy.concatenate(inputs), numpy.concatenate(targets)
+    return numpy.concatenate(inputs), numpy.concatenate(commands)
 
 
 def split_by_subject(demonstrations, held_out: typing.Sequence[str]) -> tuple:
@@ -88,7 +117,7 @@ def train_clone(demonstrations, settings: CloneSettings = None) -> tuple:
     settings = settings or CloneSettings()
     config = {'history_steps': int(settings.history_steps),
               'hidden': [int(width) for width in settings.hidden]}
-    inputs, targets = dataset(demonstrations, settings.history_steps)
+    inputs, targets = dataset(demonstrations, settings.history_steps, settings.targets)
     if len(targets) == 0:
         raise ValueError('no driven step to learn from')
     threads = torch.get_num_threads()
@@ -129,13 +158,21 @@ class ActionError:
     steps: int
 
 
-def action_error(network, demonstrations, history_steps: int) -> ActionError:
-    """Return the open-loop action error of ``network`` on ``demonstrations``."""
+def action_error(network, demonstrations, history_steps: int,
+                 targets: str = 'applied') -> ActionError:
+    """Return the open-loop action error of ``network`` on ``demonstrations``.
+
+    Against every command of ``targets`` (the model's command held over the period is
+    compared with each applied slice command; ``steps`` counts those comparisons).
+    """
     predicted, actual = [], []
     for demonstration in demonstrations:
         for trace in demonstration.episodes:
-            predicted.append(predict(network, trace, history_steps)[trace.driving])
-            actual.append(trace.commands[trace.driving])
+            model = predict(network, trace, history_steps)
+            per_step = step_targets(trace, targets)
+            for step in numpy.flatnonzero(trace.driving):
+                predicted.append(numpy.full(len(per_step[step]), model[step]))
+                actual.append(per_step[step])
     if not actual:
         return ActionError(math.nan, math.nan, math.nan, math.nan, 0)
     predicted, actual = numpy.concatenate(predicted), numpy.concatenate(actual)

@@ -9,6 +9,16 @@ commands held for a missing input (``SOURCE_NONE``) and replays. The subtasks as
 person come from the ``SessionStatus`` in force for the episode (the last one in its file that
 announces that episode). A session belongs to its subject (``subject_id`` of its configuration)
 or, without one, is its own subject: splits are by subject, never by step.
+
+**What the sim applied.** Acting at its own rate (``sim.human_period``, 0.02 s by default) the
+person answers the step's state with a ``HumanAction`` (its first command of the period) and
+every slice state of the period with a command the sim applies; the next ``TaskState`` carries
+every command applied in the period (``human_applied``, N or N*m, in time order). Each step's
+``EpisodeTrace.applied`` holds them normalized by the session's full scale (``max_force`` /
+``max_torque`` of its sim parameters; the defaults 2 N and 0.5 N*m when a session does not
+record them): what the person really did in the period after the state. A step without them
+(the episode's last, a session recorded before issue 21, a period whose human command was
+missing and so applied as zero) keeps the ``HumanAction`` command alone.
 """
 
 from dataclasses import dataclass, field
@@ -17,12 +27,15 @@ import typing
 from hrc_bag import bag_reader
 from hrc_bag.report.loading import load_sessions, topics_of_type
 from hrc_common.contract import (dof_name, HUMAN_ACTION_TYPE, InputSource, SESSION_STATUS_TYPE,
-                                 TASK_STATE_TYPE)
+                                 TASK_STATE_TYPE, TRANSLATION)
 import numpy
 
 from hrc_joystick_node.human_model import STATE_FIELDS
 
 DRIVING_SOURCES = (int(InputSource.DEVICE), int(InputSource.JOY), int(InputSource.SIMULATED))
+# Full scale of a normalized command when a session does not record its sim parameters (the
+# sim's defaults, hrc_sim_node.physics.PhysicsParams): N on translation, N*m on rotation.
+DEFAULT_FULL_SCALE = {'max_force': 2.0, 'max_torque': 0.5}
 
 
 @dataclass
@@ -34,6 +47,9 @@ class EpisodeTrace:
     commands: numpy.ndarray      # (steps,) the person's normalized command, [-1, 1]
     driving: numpy.ndarray       # (steps,) bool: the person drove at this step (kept for fits)
     subtasks: typing.List[str]   # subtask ids asked of the person (slider, pendulum, ball)
+    # per step: the person's normalized commands the sim applied in the period after the state,
+    # in time order (one per slice at the human's rate; the command alone when not recorded)
+    applied: typing.List[numpy.ndarray] = field(default_factory=list)
 
 
 @dataclass
@@ -71,15 +87,45 @@ def _subtasks_of(statuses, episode: int) -> typing.List[str]:
     return list(chosen.human_subtasks) if chosen is not None else []
 
 
-def read_episode(file, topics: dict, decoder, episode: int) -> typing.Optional[tuple]:
-    """Return (EpisodeTrace, human dof, source details) of one episode file, or None if empty."""
+def full_scales(config: dict) -> typing.Dict[str, float]:
+    """Return ``{'max_force': N, 'max_torque': N*m}`` of a session's configuration."""
+    parameters = config.get('parameters') if isinstance(config, dict) else None
+    sim = parameters.get('sim') if isinstance(parameters, dict) else None
+    scales = dict(DEFAULT_FULL_SCALE)
+    for name in scales:
+        try:
+            value = float((sim or {}).get(name))
+        except (TypeError, ValueError):
+            continue
+        if value > 0:
+            scales[name] = value
+    return scales
+
+
+def _applied(next_state, action, scales: dict) -> numpy.ndarray:
+    """Return the person's normalized commands applied after the state ``action`` answered."""
+    values = list(getattr(next_state, 'human_applied', []) or []) if next_state is not None else []
+    if not values or bool(getattr(next_state, 'human_command_missing', False)):
+        return numpy.array([float(action.command)])
+    dof = dof_name(int(action.dof), '')
+    scale = scales['max_force'] if dof == TRANSLATION else scales['max_torque']
+    return numpy.array([float(value) / scale for value in values])
+
+
+def read_episode(file, topics: dict, decoder, episode: int,
+                 scales: typing.Optional[dict] = None) -> typing.Optional[tuple]:
+    """Return (EpisodeTrace, human dof, source details) of one episode file, or None if empty.
+
+    ``scales``: the session's full scales (:func:`full_scales`; default the sim's defaults).
+    """
     wanted = topics[TASK_STATE_TYPE] + topics[HUMAN_ACTION_TYPE] + topics[SESSION_STATUS_TYPE]
     scan = bag_reader.scan_file(file, topics=wanted)
     states, actions, statuses = {}, {}, []
     for message in scan.messages:
         decoded = decoder.decode(message)
         if message.topic in topics[TASK_STATE_TYPE]:
-            states[(int(decoded.episode), int(decoded.step))] = decoded
+            if int(getattr(decoded, 'slice', 0) or 0) == 0:  # slice states: not the step's
+                states[(int(decoded.episode), int(decoded.step))] = decoded
         elif message.topic in topics[HUMAN_ACTION_TYPE]:
             actions[(int(decoded.episode), int(decoded.step))] = decoded
         else:
@@ -94,7 +140,10 @@ def read_episode(file, topics: dict, decoder, episode: int) -> typing.Optional[t
                            in DRIVING_SOURCES for key in keys])
     dofs = {dof_name(int(actions[key].dof), '') for key, use in zip(keys, driving) if use}
     details = sorted({str(actions[key].source_detail) for key, use in zip(keys, driving) if use})
-    trace = EpisodeTrace(episode, rows, commands, driving, _subtasks_of(statuses, episode))
+    scales = scales or DEFAULT_FULL_SCALE
+    applied = [_applied(states.get((key[0], key[1] + 1)), actions[key], scales) for key in keys]
+    trace = EpisodeTrace(episode, rows, commands, driving, _subtasks_of(statuses, episode),
+                         applied)
     return trace, dofs, details
 
 
@@ -114,12 +163,13 @@ def load_demonstrations(paths, log=print) -> typing.List[Demonstration]:
                    for name in (TASK_STATE_TYPE, HUMAN_ACTION_TYPE, SESSION_STATUS_TYPE)}
         subject = str(session.config.get('subject_id') or session.session_id)
         period = _seconds(session.config.get('control_period'))
+        scales = full_scales(session.config)
         by_dof = {}
         for episode, files in sorted(session.files_by_episode.items()):
             record = session.human_inputs.get(episode, {})
             period = _seconds(record.get('control_period')) or period or 0.2
             for file in files:
-                read = read_episode(file, by_type, decoder, episode)
+                read = read_episode(file, by_type, decoder, episode, scales)
                 if read is None:
                     continue
                 trace, dofs, details = read

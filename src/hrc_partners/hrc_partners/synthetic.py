@@ -46,15 +46,16 @@ def fast_and_slow(path) -> str:
 
 
 def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int = 3,
-                    episodes: int = 4, seconds: float = 16.0) -> typing.List[str]:
+                    episodes: int = 4, seconds: float = 16.0,
+                    human_period: float = 0.2) -> typing.List[str]:
     """Run one short in-process session per (person, seed); return the session folders.
 
     Case 3 (level-guided, robot on translation) puts the person on the rotation from the first
     episode. ``episodes`` training episodes of ``seconds`` s of simulation, no evaluation, no
-    checkpoints. The person acts once a control period (``sim.human_period`` 0.2 s): a clone
-    learns one command a control step (HumanAction) and acts at that rate (HumanCore), so the
-    people it learns from are recorded at that rate too (cloning from the commands applied at
-    the human's own rate, ``TaskState.human_applied``, is not built yet).
+    checkpoints. By default the person acts once a control period (``human_period`` 0.2 s: one
+    command a step, the rate a clone acts at); at a shorter ``human_period`` (the default
+    session's 0.02 s) the bags carry every command applied (``TaskState.human_applied``),
+    which a clone learns from (``hrc_partners.cloning``, targets ``applied``).
     """
     folders = []
     for person in people:
@@ -64,7 +65,8 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
                 evaluation_episodes=0, session_id=f'{person}-seed{seed}',
                 bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
                 human_profile=person,
-                overrides={'sim.episode_duration': float(seconds), 'sim.human_period': 0.2,
+                overrides={'sim.episode_duration': float(seconds),
+                           'sim.human_period': float(human_period),
                            'human.profiles_file': str(profiles_file)}))
             folders.append(result.bag_dir)
     return folders

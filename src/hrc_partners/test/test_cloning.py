@@ -85,3 +85,45 @@ def test_features_match_what_the_cloned_human_sees():
     # step 0: history filled with the first state; newest first; subtask flags last
     assert rows[0].tolist() == states[0].tolist() + states[0].tolist() + [0, 1, 1]
     assert rows[2].tolist() == states[2].tolist() + states[1].tolist() + [0, 1, 1]
+
+
+def test_a_clone_learns_every_command_the_sim_applied_at_the_human_rate(tmp_path, capsys):
+    import numpy
+
+    profiles = synthetic.fast_and_slow(tmp_path / 'people.yaml')
+    folders = synthetic.record_sessions(tmp_path / 'bags', tmp_path / 'runs', profiles,
+                                        ['fast'], [0, 1], episodes=1, seconds=8.0,
+                                        human_period=0.02)
+    demonstrations = load_demonstrations(folders, log=lambda line: None)
+    assert [item.steps for item in demonstrations] == [40, 40]
+    for trace in (trace for item in demonstrations for trace in item.episodes):
+        driven = numpy.flatnonzero(trace.driving)
+        # ten slices a period; the first is the HumanAction's command (another message), the
+        # rest are what the person did later in the period, and they differ from it
+        assert all(len(trace.applied[step]) == 10 for step in driven)
+        first = numpy.array([trace.applied[step][0] for step in driven])
+        assert numpy.allclose(first, trace.commands[driven], atol=1e-12)
+        spread = [numpy.ptp(trace.applied[step]) for step in driven]
+        assert max(spread) > 0.05, spread
+    inputs, targets = cloning.dataset(demonstrations[:1], 6, 'applied')
+    command_inputs, _ = cloning.dataset(demonstrations[:1], 6, 'command')
+    assert len(targets) == len(inputs) == 10 * 40 and len(command_inputs) == 40
+
+    # The command line learns from them by default and says so; the held-out error counts
+    # every applied command (40 held-out steps x 10 slices).
+    report = _clone(capsys, folders, 'fast-seed1', tmp_path / 'applied.pt')
+    assert report['targets'] == 'applied' and report['held_out']['steps'] == 400
+    assert report['held_out']['rmse'] < 0.5 * report['held_out']['zero_command_rmse'], report
+
+
+def test_one_command_a_period_learns_exactly_what_it_learned_before(tmp_path):
+    import numpy
+
+    profiles = synthetic.fast_and_slow(tmp_path / 'people.yaml')
+    folders = synthetic.record_sessions(tmp_path / 'bags', tmp_path / 'runs', profiles,
+                                        ['fast'], [0], episodes=1, seconds=4.0)
+    demonstrations = load_demonstrations(folders, log=lambda line: None)
+    applied = cloning.dataset(demonstrations, 6, 'applied')
+    command = cloning.dataset(demonstrations, 6, 'command')
+    assert all(numpy.array_equal(a, b) for a, b in zip(applied, command))
+    assert len(command[1]) == 20
