@@ -106,8 +106,10 @@ def clone(args, log=print) -> dict:
         report['held_out'] = {
             'steps': error.steps, 'rmse': error.rmse, 'mae': error.mae,
             'zero_command_rmse': error.zero_rmse, 'correlation': error.correlation,
-            'person_lag_s': cloning.response_lag(traces, [t.commands for t in traces], dof,
-                                                 period),
+            # the person's commands as learned: per step the mean of what was applied
+            'person_lag_s': cloning.response_lag(
+                traces, [cloning.period_commands(t, settings.targets) for t in traces], dof,
+                period),
             'clone_lag_s': cloning.response_lag(
                 traces, [cloning.predict(network, t, settings.history_steps) for t in traces],
                 dof, period)}

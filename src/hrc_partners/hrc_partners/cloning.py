@@ -80,6 +80,11 @@ def step_targets(trace, targets: str = 'applied') -> typing.List[numpy.ndarray]:
     return [numpy.array([float(command)]) for command in trace.commands]
 
 
+def period_commands(trace, targets: str = 'applied') -> numpy.ndarray:
+    """Return, per step, the mean of the commands learned from (the person's held-equivalent)."""
+    return numpy.array([float(numpy.mean(values)) for values in step_targets(trace, targets)])
+
+
 def dataset(demonstrations, history_steps: int,
             targets: str = 'applied') -> typing.Tuple[numpy.ndarray, numpy.ndarray]:
     """Return (inputs, commands) of every driven step of ``demonstrations``.
