@@ -67,6 +67,10 @@ def parse_arguments(argv):
     parser.add_argument('--spot-check', nargs='*', default=['2:0', '4:1'], metavar='CASE:SEED',
                         help='sessions rerun through the graph and compared (none: no check)')
     parser.add_argument('--parallel', type=int, default=2, help='sessions at once')
+    parser.add_argument('--stop-after', type=float, default=0.0, metavar='MINUTES',
+                        help="each learner's experiment starts no session after this many "
+                        'minutes; a cut run holds whole seeds (every case) of each profile '
+                        '(default 0 = none)')
     parser.add_argument('--name', default='study-rerun', help='experiment name (bags/<name>)')
     parser.add_argument('--bags-dir', default=str(REPO / 'bags'))
     parser.add_argument('--runs-dir', default=str(REPO / 'runs'))
@@ -81,6 +85,8 @@ def parse_arguments(argv):
         reasons.append(f'--control-seeds must be >= 0, got {options.control_seeds}')
     if options.parallel < 1:
         reasons.append(f'--parallel must be >= 1, got {options.parallel}')
+    if options.stop_after < 0:
+        reasons.append(f'--stop-after must be >= 0, got {options.stop_after}')
     spots = []
     for text in options.spot_check:
         case, _, seed = text.partition(':')
@@ -180,7 +186,9 @@ def main(argv=None) -> int:
     failures = []
     for learner in options.learners:
         name = f'{options.name}-{learner}'
-        code = experiment(options, name, learner, ['--seeds', str(options.seeds)] + profiles)
+        code = experiment(options, name, learner, ['--seeds', str(options.seeds),
+                                                   '--stop-after', str(options.stop_after)]
+                          + profiles)
         if code != 0:
             failures.append(f'{learner}: the experiment exited {code}')
             continue
