@@ -95,6 +95,12 @@ class EpisodePlan:
     training_step: int
     human_involved: bool
     judging: bool = False
+    partner: str = 'person'   # who acts as the human when involved (strategies.PARTNERS)
+
+    @property
+    def with_person(self) -> bool:
+        """Return True when the session's person acts in this episode (their time counts)."""
+        return self.human_involved and self.partner == 'person'
 
     @property
     def deterministic(self) -> bool:
@@ -255,7 +261,12 @@ class AgentCore:
         self.phase = Phase.EVALUATION if p.evaluation_only else Phase.TRAINING
         self.episode = 0                    # index of the current (or next) episode
         self.total_episodes = 0             # training and judging episodes finished
-        self.human_involved_episodes = 0    # of which the human took part
+        self.human_involved_episodes = 0    # of which the person took part
+        self.population_episodes = 0        # of which a simulated population partner acted
+        # Set by the caller that supplies a simulated population as the human in the
+        # strategy's population steps (hrc_partners.partners_first): no other runner may run
+        # them, lest the person of the last step be trained with as the "population".
+        self.population_partner = False
         self.judging_episodes = 0           # judging episodes finished (in total_episodes)
         self.judging_due = False            # the next training-phase episode is a judging one
         self.episodes_since_judging = 0     # training episodes since the last judging episode
@@ -446,9 +457,16 @@ class AgentCore:
             raise RuntimeError(f'cannot start an episode in phase {self.phase.label!r}')
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is still running')
+        step = self.training_step
+        if step.partner == 'population' and not self.population_partner:
+            raise RuntimeError(
+                f'case {self.case_id} step {step.index + 1} "{step.name}" trains with a '
+                'simulated population before the person joins: run it with '
+                'hrc_partners.partners_first.pretrain and start this session from its '
+                'checkpoint')
         plan = EpisodePlan(self.episode, derive_seed(self.params.seed, self.episode),
-                           self.phase == Phase.EVALUATION, self.training_step.index,
-                           self.human_involved, self._next_is_judging())
+                           self.phase == Phase.EVALUATION, step.index,
+                           self.human_involved, self._next_is_judging(), step.partner)
         self._log = _EpisodeLog(plan, error_sums={subtask_id: 0.0
                                                   for subtask_id in self.tree.subtasks})
         self.reward_scaler.start_episode()
@@ -674,7 +692,8 @@ class AgentCore:
     def _count_and_judge(self, plan: EpisodePlan, errors: dict) -> tuple:
         """Count a training or judging episode, judge the step; return (converged, event)."""
         self.total_episodes += 1
-        self.human_involved_episodes += int(plan.human_involved)
+        self.human_involved_episodes += int(plan.with_person)
+        self.population_episodes += int(plan.human_involved and not plan.with_person)
         judge = plan.judging or not self.judged_on_evaluation
         if plan.judging:
             self.judging_episodes += 1
@@ -711,7 +730,9 @@ class AgentCore:
             self.reward_scaler.reset()
             if self.off_policy:
                 self.policy_learner.clear_replay()
-        self.judging_due = False
+        # judge_first: the policy the step starts with may already meet it (trained before the
+        # person joined): judge it on the step's first episode instead of training first.
+        self.judging_due = self.progress.step.judge_first and self.judged_on_evaluation
         self.episodes_since_judging = 0
 
     def _next_is_judging(self) -> bool:
@@ -788,6 +809,8 @@ class AgentCore:
             human_involved_episodes=self.human_involved_episodes,
             human_involved_percentage=(100.0 * self.human_involved_episodes
                                        / self.total_episodes if self.total_episodes else 0.0))
+        if self.population_episodes:     # partners-first: with the simulated population
+            summary['population_episodes'] = self.population_episodes
         return summary
 
     # ------------------------------------------------------------------ internals
@@ -828,6 +851,7 @@ class AgentCore:
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
                              'human_involved_episodes': self.human_involved_episodes,
+                             'population_episodes': self.population_episodes,
                              'judging_episodes': self.judging_episodes,
                              'episodes_since_judging': self.episodes_since_judging,
                              'judging_due': self.judging_due},
@@ -845,6 +869,7 @@ class AgentCore:
         self.episode = int(counters['episode'])
         self.total_episodes = int(counters['total_episodes'])
         self.human_involved_episodes = int(counters['human_involved_episodes'])
+        self.population_episodes = int(counters.get('population_episodes', 0))  # older: none
         self.judging_episodes = int(counters['judging_episodes'])
         if policy_only:
             return
