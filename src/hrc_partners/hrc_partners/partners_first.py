@@ -21,7 +21,7 @@ The session's person is checked against the population: :func:`pretrain` refuses
 population that holds it (:func:`person_spec_of` names it as a partner specification).
 """
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 import json
 import pathlib
 import time
@@ -31,13 +31,23 @@ from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import run_session
 from hrc_common.contract import Phase, SimLimits
-from hrc_common.params import from_dict
+from hrc_common.params import from_dict, validate
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
 from hrc_partners.partners import MixturePartner, parse_specs
 
 POPULATION_PROFILES = ('paper', 'novice', 'skilled')
+# People unlike the population, each one trait of a person pushed outside the population's
+# spread (modelling choices; the population's reaction delay varies by ~15 %, its full scales by
+# ~20 %, its lapses by ~50 %): {name: {field: factor on the person's value}}.
+UNLIKE_TRAITS = {
+    'slower': {'reaction_delay': 2.5, 'neuromuscular_time': 2.5},      # 0.2 s -> 0.5 s
+    'heavier_handed': {'slider_full_scale': 0.4, 'pendulum_full_scale': 0.4,  # 2.5x the gain
+                       'motor_noise': 2.0},
+    'lapsing': {'lapse_probability': 7.5, 'lapse_duration': 2.5},       # 7.5x the lapses
+    'timid': {'slider_full_scale': 2.5, 'pendulum_full_scale': 2.5, 'max_rate': 0.4},
+}
 POPULATION_FIRST_PERSON = 1000      # person numbers below it are left to the sessions' people
 PERSONS_PER_PROFILE = 8
 
@@ -47,6 +57,20 @@ def default_population(profiles=POPULATION_PROFILES, persons_per_profile=PERSONS
     """Return the default training population as partner specifications ('person:paper:1000')."""
     return [f'person:{profile}:{first_person + index}' for profile in profiles
             for index in range(int(persons_per_profile))]
+
+
+def unlike_people(person) -> dict:
+    """Return {name: HumanProfile}: ``person`` with each trait of :data:`UNLIKE_TRAITS` changed."""
+    people = {}
+    for name, factors in UNLIKE_TRAITS.items():
+        changed = replace(person, description=f'{name}: {person.description}',
+                          **{trait: getattr(person, trait) * factor
+                             for trait, factor in factors.items()})
+        problems = validate(changed)
+        if problems:
+            raise ValueError(f'unlike person {name}: {problems}')
+        people[name] = changed
+    return people
 
 
 def person_spec_of(human_parameters: dict) -> str:
