@@ -40,6 +40,16 @@ window W and T training episodes per trigger:
   judging episode of the same frozen policy, until the window is full or one fails: T + W,
   **6** with the earlier update rule and **4** with ``horizon_or_episode_end``.
 
+A step with ``judge_first`` (the person's step of ``partners_first``, cases 7 and 8) judges the
+policy it inherits on its first episode, before any training in the step: with ``in_a_row`` its
+floor is W (**3**), with ``spaced`` 1 + (W - 1) * (T + 1).
+
+**Partners first** (cases 7, 8; not in the paper). A step with ``partner: population`` trains
+with simulated people instead of the session's person; it must come before every step with the
+person, and only a caller that supplies the population runs it
+(``hrc_partners.partners_first``; AgentCore refuses otherwise). Its episodes are not the
+person's time (``AgentCore.population_episodes``).
+
 The in-a-row rule judges one policy on W episodes (different reset seeds and, with the human,
 different behaviour) instead of W successive policies on one episode each; the policy it
 declares converged is the one evaluated afterwards.
