@@ -179,16 +179,17 @@ def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
                    '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
         if task.profile:
             command += ['--profile', task.profile]
-        if task.training_episodes > 0:
-            command += ['--episodes', str(task.training_episodes)]
+        # partners first: the session starts from the pre-trained checkpoint, its budget on top
+        start = pretrain_partners_first(task, bags_dir)
+        episodes = task.training_episodes if start is None else start['max_training_episodes']
+        if start is not None:
+            command += ['--resume-from', start['resume_from']]
+        if episodes > 0:
+            command += ['--episodes', str(episodes)]
         if task.evaluation_episodes >= 0:
             command += ['--eval-episodes', str(task.evaluation_episodes)]
         for override in task.overrides:
             command += ['--set', override]
-        start = pretrain_partners_first(task, bags_dir)
-        if start is not None:
-            command += ['--resume-from', start['resume_from'], '--set',
-                        f'agent.max_training_episodes={start["max_training_episodes"]}']
         pathlib.Path(task.runs_dir).mkdir(parents=True, exist_ok=True)
         with open(pathlib.Path(task.runs_dir) / f'{task.session_id}.log', 'wb') as log:
             code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode
