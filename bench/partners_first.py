@@ -83,10 +83,13 @@ def main(argv=None) -> int:
     parser.add_argument('--profile', default='paper', help="the sessions' profile")
     parser.add_argument('--unlike-cases', type=int, nargs='*', default=None,
                         help='cases evaluated offline (default: every case of the run)')
+    parser.add_argument('--seeds', type=int, nargs='*', default=None,
+                        help='only these seeds (default: every seed of the run)')
     parser.add_argument('--json', type=pathlib.Path, help='write every number here too')
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    found = sessions(args.run)
+    found = [entry for entry in sessions(args.run)
+             if args.seeds is None or entry['seed'] in args.seeds]
     if not found:
         print(f'partners_first: no final checkpoint under {args.run}', file=sys.stderr)
         return 2

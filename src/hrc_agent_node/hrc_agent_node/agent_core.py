@@ -723,6 +723,21 @@ class AgentCore:
             self.phase = Phase.UPDATING
         return converged, event
 
+    def skip_step(self) -> None:
+        """End the current training step between episodes, its condition unmet.
+
+        For a runner whose budget for a step ran out (the partners-first pre-training, whose
+        population may be harder than the person: hrc_partners.partners_first); the next step
+        starts as after an advance. Only in phase training and before the last step.
+        """
+        if self._log is not None or self.phase != Phase.TRAINING:
+            raise RuntimeError(f'a step is skipped between episodes in phase training, not in '
+                               f'phase {self.phase.label!r}')
+        previous = self.progress.step
+        self.progress.skip()
+        self._settle_learner()
+        self._start_step(previous)
+
     def _start_step(self, previous_step) -> None:
         """Begin the step after ``previous_step``: forget samples and scales of another reward."""
         if tuple(previous_step.robot_subtasks) != tuple(self.progress.step.robot_subtasks):

@@ -330,6 +330,13 @@ class StrategyProgress:
         self.step_history = []
         return True, 'advanced'
 
+    def skip(self) -> None:
+        """Move on to the next step with its condition unmet (a runner's budget ran out)."""
+        if self.finished or self.is_last_step:
+            raise RuntimeError('only a step before the last one can be skipped')
+        self.step_index += 1
+        self.step_history = []
+
     def state_dict(self) -> dict:
         """Return the progress as plain data (for checkpoints)."""
         return {'case_id': self.case.case_id, 'step_index': self.step_index,

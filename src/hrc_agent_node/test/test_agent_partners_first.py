@@ -102,3 +102,18 @@ def test_a_session_resumed_at_the_person_step_runs_with_the_person(tmp_path):
     assert session.population_episodes == trainer.population_episodes > 0
     plan, _ = run_episode(session)
     assert plan.judging and plan.with_person and session.human_involved_episodes == 1
+
+
+def test_a_step_skipped_between_episodes_starts_the_next_one():
+    core = make_core(8)
+    core.population_partner = True
+    while core.training_step.index == 0:
+        run_episode(core)
+    run_episode(core, training=BAD, judging=BAD)        # the population step, unmet
+    assert core.training_step.index == 1 and core.phase == Phase.TRAINING
+    core.skip_step()
+    assert core.training_step.with_person
+    plan, _ = run_episode(core)
+    assert plan.training_step == 2 and plan.judging     # judge_first holds after a skip too
+    with pytest.raises(RuntimeError, match='only a step before the last one'):
+        core.skip_step()

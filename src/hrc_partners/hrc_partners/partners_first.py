@@ -50,6 +50,10 @@ UNLIKE_TRAITS = {
 }
 POPULATION_FIRST_PERSON = 1000      # person numbers below it are left to the sessions' people
 PERSONS_PER_PROFILE = 8
+# Population episodes after which the population step ends even if unmet (modelling choice:
+# a population with slow and noisy people may be harder than the person; measured, case 8's
+# population step met its condition after 14-29 episodes, case 7's not in 266).
+POPULATION_BUDGET = 60
 
 
 def default_population(profiles=POPULATION_PROFILES, persons_per_profile=PERSONS_PER_PROFILE,
@@ -96,6 +100,7 @@ class PretrainResult:
     episodes: int                   # training and judging episodes so far (the core's total)
     population_episodes: int        # of which with a simulated person of the population
     reached_person_step: bool       # False: max_training_episodes ended training before it
+    population_met: bool            # the population step met its condition (else: budget)
     person: str                     # the session's person (not in the population)
     population: list = field(default_factory=list)   # the specifications drawn from
     partners_met: list = field(default_factory=list)  # the population episodes' partners
@@ -107,7 +112,8 @@ class PretrainResult:
 
 
 def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
-             population=None, profiles_file=None) -> PretrainResult:
+             population=None, profiles_file=None,
+             population_budget: int = POPULATION_BUDGET) -> PretrainResult:
     """Run a partners-first case up to the person's step; save and return its checkpoint.
 
     ``agent_params``: the session's AgentParams (case, seed, preset, learner, rules: the
@@ -115,6 +121,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     session's person as a partner specification (:func:`person_spec_of`); ValueError if the
     population holds it. ``population``: partner specifications (default
     :func:`default_population`), one drawn for every episode, seeded by the session seed.
+    ``population_budget``: episodes of a population step after which it ends unmet
+    (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``).
     """
     population = list(population or default_population())
     specs = parse_specs(population)
@@ -130,13 +138,21 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     partner = MixturePartner(specs, core.human_dof, core.seed, limits, 1, profiles_file)
     met = []
     person_step = core.case.first_person_step
+    population_met = True
+    in_step = 0                     # episodes of the current population step
     with SliderPendulumBall(physics) as sim:
         while core.phase not in (Phase.DONE, Phase.EVALUATION) \
                 and core.progress.step_index < person_step:
+            step = core.progress.step_index
             population_step = core.training_step.partner == 'population'
             run_session(core, sim, partner, max_episodes=1)
             if population_step:
                 met.append(partner.spec.text)
+                in_step = in_step + 1 if core.progress.step_index == step else 0
+                if population_budget and in_step >= population_budget \
+                        and core.phase == Phase.TRAINING:
+                    core.skip_step()
+                    population_met, in_step = False, 0
     core.population_partner = False
     checkpoint = pathlib.Path(checkpoint)
     checkpoint.parent.mkdir(parents=True, exist_ok=True)
@@ -145,7 +161,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                           core.population_episodes,
                           core.progress.step_index >= person_step
                           and core.activity_phase in (Phase.TRAINING, Phase.UPDATING),
-                          person, population, met, time.perf_counter() - started)
+                          population_met, person, population, met,
+                          time.perf_counter() - started)
 
 
 PRETRAINED_CHECKPOINT = 'pretrained.pt'    # in the session's run folder

@@ -124,3 +124,22 @@ def test_unlike_people_change_one_trait_each():
         > people['heavier_handed'].slider_full_scale
     assert people['lapsing'].lapse_probability > person.lapse_probability
     assert people['lapsing'].reaction_delay == person.reaction_delay
+
+
+@pytest.mark.slow
+def test_a_population_step_that_cannot_be_met_ends_after_its_budget(tmp_path):
+    tree = yaml.safe_load((params_dir() / 'task_tree.yaml').read_text())
+    for subtask in tree['subtasks']:
+        # alone the robot meets its own subtask at once; nobody can meet the ball's
+        subtask['tolerance'] = 1e-9 if subtask['id'] == 'ball' else 100.0
+    path = tmp_path / 'tree.yaml'
+    path.write_text(yaml.safe_dump(tree))
+    physics = with_overrides(PhysicsParams(), episode_duration=2.0)
+    params = with_overrides(AgentParams(), case=8, seed=4, horizon=20, minibatch_size=10,
+                            convergence_window=1, judging_rule='in_a_row',
+                            task_tree_file=str(path), checkpoint_dir='', torch_threads=1)
+    result = pretrain(params, physics, tmp_path / 'pre.pt', 'person:paper:4',
+                      population_budget=3)
+    assert result.reached_person_step and not result.population_met
+    assert result.population_episodes == len(result.partners_met) == 3
+    assert read_checkpoint(tmp_path / 'pre.pt')['core']['progress']['step_index'] == 2
