@@ -9,6 +9,9 @@ the person's step. The session with the person (the in-process engine, the exper
 or the graph session) then starts from that checkpoint (agent ``resume_from``): its first
 episode judges the pre-trained policy with the person (the step's ``judge_first``), and with
 ``judging_rule: in_a_row`` the person's step can end after ``convergence_window`` episodes.
+A population step that has not met its condition after ``POPULATION_BUDGET`` episodes ends
+anyway (``AgentCore.skip_step``; ``PretrainResult.population_met`` says so): the population,
+with its slow and noisy people, may be a harder partner than the person.
 
 **The population (modelling choice).** By default :func:`default_population`: persons
 ``POPULATION_FIRST_PERSON`` .. + ``persons_per_profile`` - 1 of the populations around the
