@@ -6,7 +6,7 @@ Reads the final checkpoints of an experiment run with ``--checkpoints`` (in-proc
     ros2 run hrc_bringup experiment --cases 2 8 1 7 --seeds 3 --episodes 300 \
         --set agent.preset=tuned --set agent.judging_rule=in_a_row --checkpoints \
         --name pf-3seeds --bags-dir /tmp/pf/bags --runs-dir /tmp/pf/runs --no-report
-    python bench/partners_first.py /tmp/pf/runs/pf-3seeds --episodes 3
+    python bench/partners_first.py /tmp/pf/runs/pf-3seeds [more runs] --episodes 3
 
 and prints, per case, over the seeds: the person's (human-involved) episodes, all training
 episodes, the population episodes, and the team's total error in the session's evaluation
@@ -77,7 +77,8 @@ def evaluate(checkpoint, profile, seed: int, episodes: int) -> float:
 def main(argv=None) -> int:
     """Print the tables; return 0 (2 when the run holds no final checkpoint)."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('run', type=pathlib.Path, help='<runs-dir>/<experiment name>')
+    parser.add_argument('runs', type=pathlib.Path, nargs='+',
+                        help='<runs-dir>/<experiment name> (one or more)')
     parser.add_argument('--episodes', type=int, default=3,
                         help='offline evaluation episodes per person and seed (0: none)')
     parser.add_argument('--profile', default='paper', help="the sessions' profile")
@@ -88,10 +89,10 @@ def main(argv=None) -> int:
     parser.add_argument('--json', type=pathlib.Path, help='write every number here too')
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    found = [entry for entry in sessions(args.run)
+    found = [entry for run in args.runs for entry in sessions(run)
              if args.seeds is None or entry['seed'] in args.seeds]
     if not found:
-        print(f'partners_first: no final checkpoint under {args.run}', file=sys.stderr)
+        print(f'partners_first: no final checkpoint under {args.runs}', file=sys.stderr)
         return 2
     cases = sorted({entry['case'] for entry in found})
     print('| case | seeds | converged | person episodes | all episodes | population episodes '
