@@ -22,11 +22,17 @@ profiles so that the robot meets slow and fast, noisy and precise people; person
 seed: person 0, 1, ... of the profile) nor the profile's own mean person (``person: -1``).
 The session's person is checked against the population: :func:`pretrain` refuses a
 population that holds it (:func:`person_spec_of` names it as a partner specification).
+
+By hand (then start the session with the person as the last line says)::
+
+    python -m hrc_partners.partners_first --case 8 --seed 0 --set agent.preset=tuned ...
 """
 
+import argparse
 from dataclasses import asdict, dataclass, field, replace
 import json
 import pathlib
+import sys
 import time
 
 from hrc_agent_node.agent_core import AgentCore
@@ -35,6 +41,8 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import run_session
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict, validate
+from hrc_common.paths import params_dir as default_params_dir
+from hrc_common.session_plan import compose, new_session_id, parse_overrides, SessionSettings
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
@@ -196,3 +204,53 @@ def prepare_person_session(parameters: dict, run_dir, population=None):
     (run_dir / PRETRAIN_RECORD).write_text(json.dumps(result.to_plain(), indent=2) + '\n')
     return {'resume_from': result.checkpoint,
             'max_training_episodes': result.episodes + agent.max_training_episodes}
+
+
+def main(argv=None) -> int:
+    """Pre-train a partners-first session; print its record and the command that continues it."""
+    parser = argparse.ArgumentParser(
+        prog='python -m hrc_partners.partners_first',
+        description='Pre-train a partners-first session (case 7 or 8): the robot alone, then a '
+                    'population of simulated people, no person; then start the session with '
+                    'the person from the checkpoint (the command is printed).')
+    parser.add_argument('--case', type=int, default=8, help='7 or 8 (default 8)')
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--session-id', default='', help="default: the session runner's")
+    parser.add_argument('--runs-dir', default='runs', help="the session runner's --runs-dir")
+    parser.add_argument('--profile', default='', help="the person's simulated-human profile")
+    parser.add_argument('--set', action='append', default=[], metavar='NODE.PARAM=VALUE',
+                        help='parameter override, as for the session (repeatable)')
+    parser.add_argument('--params-dir', default='', help='default: ./params or the installed')
+    args = parser.parse_args(argv)
+    try:
+        settings = SessionSettings(case=args.case, seed=args.seed, session_id=args.session_id,
+                                   runs_dir=args.runs_dir, human_profile=args.profile,
+                                   overrides=parse_overrides(args.set))
+        settings.session_id = settings.session_id or new_session_id(settings)
+        params_dir = pathlib.Path(args.params_dir) if args.params_dir else default_params_dir()
+        parameters = compose(settings, params_dir)
+        from_dict(AgentParams, parameters['agent'])      # every bad agent value, at once
+    except ValueError as error:
+        print(f'partners_first: {error}', file=sys.stderr)
+        return 2
+    run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
+    start = prepare_person_session(parameters, run_dir)
+    if start is None:
+        print(f'partners_first: case {args.case} has no population step (cases 7 and 8 do)',
+              file=sys.stderr)
+        return 2
+    record = json.loads((run_dir / PRETRAIN_RECORD).read_text())
+    print(f'partners_first: {record["episodes"]} episodes ({record["population_episodes"]} with '
+          f'the population, its condition {"met" if record["population_met"] else "unmet"}) in '
+          f'{record["wall_seconds"]:.0f} s; the person\'s step '
+          f'{"is next" if record["reached_person_step"] else "was not reached"}')
+    print(f'partners_first: {run_dir / PRETRAIN_RECORD}, {start["resume_from"]}')
+    overrides = ''.join(f' --set {text}' for text in args.set)
+    print(f'then: ros2 run hrc_bringup session --case {args.case} --seed {args.seed} '
+          f'--session-id {settings.session_id} --runs-dir {settings.runs_dir}{overrides} '
+          f'--resume-from {start["resume_from"]} --episodes {start["max_training_episodes"]}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -16,7 +16,7 @@ from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.sim_human import load_profile
-from hrc_partners.partners_first import (default_population, person_spec_of,
+from hrc_partners.partners_first import (default_population, main, person_spec_of,
                                          POPULATION_FIRST_PERSON, prepare_person_session,
                                          pretrain, unlike_people)
 from hrc_sim_node.physics import PhysicsParams
@@ -143,3 +143,13 @@ def test_a_population_step_that_cannot_be_met_ends_after_its_budget(tmp_path):
     assert result.reached_person_step and not result.population_met
     assert result.population_episodes == len(result.partners_met) == 3
     assert read_checkpoint(tmp_path / 'pre.pt')['core']['progress']['step_index'] == 2
+
+
+def test_the_command_line_refuses_bad_input_with_every_reason(capsys):
+    assert main(['--case', '8', '--set', 'agent.gamma=3', '--set', 'agent.horizon=0']) == 2
+    error = capsys.readouterr().err
+    assert 'gamma: 3.0 is above the maximum 1.0' in error and 'horizon: 0 is below' in error
+    assert main(['--case', '2']) == 2
+    assert 'case 2 has no population step' in capsys.readouterr().err
+    assert main(['--case', '9']) == 2
+    assert 'case must be one of 1..8, got 9' in capsys.readouterr().err
