@@ -5,7 +5,7 @@ so they cannot diverge::
 
     core = AgentCore(params, limits=SimLimits.of(<the sim's reset response or PhysicsParams>))
                                                  # or load_into(core, checkpoint) to resume
-    while core.phase != 'done':
+    while core.phase != Phase.DONE:
         plan = core.start_episode()              # index, seed, kind (training / judging /
         state = <reset the sim with plan.seed>   #   evaluation), human involved or not
         while not (state.truncated or state.terminated):
@@ -14,13 +14,14 @@ so they cannot diverge::
                                                  #   inside the episode runs here first)
             state = <step the sim with decision.action and the human's command>
         result = core.end_episode(state)          # reward of the last step, metrics, strategy
-        if core.phase == 'updating':
+        if core.phase == Phase.UPDATING:
             core.update()                         # PPO at the episode's end, when due
         <save core.state_dict() (checkpoint.save_checkpoint)>
 
-Phases (one place, :attr:`phase`): ``training`` -> (``updating`` -> ``training``)* ->
-``evaluation`` -> ``done``; the operator may put ``paused`` between two episodes
-(:meth:`pause`, :meth:`resume`) or end the session as ``aborted`` (:meth:`abort`).
+Phases (one place, :attr:`phase`, a ``hrc_common.contract.Phase``; on the wire its code, in logs
+its label): ``training`` -> (``updating`` -> ``training``)* -> ``evaluation`` -> ``done``; the
+operator may put ``paused`` between two episodes (:meth:`pause`, :meth:`resume`) or end the
+session as ``aborted`` (:meth:`abort`).
 Training ends when the strategy's last step converges or after ``max_training_episodes``
 episodes (judging episodes included); evaluation runs the frozen deterministic policy for
 ``evaluation_episodes`` episodes in the last training step's setting (human involved as there).
@@ -72,7 +73,7 @@ from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
-from hrc_common.contract import SimLimits
+from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import checked
 
 RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
@@ -94,6 +95,12 @@ class EpisodePlan:
     training_step: int
     human_involved: bool
     judging: bool = False
+    partner: str = 'person'   # who acts as the human when involved (strategies.PARTNERS)
+
+    @property
+    def with_person(self) -> bool:
+        """Return True when the session's person acts in this episode (their time counts)."""
+        return self.human_involved and self.partner == 'person'
 
     @property
     def deterministic(self) -> bool:
@@ -149,7 +156,7 @@ class EpisodeResult:
     converged: bool          # the step's condition was met after this episode
     event: str               # '' | 'advanced' | 'training_finished' | 'evaluation_finished'
     last_record: StepRecord = None
-    phase_after: str = ''
+    phase_after: Phase = None    # the session's phase after this episode
     judging: bool = False    # a judging episode (deterministic, counted in the totals)
 
     def to_plain(self) -> dict:
@@ -251,10 +258,15 @@ class AgentCore:
         self.buffer = RolloutBuffer()
         # Runs the PPO updates: synchronous (deterministic) unless set_learner_mode('background').
         self.learner = make_learner('synchronous', self.ppo)
-        self.phase = 'evaluation' if p.evaluation_only else 'training'
+        self.phase = Phase.EVALUATION if p.evaluation_only else Phase.TRAINING
         self.episode = 0                    # index of the current (or next) episode
         self.total_episodes = 0             # training and judging episodes finished
-        self.human_involved_episodes = 0    # of which the human took part
+        self.human_involved_episodes = 0    # of which the person took part
+        self.population_episodes = 0        # of which a simulated population partner acted
+        # Set by the caller that supplies a simulated population as the human in the
+        # strategy's population steps (hrc_partners.partners_first): no other runner may run
+        # them, lest the person of the last step be trained with as the "population".
+        self.population_partner = False
         self.judging_episodes = 0           # judging episodes finished (in total_episodes)
         self.judging_due = False            # the next training-phase episode is a judging one
         self.episodes_since_judging = 0     # training episodes since the last judging episode
@@ -321,16 +333,16 @@ class AgentCore:
         return self.case.human_dof
 
     @property
-    def activity_phase(self) -> str:
+    def activity_phase(self) -> Phase:
         """Return the phase, or while paused/aborted the phase that was interrupted."""
-        if self.phase in ('paused', 'aborted') and self._interrupted_phase is not None:
+        if self.phase in (Phase.PAUSED, Phase.ABORTED) and self._interrupted_phase is not None:
             return self._interrupted_phase
         return self.phase
 
     @property
     def training_step(self):
         """Return the TrainingStep in force (the last one in evaluation)."""
-        if self.activity_phase in ('evaluation', 'done') or self.progress.finished:
+        if self.activity_phase in (Phase.EVALUATION, Phase.DONE) or self.progress.finished:
             return self.case.steps[-1]
         return self.progress.step
 
@@ -441,13 +453,20 @@ class AgentCore:
 
     def start_episode(self) -> EpisodePlan:
         """Begin the next episode and return its plan."""
-        if self.phase not in ('training', 'evaluation'):
-            raise RuntimeError(f'cannot start an episode in phase {self.phase!r}')
+        if self.phase not in (Phase.TRAINING, Phase.EVALUATION):
+            raise RuntimeError(f'cannot start an episode in phase {self.phase.label!r}')
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is still running')
+        step = self.training_step
+        if step.partner == 'population' and not self.population_partner:
+            raise RuntimeError(
+                f'case {self.case_id} step {step.index + 1} "{step.name}" trains with a '
+                'simulated population before the person joins: run it with '
+                'hrc_partners.partners_first.pretrain and start this session from its '
+                'checkpoint')
         plan = EpisodePlan(self.episode, derive_seed(self.params.seed, self.episode),
-                           self.phase == 'evaluation', self.training_step.index,
-                           self.human_involved, self._next_is_judging())
+                           self.phase == Phase.EVALUATION, step.index,
+                           self.human_involved, self._next_is_judging(), step.partner)
         self._log = _EpisodeLog(plan, error_sums={subtask_id: 0.0
                                                   for subtask_id in self.tree.subtasks})
         self.reward_scaler.start_episode()
@@ -663,7 +682,7 @@ class AgentCore:
         if plan.evaluation:
             self.evaluation_results.append(result)
             if len(self.evaluation_results) >= self.params.evaluation_episodes:
-                self.phase = 'done'
+                self.phase = Phase.DONE
                 result.event = 'evaluation_finished'
         self._log = None
         self.episode += 1
@@ -673,7 +692,8 @@ class AgentCore:
     def _count_and_judge(self, plan: EpisodePlan, errors: dict) -> tuple:
         """Count a training or judging episode, judge the step; return (converged, event)."""
         self.total_episodes += 1
-        self.human_involved_episodes += int(plan.human_involved)
+        self.human_involved_episodes += int(plan.with_person)
+        self.population_episodes += int(plan.human_involved and not plan.with_person)
         judge = plan.judging or not self.judged_on_evaluation
         if plan.judging:
             self.judging_episodes += 1
@@ -698,10 +718,25 @@ class AgentCore:
             self._settle_learner()   # as a synchronous update would have been: already in
             self.buffer.clear()  # the converged (or last) policy is the one evaluated
             self.judging_due = False
-            self.phase = 'evaluation' if self.params.evaluation_episodes > 0 else 'done'
+            self.phase = Phase.EVALUATION if self.params.evaluation_episodes > 0 else Phase.DONE
         elif self.update_due:
-            self.phase = 'updating'
+            self.phase = Phase.UPDATING
         return converged, event
+
+    def skip_step(self) -> None:
+        """End the current training step between episodes, its condition unmet.
+
+        For a runner whose budget for a step ran out (the partners-first pre-training, whose
+        population may be harder than the person: hrc_partners.partners_first); the next step
+        starts as after an advance. Only in phase training and before the last step.
+        """
+        if self._log is not None or self.phase != Phase.TRAINING:
+            raise RuntimeError(f'a step is skipped between episodes in phase training, not in '
+                               f'phase {self.phase.label!r}')
+        previous = self.progress.step
+        self.progress.skip()
+        self._settle_learner()
+        self._start_step(previous)
 
     def _start_step(self, previous_step) -> None:
         """Begin the step after ``previous_step``: forget samples and scales of another reward."""
@@ -710,13 +745,15 @@ class AgentCore:
             self.reward_scaler.reset()
             if self.off_policy:
                 self.policy_learner.clear_replay()
-        self.judging_due = False
+        # judge_first: the policy the step starts with may already meet it (trained before the
+        # person joined): judge it on the step's first episode instead of training first.
+        self.judging_due = self.progress.step.judge_first and self.judged_on_evaluation
         self.episodes_since_judging = 0
 
     def _next_is_judging(self) -> bool:
         """Return True when the next episode of the training phase is a judging episode."""
         return self.judged_on_evaluation and self.judging_due \
-            and self.activity_phase == 'training' and not self.progress.finished
+            and self.activity_phase == Phase.TRAINING and not self.progress.finished
 
     def update(self) -> dict:
         """Run the PPO update on the buffer (phase ``updating``), then go back to training.
@@ -727,11 +764,11 @@ class AgentCore:
         swapping in a background update still running); returns the statistics of the last
         update run.
         """
-        if self.phase != 'updating':
-            raise RuntimeError(f'no update is due in phase {self.phase!r}')
+        if self.phase != Phase.UPDATING:
+            raise RuntimeError(f'no update is due in phase {self.phase.label!r}')
         if self.off_policy:
             self.last_update = stats = self.policy_learner.update()
-            self.phase = 'training'
+            self.phase = Phase.TRAINING
             if self.judged_on_evaluation and self.params.judging_interval == 0:
                 self.judging_due = True
             return stats
@@ -741,7 +778,7 @@ class AgentCore:
             stats = self._start_update()
             if stats is None:        # background learner: between episodes nothing acts
                 stats = self._settle_learner()
-        self.phase = 'training'
+        self.phase = Phase.TRAINING
         return stats
 
     # ------------------------------------------------------------------ operator
@@ -750,14 +787,14 @@ class AgentCore:
         """Pause between two episodes: no episode starts until :meth:`resume`."""
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is running: pause at its end')
-        if self.phase not in ('training', 'evaluation'):
-            raise RuntimeError(f'cannot pause in phase {self.phase!r}')
-        self._interrupted_phase, self.phase = self.phase, 'paused'
+        if self.phase not in (Phase.TRAINING, Phase.EVALUATION):
+            raise RuntimeError(f'cannot pause in phase {self.phase.label!r}')
+        self._interrupted_phase, self.phase = self.phase, Phase.PAUSED
 
     def resume(self) -> None:
         """Continue a paused session in the phase it was paused in."""
-        if self.phase != 'paused':
-            raise RuntimeError(f'cannot resume in phase {self.phase!r}: not paused')
+        if self.phase != Phase.PAUSED:
+            raise RuntimeError(f'cannot resume in phase {self.phase.label!r}: not paused')
         self.phase, self._interrupted_phase = self._interrupted_phase, None
 
     def abort(self) -> None:
@@ -765,10 +802,10 @@ class AgentCore:
 
         The last checkpoint taken at an episode end stays the one to resume from.
         """
-        if self.phase != 'aborted':
+        if self.phase != Phase.ABORTED:
             self._interrupted_phase = self.activity_phase
         self._log = None
-        self.phase = 'aborted'
+        self.phase = Phase.ABORTED
 
     def evaluation_summary(self) -> dict:
         """Return the Table II metrics averaged over the evaluation episodes."""
@@ -787,6 +824,8 @@ class AgentCore:
             human_involved_episodes=self.human_involved_episodes,
             human_involved_percentage=(100.0 * self.human_involved_episodes
                                        / self.total_episodes if self.total_episodes else 0.0))
+        if self.population_episodes:     # partners-first: with the simulated population
+            summary['population_episodes'] = self.population_episodes
         return summary
 
     # ------------------------------------------------------------------ internals
@@ -827,13 +866,15 @@ class AgentCore:
                 'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
                 'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
                              'human_involved_episodes': self.human_involved_episodes,
+                             'population_episodes': self.population_episodes,
                              'judging_episodes': self.judging_episodes,
                              'episodes_since_judging': self.episodes_since_judging,
                              'judging_due': self.judging_due},
                 # a session resumed in evaluation runs only the evaluation episodes left
                 'evaluation_results': [result.to_plain() for result in self.evaluation_results],
-                # a paused session resumes in the phase it was paused in
-                'phase': self.activity_phase}
+                # a paused session resumes in the phase it was paused in (saved as its
+                # label: the checkpoint format of before)
+                'phase': self.activity_phase.label}
 
     def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
         """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""
@@ -843,6 +884,7 @@ class AgentCore:
         self.episode = int(counters['episode'])
         self.total_episodes = int(counters['total_episodes'])
         self.human_involved_episodes = int(counters['human_involved_episodes'])
+        self.population_episodes = int(counters.get('population_episodes', 0))  # older: none
         self.judging_episodes = int(counters['judging_episodes'])
         if policy_only:
             return
@@ -853,12 +895,15 @@ class AgentCore:
         self.progress.load_state_dict(state['progress'])
         self.evaluation_results = [EpisodeResult.from_plain(data)
                                    for data in state['evaluation_results']]
-        phase = state['phase']
+        try:
+            phase = Phase.from_label(state['phase'])
+        except ValueError:       # not a phase: start training, as for paused or aborted
+            phase = Phase.TRAINING
         # A session stopped while an update was due does the update first when resumed; one
         # stopped in its evaluation runs the evaluation episodes it has not run yet (a finished
         # one stays done).
-        if phase == 'evaluation' \
+        if phase == Phase.EVALUATION \
                 and len(self.evaluation_results) >= self.params.evaluation_episodes:
-            phase = 'done'
-        self.phase = phase if phase in ('training', 'updating', 'evaluation', 'done') \
-            else 'training'
+            phase = Phase.DONE
+        self.phase = phase if phase in (Phase.TRAINING, Phase.UPDATING, Phase.EVALUATION,
+                                        Phase.DONE) else Phase.TRAINING

@@ -26,8 +26,8 @@ class AgentParams:
     # --- session
     session_id: str = param('', 'Session id stamped on every message and checkpoint; empty = '
                                 'derived from case and seed (case<N>_seed<S>)')
-    case: int = param(1, 'Paper case 1..6 (params/cases.yaml): strategy and role assignment',
-                      low=1, high=6)
+    case: int = param(1, "Case 1..8 (params/cases.yaml: 1-6 the paper's, 7-8 partners first): "
+                         'strategy and role assignment', low=1, high=8)
     seed: int = param(0, 'Session seed: network init, exploration noise, episode seeds',
                       low=0, high=2**31 - 1)
     mode: str = param('lockstep', 'Clock mode of the sim: with human_action_source same_step, '

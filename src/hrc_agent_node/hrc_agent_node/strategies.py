@@ -40,6 +40,16 @@ window W and T training episodes per trigger:
   judging episode of the same frozen policy, until the window is full or one fails: T + W,
   **6** with the earlier update rule and **4** with ``horizon_or_episode_end``.
 
+A step with ``judge_first`` (the person's step of ``partners_first``, cases 7 and 8) judges the
+policy it inherits on its first episode, before any training in the step: with ``in_a_row`` its
+floor is W (**3**), with ``spaced`` 1 + (W - 1) * (T + 1).
+
+**Partners first** (cases 7, 8; not in the paper). A step with ``partner: population`` trains
+with simulated people instead of the session's person; it must come before every step with the
+person, and only a caller that supplies the population runs it
+(``hrc_partners.partners_first``; AgentCore refuses otherwise). Its episodes are not the
+person's time (``AgentCore.population_episodes``).
+
 The in-a-row rule judges one policy on W episodes (different reset seeds and, with the human,
 different behaviour) instead of W successive policies on one episode each; the policy it
 declares converged is the one evaluated afterwards.
@@ -53,6 +63,10 @@ from hrc_agent_node.task_tree import load_data_file, TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
 SELECTOR_PREFIX = 'direct:'
+# Who acts as the human in a step where the human is involved: the session's person (the real
+# one, or the study's simulated person), or a population of simulated people run in process
+# before the person joins (the partners-first strategy; hrc_partners.partners_first).
+PARTNERS = ('person', 'population')
 
 
 class CasesError(ValueError):
@@ -70,6 +84,13 @@ class TrainingStep:
     human_subtasks: tuple   # subtask ids the human is asked to hold, tree order
     advance: str            # one of ADVANCE_CONDITIONS
     watch: tuple = ()       # subtask ids the advance condition checks, tree order
+    partner: str = 'person'  # who is the human when involved: one of PARTNERS
+    judge_first: bool = False  # the step's first episode judges the policy it starts with
+
+    @property
+    def with_person(self) -> bool:
+        """Return True when the session's person acts in this step (their time counts)."""
+        return self.human_involved and self.partner == 'person'
 
 
 @dataclass(frozen=True)
@@ -87,6 +108,16 @@ class Case:
     def executors(self) -> dict:
         """Return {action id: 'robot' | 'human'}."""
         return {self.robot_dof: 'robot', self.human_dof: 'human'}
+
+    @property
+    def first_person_step(self) -> int:
+        """Return the index of the first step in which the person acts (len(steps): none)."""
+        return next((step.index for step in self.steps if step.with_person), len(self.steps))
+
+    @property
+    def has_population_steps(self) -> bool:
+        """Return True when a step trains with a simulated population (run before the person)."""
+        return any(step.partner == 'population' for step in self.steps)
 
 
 def load_cases(path, tree) -> dict:
@@ -148,6 +179,17 @@ def _resolve_case(case_id, strategy, entry, robot_action, human_action, tree) ->
             raise CasesError(f'{where}: the robot needs at least one subtask in its reward')
         if not involved and human:
             raise CasesError(f'{where}: the human is not involved but has subtasks {human}')
+        partner = raw.get('partner', 'person')
+        if partner not in PARTNERS:
+            raise CasesError(f'{where}: partner {partner!r} is not one of {PARTNERS}')
+        if partner == 'population' and not involved:
+            raise CasesError(f'{where}: partner population needs human_involved true')
+        if partner == 'population' and any(earlier.with_person for earlier in steps):
+            raise CasesError(f'{where}: a population step must come before every step with '
+                             f'the person (it is trained before the person joins)')
+        judge_first = raw.get('judge_first', False)
+        if not isinstance(judge_first, bool):
+            raise CasesError(f'{where}: judge_first must be true or false')
         if 'watch' in raw:
             watch = _resolve_ids(raw['watch'], tree, robot_action, human_action, where)
         elif advance == 'converged':
@@ -158,7 +200,8 @@ def _resolve_case(case_id, strategy, entry, robot_action, human_action, tree) ->
         if not watch:
             raise CasesError(f'{where}: the advance condition watches no subtask')
         steps.append(TrainingStep(index, str(raw.get('name', f'step {index}')), tuple(robot),
-                                  involved, tuple(human), advance, tuple(watch)))
+                                  involved, tuple(human), advance, tuple(watch), partner,
+                                  judge_first))
     return Case(case_id, strategy, str(entry.get('description', '')), robot_action,
                 human_action, tuple(steps))
 
@@ -286,6 +329,13 @@ class StrategyProgress:
         self.step_index += 1
         self.step_history = []
         return True, 'advanced'
+
+    def skip(self) -> None:
+        """Move on to the next step with its condition unmet (a runner's budget ran out)."""
+        if self.finished or self.is_last_step:
+            raise RuntimeError('only a step before the last one can be skipped')
+        self.step_index += 1
+        self.step_history = []
 
     def state_dict(self) -> dict:
         """Return the progress as plain data (for checkpoints)."""

@@ -31,7 +31,7 @@ def test_table_one_defaults():
 
 
 @pytest.mark.parametrize('overrides, reason', [
-    ({'case': 7}, 'case: 7 is above the maximum 6'),
+    ({'case': 9}, 'case: 9 is above the maximum 8'),
     ({'gamma': 1.5}, 'gamma: 1.5 is above the maximum 1.0'),
     ({'mode': 'turbo'}, "mode: 'turbo' is not one of"),
     ({'minibatch_size': 600}, 'minibatch_size: 600 exceeds horizon 512'),

@@ -22,7 +22,7 @@ BAD = {'slider': 0.03, 'pendulum': 1.3, 'ball': 0.24}
 
 
 def test_six_cases_match_the_paper():
-    assert sorted(CASES) == [1, 2, 3, 4, 5, 6]
+    assert sorted(CASES) == [1, 2, 3, 4, 5, 6, 7, 8]
     for case_id, strategy in ((1, 'responsibility_guided'), (3, 'level_guided'),
                               (5, 'learn_together')):
         robot_translates, robot_rotates = CASES[case_id], CASES[case_id + 1]
@@ -136,6 +136,14 @@ def cases_document():
     (lambda d: d['strategies']['level_guided']['steps'][0].update(
         human_subtasks=['direct:dog']), 'must be direct:robot or direct:human'),
     (lambda d: d['strategies']['learn_together'].update(steps=[]), 'non-empty list `steps`'),
+    (lambda d: d['strategies']['partners_first']['steps'][1].update(partner='robot'),
+     "partner 'robot' is not one of"),
+    (lambda d: d['strategies']['partners_first']['steps'][0].update(partner='population'),
+     'partner population needs human_involved true'),
+    (lambda d: d['strategies']['partners_first']['steps'].reverse(),
+     'a population step must come before every step with the person'),
+    (lambda d: d['strategies']['partners_first']['steps'][2].update(judge_first='yes'),
+     'judge_first must be true or false'),
 ])
 def test_bad_cases_are_refused_with_reason(change, reason):
     document = copy.deepcopy(cases_document())
@@ -143,3 +151,31 @@ def test_bad_cases_are_refused_with_reason(change, reason):
     with pytest.raises(CasesError) as error:
         cases_from_dict(document, TREE)
     assert reason in str(error.value)
+
+
+@pytest.mark.parametrize('case_id, robot, human', [(7, 'translation', 'rotation'),
+                                                   (8, 'rotation', 'translation')])
+def test_partners_first_steps_alone_then_population_then_the_person(case_id, robot, human):
+    case = CASES[case_id]
+    assert (case.strategy, case.robot_dof, case.human_dof) == ('partners_first', robot, human)
+    everything = ('ball', 'slider', 'pendulum')
+    assert [(s.robot_subtasks, s.human_involved, s.partner, s.judge_first) for s in case.steps] \
+        == [(('slider', 'pendulum'), False, 'person', False),
+            (everything, True, 'population', False),
+            (everything, True, 'person', True)]
+    assert [s.with_person for s in case.steps] == [False, False, True]
+    assert case.first_person_step == 2 and case.has_population_steps
+    assert case.steps[0].watch == (case.steps[0].robot_subtasks[0 if robot == 'translation'
+                                                                else 1],)
+    # the paper's cases have no population step; the person is there from the first step
+    # they are involved in
+    assert not any(CASES[c].has_population_steps for c in range(1, 7))
+    assert [CASES[c].first_person_step for c in range(1, 7)] == [1, 1, 0, 0, 0, 0]
+    progress = StrategyProgress(case, TREE, convergence_window=2)
+    for expected in ('', 'advanced'):                 # alone: the robot's own subtask
+        assert progress.record(GOOD)[1] == expected
+    assert progress.step.partner == 'population'
+    for expected in ('', 'advanced'):
+        assert progress.record(GOOD)[1] == expected
+    assert progress.step.with_person and progress.is_last_step
+    assert progress.record(GOOD) == (False, '') and progress.record(GOOD) == (True, 'finished')

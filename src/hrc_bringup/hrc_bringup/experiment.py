@@ -16,6 +16,11 @@ A task runs the session with the chosen engine:
   domain reserved on the worker's machine (lock files of hrc_common.domains.DomainReservation,
   shared with the tests), so concurrent sessions on one node never see each other.
 
+Cases 7 and 8 (``partners_first``) first train with a simulated population in the worker
+(``hrc_partners.partners_first.prepare_person_session``: the robot alone, then the population,
+no person, a record in the session's run folder, ``pretrain.json``); the session with its
+simulated person then starts from that checkpoint, in either engine.
+
 Bags land in ``<bags-dir>/<name>/<session_id>`` as seen from the worker: on a cluster that is a
 shared filesystem, or with ``--pull-bags`` each task packs its session folder and the driver
 unpacks it here (docs/sweeps.md). Every session's outcome and the sweep's wall time go to
@@ -49,7 +54,8 @@ from hrc_common.contract import case_problem, make_session_id
 from hrc_common.domains import DomainReservation
 from hrc_common.executables import executable_path
 from hrc_common.session_plan import package_version, parse_overrides
-from hrc_engine.engine import EngineConfig, run_session
+from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_partners.partners_first import prepare_person_session
 
 from hrc_bringup.time_left import TimeLeft
 
@@ -130,15 +136,37 @@ def _ray_node_id() -> str:
         return ''
 
 
-def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
-    """Run the session with the in-process engine; return (exit code, error text)."""
-    overrides = parse_overrides(task.overrides)
-    run_session(EngineConfig(
+def engine_config_of(task: SessionTask, bags_dir: pathlib.Path) -> EngineConfig:
+    """Return the in-process engine's configuration of a task."""
+    return EngineConfig(
         case=task.case, seed=task.seed, training_episodes=task.training_episodes,
         evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
         bags_dir=str(bags_dir), runs_dir=str(pathlib.Path(task.runs_dir) / task.session_id),
-        human_profile=task.profile, overrides=overrides, params_dir=task.params_dir,
-        checkpoints=task.checkpoints))
+        human_profile=task.profile, overrides=parse_overrides(task.overrides),
+        params_dir=task.params_dir, checkpoints=task.checkpoints)
+
+
+def pretrain_partners_first(task: SessionTask, bags_dir: pathlib.Path):
+    """Pre-train a partners-first task with its population; return the agent's new parameters.
+
+    None for the other cases. The session's parameters are composed as the engine composes
+    them (the graph's agent, sim and human parameters are the same), and the pre-training's
+    files go to the session's run folder.
+    """
+    _, parameters = compose_parameters(engine_config_of(task, bags_dir))
+    session_dir = pathlib.Path(task.runs_dir) / task.session_id / task.session_id
+    session_dir.mkdir(parents=True, exist_ok=True)
+    return prepare_person_session(parameters, session_dir)
+
+
+def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
+    """Run the session with the in-process engine; return (exit code, error text)."""
+    config = engine_config_of(task, bags_dir)
+    start = pretrain_partners_first(task, bags_dir)
+    if start is not None:
+        config.resume_from = start['resume_from']
+        config.training_episodes = start['max_training_episodes']
+    run_session(config)
     return 0, ''
 
 
@@ -153,8 +181,13 @@ def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
                    '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
         if task.profile:
             command += ['--profile', task.profile]
-        if task.training_episodes > 0:
-            command += ['--episodes', str(task.training_episodes)]
+        # partners first: the session starts from the pre-trained checkpoint, its budget on top
+        start = pretrain_partners_first(task, bags_dir)
+        episodes = task.training_episodes if start is None else start['max_training_episodes']
+        if start is not None:
+            command += ['--resume-from', start['resume_from']]
+        if episodes > 0:
+            command += ['--episodes', str(episodes)]
         if task.evaluation_episodes >= 0:
             command += ['--eval-episodes', str(task.evaluation_episodes)]
         for override in task.overrides:

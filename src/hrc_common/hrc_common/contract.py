@@ -6,9 +6,11 @@ The API below is stable (other packages import it by name):
 Phases (``SessionStatus.phase``)
     ``Phase`` -- IntEnum whose values equal ``hrc_msgs/msg/SessionStatus`` ``PHASE_*``
     (checked by a test); ``Phase.X.label`` is the lower-case name the CLI and the display show
-    ('training', ...); ``Phase.from_label(text)``; ``phase_label(code, default=None)`` for a
-    raw code (an unknown code gives ``default``, or 'phase N'); ``FINISHED_PHASES`` (done,
-    aborted); ``ACTIVE_PHASES`` (training, updating, evaluation).
+    ('training', ...) and also ``str(Phase.X)``; a phase compares equal to its label and to its
+    code (``AgentCore.phase`` is a Phase); ``Phase.from_label(text)``;
+    ``phase_label(code, default=None)`` for a raw code (an unknown code gives ``default``, or
+    'phase N'); ``FINISHED_PHASES`` (done, aborted); ``ACTIVE_PHASES`` (training, updating,
+    evaluation).
 Human input sources (``HumanAction.source``)
     ``InputSource`` -- IntEnum whose values equal ``hrc_msgs/msg/HumanAction`` ``SOURCE_*``;
     ``InputSource.X.label`` ('device', 'joy', 'simulated', 'replay', 'none');
@@ -80,9 +82,35 @@ class Phase(enum.IntEnum):
         """Return the lower-case name shown to users ('training', ...)."""
         return self.name.lower()
 
+    # A phase equals its label ('done' == Phase.DONE), so code that still names phases by label
+    # (a node, a test) keeps working against AgentCore.phase, which is a Phase. It still equals
+    # its code (Phase.DONE == 4) and hashes as the code: sets and dicts of phases (and of raw
+    # codes from messages) work as before; a label is not found in a set of phases.
+    def __eq__(self, other):
+        if isinstance(other, str):
+            return other == self.label
+        return int(self) == other
+
+    def __ne__(self, other):
+        return not self == other
+
+    __hash__ = int.__hash__
+
+    def __str__(self) -> str:
+        """Return the label: logs and status lines say 'phase done', as when it was a string."""
+        return self.label
+
+    def __format__(self, spec: str) -> str:
+        return format(self.label, spec)
+
     @classmethod
-    def from_label(cls, label: str) -> 'Phase':
-        """Return the phase named ``label`` (as ``Phase.X.label``); ValueError if unknown."""
+    def from_label(cls, label) -> 'Phase':
+        """Return the phase named ``label`` (as ``Phase.X.label``); ValueError if unknown.
+
+        A Phase is returned as it is (``Phase.from_label(core.phase)`` works).
+        """
+        if isinstance(label, cls):
+            return label
         try:
             return cls[label.upper()]
         except KeyError:

@@ -27,6 +27,17 @@ def test_phases_equal_the_message_constants():
         Phase.from_label('resting')
 
 
+def test_a_phase_equals_its_label_and_its_code():
+    # AgentCore.phase is a Phase; code that names phases by label keeps working with it
+    assert Phase.DONE == 'done' and 'done' == Phase.DONE and Phase.DONE != 'training'
+    assert not Phase.DONE != 'done'
+    assert Phase.DONE == 4 and Phase.DONE in contract.FINISHED_PHASES
+    assert 4 in contract.FINISHED_PHASES and {Phase.DONE: 'x'}[4] == 'x'   # hashed as its code
+    assert Phase.UPDATING in ('training', 'updating') and 'paused' in (Phase.PAUSED,)
+    assert str(Phase.PAUSED) == 'paused' and f'phase {Phase.EVALUATION}' == 'phase evaluation'
+    assert Phase.from_label(Phase.ABORTED) is Phase.ABORTED
+
+
 def test_input_sources_equal_the_message_constants():
     from hrc_msgs.msg import HumanAction
     declared = {name for name in dir(HumanAction) if name.startswith('SOURCE_')}
@@ -106,14 +117,15 @@ def test_session_id_format():
 
 def test_case_table_from_the_repository_file():
     table = case_table()
-    assert sorted(table) == [1, 2, 3, 4, 5, 6]
+    assert sorted(table) == [1, 2, 3, 4, 5, 6, 7, 8]   # the paper's six, and partners first
     for case_id, spec in table.items():
         assert spec.robot_dof == (TRANSLATION if case_id % 2 else ROTATION)
         assert spec.human_dof == other_dof(spec.robot_dof)
-    assert [table[c].strategy for c in (1, 3, 5)] == ['responsibility_guided', 'level_guided',
-                                                      'learn_together']
-    assert case_problem(6) is None
-    assert case_problem(7) == 'case must be one of 1..6, got 7'
+    assert [table[c].strategy for c in (1, 3, 5, 7)] == ['responsibility_guided', 'level_guided',
+                                                         'learn_together', 'partners_first']
+    assert table[8].strategy == 'partners_first'
+    assert case_problem(6) is None and case_problem(8) is None
+    assert case_problem(9) == 'case must be one of 1..8, got 9'
     assert case_problem(True) and case_problem('2')
 
 

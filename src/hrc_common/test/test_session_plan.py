@@ -37,7 +37,7 @@ def test_compose_makes_the_nodes_agree():
 
 
 @pytest.mark.parametrize('settings, reason', [
-    (SessionSettings(case=7), 'case must be one of 1..6, got 7'),
+    (SessionSettings(case=9), 'case must be one of 1..8, got 9'),
     (SessionSettings(mode='fast'), "mode must be 'lockstep' or 'realtime'"),
     (SessionSettings(seed=-1), 'seed must be >= 0'),
     (SessionSettings(overrides={'robot.x': 1}), '--set robot.x: the node must be one of'),

@@ -1,0 +1,155 @@
+"""Partners first (cases 7, 8): pre-training with a population, then the person in the engine.
+
+Tiny and deterministic: 10-step episodes, a task tree whose tolerances every state meets (so
+each step converges as soon as its rule allows), one-episode convergence windows.
+"""
+
+import json
+
+import pytest
+import yaml
+
+from hrc_agent_node.checkpoint import read_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_common.contract import EpisodeKind
+from hrc_common.params import with_overrides
+from hrc_common.paths import params_dir
+from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_joystick_node.sim_human import load_profile
+from hrc_partners.partners_first import (default_population, main, person_spec_of,
+                                         POPULATION_FIRST_PERSON, prepare_person_session,
+                                         pretrain, unlike_people)
+from hrc_sim_node.physics import PhysicsParams
+
+SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10,
+         'agent.convergence_window': 1, 'agent.judging_rule': 'in_a_row'}
+
+
+@pytest.fixture
+def easy_tree(tmp_path):
+    """Return a task tree file whose tolerances any state of the episode meets."""
+    tree = yaml.safe_load((params_dir() / 'task_tree.yaml').read_text())
+
+    def widen(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                node[key] = 100.0 if key == 'tolerance' else widen(value)
+        elif isinstance(node, list):
+            return [widen(item) for item in node]
+        return node
+
+    path = tmp_path / 'easy_tree.yaml'
+    path.write_text(yaml.safe_dump(widen(tree)))
+    return str(path)
+
+
+def test_the_population_leaves_out_the_sessions_people():
+    population = default_population()
+    assert len(population) == 24 and len(set(population)) == 24
+    for spec in population:
+        kind, profile, number = spec.split(':')
+        assert kind == 'person' and profile in ('paper', 'novice', 'skilled')
+        assert int(number) >= POPULATION_FIRST_PERSON   # the experiment's people are 0, 1, ...
+    assert person_spec_of({'profile': 'paper', 'person': 3}) == 'person:paper:3'
+    assert person_spec_of({'profile': 'novice', 'person': -1}) == 'profile:novice'
+    assert person_spec_of({'input': 'model', 'model_file': 'm.pt'}) == 'model:m.pt'
+
+
+@pytest.mark.slow
+def test_pretraining_meets_the_population_only_and_stops_at_the_persons_step(tmp_path,
+                                                                           easy_tree):
+    physics = with_overrides(PhysicsParams(), episode_duration=2.0)
+    params = with_overrides(AgentParams(), case=7, seed=2, horizon=20, minibatch_size=10,
+                            convergence_window=1, judging_rule='in_a_row',
+                            task_tree_file=easy_tree, checkpoint_dir='', torch_threads=1)
+    population = ['person:novice:1000', 'person:skilled:1001', 'person:paper:1002']
+    result = pretrain(params, physics, tmp_path / 'pre.pt', 'person:paper:2', population)
+    assert result.reached_person_step
+    assert result.population_episodes == len(result.partners_met) > 0
+    assert set(result.partners_met) <= set(population)
+    assert 'person:paper:2' not in result.partners_met
+    core = read_checkpoint(tmp_path / 'pre.pt')['core']
+    assert core['progress']['step_index'] == 2            # the person's step, not begun
+    assert core['counters']['human_involved_episodes'] == 0
+    assert core['counters']['population_episodes'] == result.population_episodes
+    # the same seed meets the same partners
+    again = pretrain(params, physics, tmp_path / 'again.pt', 'person:paper:2', population)
+    assert again.partners_met == result.partners_met
+    with pytest.raises(ValueError, match='is in the training population'):
+        pretrain(params, physics, tmp_path / 'x.pt', 'person:paper:1002', population)
+    with pytest.raises(ValueError, match='has no population step'):
+        pretrain(with_overrides(params, case=2), physics, tmp_path / 'y.pt', 'profile:paper',
+                 population)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('case', [7, 8])
+def test_a_partners_first_session_in_the_engine_runs_its_phases_in_order(tmp_path, easy_tree,
+                                                                       case):
+    config = EngineConfig(case=case, seed=1, training_episodes=40, evaluation_episodes=1,
+                          session_id=f'pf{case}', bags_dir=str(tmp_path / 'bags'),
+                          runs_dir=str(tmp_path / 'runs'),
+                          overrides=dict(SHORT, **{'agent.task_tree_file': easy_tree,
+                                                   'human.person': 1}))
+    _, parameters = compose_parameters(config)
+    start = prepare_person_session(parameters, tmp_path / 'runs' / f'pf{case}')
+    record = json.loads((tmp_path / 'runs' / f'pf{case}' / 'pretrain.json').read_text())
+    assert record['person'] == 'person:paper:1' and record['reached_person_step']
+    assert record['person'] not in record['population']
+    assert start['max_training_episodes'] == record['episodes'] + 40
+    config.resume_from = start['resume_from']
+    config.training_episodes = start['max_training_episodes']
+    result = run_session(config)
+    assert result.converged and result.strategy == 'partners_first'
+    kinds = [(EpisodeKind(e['kind']).label, e['training_step']) for e in result.episodes]
+    # the person's step only, judged first: the pre-trained policy meets it at once
+    assert kinds == [('judging', 2), ('evaluation', 2)]
+    assert result.human_involved_episodes == 1
+    assert result.training_episodes == record['episodes'] + 1
+    assert result.episodes[0]['episode'] == record['episodes']   # numbering goes on
+    bags = sorted(path.name for path in (tmp_path / 'bags' / f'pf{case}').glob('*_ep*.mcap'))
+    first = record['episodes']
+    assert bags == [f'pf{case}_ep{first:04d}.mcap', f'pf{case}_ep{first + 1:04d}.mcap']
+    # the paper's cases need no pre-training
+    _, paper = compose_parameters(EngineConfig(case=2, overrides=dict(SHORT)))
+    assert prepare_person_session(paper, tmp_path / 'none') is None
+
+
+def test_unlike_people_change_one_trait_each():
+    person = load_profile('paper')
+    people = unlike_people(person)
+    assert list(people) == ['slower', 'heavier_handed', 'lapsing', 'timid']
+    assert people['slower'].reaction_delay == pytest.approx(2.5 * person.reaction_delay)
+    assert people['timid'].slider_full_scale > person.slider_full_scale \
+        > people['heavier_handed'].slider_full_scale
+    assert people['lapsing'].lapse_probability > person.lapse_probability
+    assert people['lapsing'].reaction_delay == person.reaction_delay
+
+
+@pytest.mark.slow
+def test_a_population_step_that_cannot_be_met_ends_after_its_budget(tmp_path):
+    tree = yaml.safe_load((params_dir() / 'task_tree.yaml').read_text())
+    for subtask in tree['subtasks']:
+        # alone the robot meets its own subtask at once; nobody can meet the ball's
+        subtask['tolerance'] = 1e-9 if subtask['id'] == 'ball' else 100.0
+    path = tmp_path / 'tree.yaml'
+    path.write_text(yaml.safe_dump(tree))
+    physics = with_overrides(PhysicsParams(), episode_duration=2.0)
+    params = with_overrides(AgentParams(), case=8, seed=4, horizon=20, minibatch_size=10,
+                            convergence_window=1, judging_rule='in_a_row',
+                            task_tree_file=str(path), checkpoint_dir='', torch_threads=1)
+    result = pretrain(params, physics, tmp_path / 'pre.pt', 'person:paper:4',
+                      population_budget=3)
+    assert result.reached_person_step and not result.population_met
+    assert result.population_episodes == len(result.partners_met) == 3
+    assert read_checkpoint(tmp_path / 'pre.pt')['core']['progress']['step_index'] == 2
+
+
+def test_the_command_line_refuses_bad_input_with_every_reason(capsys):
+    assert main(['--case', '8', '--set', 'agent.gamma=3', '--set', 'agent.horizon=0']) == 2
+    error = capsys.readouterr().err
+    assert 'gamma: 3.0 is above the maximum 1.0' in error and 'horizon: 0 is below' in error
+    assert main(['--case', '2']) == 2
+    assert 'case 2 has no population step' in capsys.readouterr().err
+    assert main(['--case', '9']) == 2
+    assert 'case must be one of 1..8, got 9' in capsys.readouterr().err
