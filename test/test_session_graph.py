@@ -136,3 +136,26 @@ def test_a_joystick_fifo_drives_the_human_side(tmp_path, ros_domain_id, read_ros
     assert all(abs(command - expected) < 1e-3 for command in involved), involved[:5]
     wrench = bag['/hrc/human/cmd_wrench'][-1].wrench
     assert wrench.torque.x < 0.0 and wrench.force.z == 0.0  # case 5: the human rotates
+
+
+def test_a_partners_first_session_is_pre_trained_by_the_runner(tmp_path, ros_domain_id,
+                                                               read_rosbag):
+    """Case 8: the runner pre-trains (no person) and the graph continues from that checkpoint.
+
+    With 3 episodes the robot alone does not converge, so the pre-training runs out of episodes
+    before the person's step and the runner says so; the graph's first episode is the one after
+    the pre-training's (the checkpoint was resumed), an evaluation.
+    """
+    result = subprocess.run(session_command(tmp_path, ros_domain_id, '--case', '8',
+                                            '--episodes', '3', '--eval-episodes', '1',
+                                            '--set', 'sim.episode_duration=1.0'),
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert '[session] pre-trained with simulated partners (no person): 3 episodes' \
+        in result.stdout, result.stdout
+    assert 'ran out of episodes before the person' in result.stdout
+    run_dir = tmp_path / 'runs' / 'test'
+    assert (run_dir / 'pretrain.json').is_file() and (run_dir / 'pretrained.pt').is_file()
+    assert f"resume_from: {run_dir / 'pretrained.pt'}" in (run_dir / 'parameters.yaml').read_text()
+    summaries = read_rosbag(tmp_path / 'bags' / 'test')['/hrc/episode']
+    assert [(summary.episode, summary.evaluation) for summary in summaries] == [(3, True)]

@@ -81,6 +81,10 @@ RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'st
                  'human_effort', 'converged', 'event', 'judging')
 
 
+class PopulationStepRefused(ValueError):
+    """A population step reached by a runner that has no simulated population to give."""
+
+
 @dataclass(frozen=True)
 class EpisodePlan:
     """What the next episode is: its index in the session, its seed, and its kind.
@@ -451,6 +455,22 @@ class AgentCore:
 
     # ------------------------------------------------------------------ episode
 
+    def population_step_problem(self) -> str:
+        """Return why the next episode cannot run here ('' if it can).
+
+        A strategy's population step (partners first) is run only by a caller that supplies
+        the simulated population (``population_partner``); any other runner must start the
+        session from the pre-trained checkpoint, which stands at the person's step.
+        """
+        step = self.training_step
+        if step.partner != 'population' or self.population_partner \
+                or self.phase not in (Phase.TRAINING, Phase.EVALUATION):
+            return ''
+        return (f'case {self.case_id} step {step.index + 1} "{step.name}" trains with a '
+                'simulated population before the person joins: pre-train it first (hrc '
+                'session does; by hand: python -m hrc_partners.partners_first --case '
+                f'{self.case_id}) and start this session from its checkpoint (resume_from)')
+
     def start_episode(self) -> EpisodePlan:
         """Begin the next episode and return its plan."""
         if self.phase not in (Phase.TRAINING, Phase.EVALUATION):
@@ -458,12 +478,9 @@ class AgentCore:
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is still running')
         step = self.training_step
-        if step.partner == 'population' and not self.population_partner:
-            raise RuntimeError(
-                f'case {self.case_id} step {step.index + 1} "{step.name}" trains with a '
-                'simulated population before the person joins: run it with '
-                'hrc_partners.partners_first.pretrain and start this session from its '
-                'checkpoint')
+        problem = self.population_step_problem()
+        if problem:
+            raise PopulationStepRefused(problem)
         plan = EpisodePlan(self.episode, derive_seed(self.params.seed, self.episode),
                            self.phase == Phase.EVALUATION, step.index,
                            self.human_involved, self._next_is_judging(), step.partner)

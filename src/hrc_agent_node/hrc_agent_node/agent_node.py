@@ -50,7 +50,7 @@ import os
 import time
 
 from geometry_msgs.msg import WrenchStamped
-from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.checkpoint import CheckpointError, load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import CasesError
@@ -110,6 +110,9 @@ class AgentNode(Node):
                 f'({"policy for evaluation" if self.params.evaluation_only else "session"}): '
                 f'{self.core.total_episodes} training episodes done, next episode '
                 f'{self.core.episode}')
+        problem = self.core.population_step_problem()
+        if problem:   # partners first without its pre-training: refused, not a traceback
+            raise ParameterError(problem)
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.session_pub = self.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS,
                                                  event_callbacks=quiet_pub)
@@ -235,7 +238,11 @@ class AgentNode(Node):
         # synchronously at the step where the update is due, exactly as the in-process engine.
         self.core.set_learner_mode('background' if self.next_clock_mode() == 'realtime'
                                    else 'synchronous')
-        plan = self.core.start_episode()
+        try:
+            plan = self.core.start_episode()
+        except PopulationStepRefused as error:   # partners first run without its pre-training
+            self.abort(str(error), exit_code=2)
+            return
         self.stamps = {}
         self.states_before_limits = []
         self.pending_state = None

@@ -6,7 +6,7 @@ test_agent_convergence.py.
 
 import pytest
 
-from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import Phase, SimLimits
@@ -85,9 +85,16 @@ def test_the_paper_cases_have_no_population_episodes_in_their_summary():
 def test_a_population_step_needs_a_population_partner():
     core = make_core(8)
     while core.training_step.index == 0:      # alone: no partner needed
+        assert core.population_step_problem() == ''
         run_episode(core)
-    with pytest.raises(RuntimeError, match='partners_first.pretrain'):
+    problem = core.population_step_problem()
+    assert 'python -m hrc_partners.partners_first --case 8' in problem
+    # a ValueError: the engine and the agent node refuse it (exit 2), no traceback
+    with pytest.raises(PopulationStepRefused, match='pre-train it first') as error:
         core.start_episode()
+    assert isinstance(error.value, ValueError) and str(error.value) == problem
+    core.population_partner = True
+    assert core.population_step_problem() == ''
 
 
 def test_a_session_resumed_at_the_person_step_runs_with_the_person(tmp_path):

@@ -34,6 +34,7 @@ Exit codes: 0 done, 1 a node failed, 2 bad arguments, 3 aborted by the operator,
 130/143 SIGINT/SIGTERM.
 """
 
+import json
 import os
 import pathlib
 import re
@@ -45,6 +46,7 @@ from hrc_common import paths
 from hrc_common.executables import executable_path
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, NODES, SessionSettings, write_session_files
+from hrc_partners.partners_first import prepare_person_session
 import rclpy
 from rclpy.context import Context
 import yaml
@@ -95,6 +97,26 @@ def run_session(settings: SessionSettings, options) -> int:
         # agent waits for it (wait_for_subscribers) as long as the runner waits for its input.
         agent = parameters['agent']
         agent['reset_timeout'] = max(float(agent['reset_timeout']), float(options.input_wait))
+    if not settings.resume_from:
+        # Partners first (cases 7, 8): the robot alone and with the simulated population in
+        # this process first (no person: minutes), then the graph from that checkpoint.
+        try:
+            start = prepare_person_session(parameters, run_dir)
+        except (ValueError, OSError) as error:
+            print(f'session: pre-training with simulated partners failed: {error}',
+                  file=sys.stderr)
+            return 2
+        if start is not None:
+            parameters['agent'].update(start)
+            record = json.loads((run_dir / 'pretrain.json').read_text())
+            print(f'[session] pre-trained with simulated partners (no person): '
+                  f'{record["episodes"]} episodes, {record["population_episodes"]} of them '
+                  f'with the population, in {record["wall_seconds"]:.0f} s; the session '
+                  f'continues from {start["resume_from"]}', flush=True)
+            if not record['reached_person_step']:
+                print("[session] the pre-training ran out of episodes before the person's "
+                      'step (the robot alone did not converge): the person joins only for '
+                      'the evaluation; give more --episodes', flush=True)
     params_path, _ = write_session_files(settings, parameters, run_dir)
 
     env = dict(os.environ)

@@ -19,7 +19,8 @@ def parse_args(argv=None):
     parser = argparse.ArgumentParser(
         prog='hrc session', description='Run one hrc session (one case, one seed): sim, agent, '
         'human and recorder as supervised processes, then the report.')
-    parser.add_argument('--case', type=int, default=2, help='paper case 1..6 (default 2)')
+    parser.add_argument('--case', type=int, default=2,
+                        help="case 1..8: the paper's six, 7-8 partners first (default 2)")
     parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
     parser.add_argument('--engine', choices=('graph',), default='graph',
                         help='graph (default): the nodes as processes over DDS; for one '

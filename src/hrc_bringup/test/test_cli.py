@@ -145,3 +145,13 @@ def test_the_installed_hrc_runs_as_ros2_run_starts_it(tmp_path):
     assert 'case 2: responsibility_guided' in result.stdout, result.stdout
     result = subprocess.run([hrc, 'nothing'], capture_output=True, text=True, timeout=60)
     assert result.returncode == 2 and 'Traceback' not in result.stderr
+
+
+def test_a_partners_first_case_in_the_engine_without_its_pre_training_is_refused(capsys,
+                                                                                 tmp_path):
+    code, _, err = run(capsys, 'session', '--engine', 'inprocess', '--case', '7', '--episodes',
+                       '1', '--no-record', '--runs-dir', str(tmp_path))
+    assert code == 2, err
+    assert 'case 7: the steps before the person train with a simulated population' in err
+    assert 'python -m hrc_partners.partners_first --case 7' in err
+    assert 'Traceback' not in err

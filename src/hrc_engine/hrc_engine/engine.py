@@ -35,7 +35,7 @@ import typing
 import yaml
 
 from hrc_common import qos_table
-from hrc_common.contract import SimLimits
+from hrc_common.contract import Phase, SimLimits
 from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
@@ -129,7 +129,7 @@ class InProcessSession:
     """One session: the cores wired as the lockstep graph wires the nodes."""
 
     def __init__(self, config: EngineConfig):
-        from hrc_agent_node.agent_core import AgentCore
+        from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
         from hrc_agent_node.config import AgentParams
         from hrc_common.params import from_dict
         from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
@@ -154,6 +154,18 @@ class InProcessSession:
             from hrc_agent_node.checkpoint import load_into
             load_into(self.core, self.agent_params.resume_from,
                       resume=not self.agent_params.evaluation_only)
+        case = self.core.case
+        if (case.has_population_steps and not self.core.population_partner
+                and self.core.phase == Phase.TRAINING
+                and self.core.training_step.index < case.first_person_step):
+            # Partners first before its pre-training: refused now (exit 2), not after minutes
+            # of the robot alone; the engine cannot pre-train (hrc_partners is a higher layer).
+            raise PopulationStepRefused(
+                f'case {case.case_id}: the steps before the person train with a simulated '
+                'population, which this engine cannot run: start from the pre-trained '
+                f'checkpoint (python -m hrc_partners.partners_first --case {case.case_id}, '
+                'then --resume-from), or use hrc experiment / hrc session (graph), which '
+                'pre-train')
         self.human = SimulatedHumanSide(self.parameters['human'], self.limits)
         self.clock = WallClock()
         self.run_dir = pathlib.Path(self.settings.runs_dir) / self.session_id

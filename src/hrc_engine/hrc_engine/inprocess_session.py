@@ -22,7 +22,8 @@ def parse_args(argv=None) -> EngineConfig:
         prog='hrc session --engine inprocess', description='Run one hrc session (one case, '
         'one seed) in one process: physics, step protocol, PPO agent, simulated human, '
         'evaluation, checkpoints and the bags of the graph, without ROS communication.')
-    parser.add_argument('--case', type=int, default=2, help='paper case 1..6 (default 2)')
+    parser.add_argument('--case', type=int, default=2, help="case 1..8: the paper's six, 7-8 "
+                        'partners first (from their pre-trained checkpoint; default 2)')
     parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
     parser.add_argument('--episodes', type=int, default=0,
                         help='max training episodes (default: params/agent.yaml)')

@@ -246,7 +246,7 @@ def main(argv=None) -> int:
           f'{"is next" if record["reached_person_step"] else "was not reached"}')
     print(f'partners_first: {run_dir / PRETRAIN_RECORD}, {start["resume_from"]}')
     overrides = ''.join(f' --set {text}' for text in args.set)
-    print(f'then: ros2 run hrc_bringup session --case {args.case} --seed {args.seed} '
+    print(f'then: hrc session --case {args.case} --seed {args.seed} '
           f'--session-id {settings.session_id} --runs-dir {settings.runs_dir}{overrides} '
           f'--resume-from {start["resume_from"]} --episodes {start["max_training_episodes"]}')
     return 0
