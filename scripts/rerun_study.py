@@ -16,8 +16,9 @@ Steps, each printed as it starts:
    returns, errors, efforts and kinds, or the rerun fails (exit 1);
 4. ``hrc_results`` on the PPO run into ``--out`` (docs/results.md), SAC into ``--out``/sac.
 
-The learning settings of the study (``STUDY_SETTINGS``) are the ones issue 22 measured to need
-the fewest episodes with PPO; the paper's own Table I settings stay the agent's defaults.
+The learning settings of the study (``hrc_common.session_plan.STUDY_LEARNING``) are the ones
+issue 22 measured to need the fewest episodes with PPO; the paper's own Table I settings stay
+the agent's defaults.
 
 Example (the whole study; ~1-2 h on 2 cores)::
 
@@ -38,16 +39,11 @@ import subprocess
 import sys
 import time
 
+from hrc_common.session_plan import STUDY_LEARNING
+
 REPO = pathlib.Path(__file__).resolve().parents[1]
-# The study's learning settings (issue 22): PPO updating at the horizon or an episode's end,
-# whichever comes first (MATLAB's reading of Table I); convergence judged on deterministic
-# episodes in a row every 2nd episode (floor 4-5 human-involved episodes instead of 12); the
-# `graded` reward preset (a slope from the stops to the goal on every subtask); 10 epochs and
-# a clip of 0.2 (Stable-Baselines3's defaults: the paper's 3 epochs and 0.05 learn too little
-# per update for 200-step episodes).
-STUDY_SETTINGS = ('agent.update_rule=horizon_or_episode_end', 'agent.judging_rule=in_a_row',
-                  'agent.judging_interval=2', 'agent.preset=graded', 'agent.epochs=10',
-                  'agent.clip_coef=0.2')
+# The study's learning settings: hrc_common.session_plan.STUDY_LEARNING (issue 22; why there).
+STUDY_SETTINGS = tuple(f'{key}={value}' for key, value in STUDY_LEARNING.items())
 LEARNER_SETTINGS = {'ppo': ('agent.algorithm=ppo',),
                     'sac': ('agent.algorithm=sac', 'agent.preset=tuned')}
 

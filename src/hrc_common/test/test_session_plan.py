@@ -93,3 +93,16 @@ def test_an_override_the_session_overrules_is_refused_not_dropped():
     assert 'sim.seed' not in text and 'horizon' not in text   # the same value, or not owned
     settings.human_input, settings.overrides = 'script', {'human.input': 'script'}
     assert compose(settings, PARAMS)['human']['input'] == 'script'
+
+
+def test_the_study_learning_settings_are_agent_parameters_the_session_takes():
+    from hrc_common.session_plan import STUDY_LEARNING, study_learning_arguments
+
+    defaults = yaml.safe_load((PARAMS / 'agent.yaml').read_text())['agent']['ros__parameters']
+    overrides = {key: value for key, value in STUDY_LEARNING.items()}
+    agent = compose(SessionSettings(case=2, overrides=overrides), PARAMS)['agent']
+    for key, value in STUDY_LEARNING.items():
+        name = key.split('.', 1)[1]
+        assert name in defaults and defaults[name] != value, key   # a real change of default
+        assert agent[name] == value
+    assert study_learning_arguments()[:2] == ['--set', 'agent.update_rule=horizon_or_episode_end']
