@@ -151,7 +151,7 @@ def main() -> int:
     parser.add_argument('--human-periods', type=float, nargs='+', default=[0.2, 0.02])
     parser.add_argument('--executors', nargs='+', default=['lean', 'rclpy'],
                         choices=('lean', 'rclpy', 'events'),
-                        help="executors of the nodes and of the ping-pong (HRC_EXECUTOR)")
+                        help='executors of the nodes and of the ping-pong (HRC_EXECUTOR)')
     parser.add_argument('--graph-executors', nargs='+', default=None,
                         choices=('lean', 'rclpy', 'events'),
                         help='executors of the graph runs (default: --executors)')
