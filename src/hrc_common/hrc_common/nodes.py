@@ -13,6 +13,7 @@ import rclpy
 from rclpy._rclpy_pybind11 import RCLError
 from rclpy.executors import (ExternalShutdownException, SingleThreadedExecutor,
                              TimeoutObject)
+from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 from rclpy.utilities import timeout_sec_to_nsec
@@ -230,7 +231,6 @@ def make_executor(name: str, context=None):
     if name == 'rclpy':
         return SingleThreadedExecutor(context=context)
     if name == 'events':
-        from rclpy.experimental import EventsExecutor
         return EventsExecutor(context=context)
     raise ValueError(f'{EXECUTOR_VARIABLE}={name!r} is not one of {", ".join(EXECUTORS)}')
 
