@@ -245,8 +245,14 @@ def spin(node, executor_name: str) -> None:
     rclpy's EventsExecutor (Jazzy, rclpy 7.1) is turned with a timeout: its ``spin()`` and its
     ``spin_once()`` without a timeout never run a callback and starve every other Python thread
     (bench/events_executor_hang.py reproduces it in a few lines); that is why the graph hung with
-    every node on it (issue 24). ``spin_once(timeout_sec)`` serves callbacks as they come.
+    every node on it (issue 24). ``spin_once(timeout_sec)`` serves callbacks as they come. It
+    has no guard conditions ("Guard conditions not supported"): a node with one (the human
+    node's stick watcher) is refused with a ParameterError (exit code 2).
     """
+    if executor_name == 'events' and any(True for _ in node.guards):
+        raise ParameterError(f"{EXECUTOR_VARIABLE}=events: rclpy's EventsExecutor has no guard "
+                             f'conditions (Jazzy) and node {node.get_name()!r} uses one; use '
+                             f'lean or rclpy')
     executor = make_executor(executor_name, context=node.context)
     executor.add_node(node)
     try:

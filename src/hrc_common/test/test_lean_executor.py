@@ -184,3 +184,24 @@ def test_a_turn_costs_less_than_rclpys(rclpy_context):
         reference.append(turns_per_second(rclpy_context, 'rclpy', 1500))
     # Measured here: about 3x (lean ~12k turns/s, rclpy ~4k on a quiet core).
     assert max(lean) > 1.5 * max(reference), (lean, reference)
+
+
+def test_events_refuses_a_node_with_a_guard_condition(ros_domain_id, monkeypatch, capsys):
+    """EventsExecutor: a node with a guard condition is refused before it spins (exit code 2).
+
+    rclpy's EventsExecutor raises 'Guard conditions not supported' in the middle of spinning
+    (the human node has one); the refusal says why, with no traceback.
+    """
+    import rclpy
+
+    def node_with_a_guard():
+        node = rclpy.create_node('guarded')
+        node.create_guard_condition(lambda: None)
+        return node
+
+    monkeypatch.setenv(EXECUTOR_VARIABLE, 'events')
+    code = run_node(node_with_a_guard, 'guarded_node', 'summary', args=['guarded_node'])
+    error = capsys.readouterr().err
+    assert code == 2, error
+    assert 'EventsExecutor has no guard conditions' in error and "'guarded'" in error
+    assert 'Traceback' not in error
