@@ -182,7 +182,7 @@ def test_a_turn_costs_less_than_rclpys(rclpy_context):
     for _ in range(3):
         lean.append(turns_per_second(rclpy_context, 'lean', 1500))
         reference.append(turns_per_second(rclpy_context, 'rclpy', 1500))
-    # Measured here: about 3x (lean ~12k turns/s, rclpy ~4k on a quiet core).
+    # Measured here (2026-12-02, load 8): lean 2499 turns/s, rclpy 596 (x4.2).
     assert max(lean) > 1.5 * max(reference), (lean, reference)
 
 
