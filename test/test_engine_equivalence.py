@@ -121,6 +121,20 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
 
 
 @pytest.mark.slow
+def test_the_nodes_on_rclpys_executor_give_the_engines_session(tmp_path, ros_domain_id,
+                                                              read_rosbag, monkeypatch):
+    """``HRC_EXECUTOR=rclpy``: rclpy's SingleThreadedExecutor, as before issue 24, bit for bit.
+
+    The default, ``lean`` (hrc_common.nodes.LeanExecutor), is the test above. ``events`` cannot
+    run the graph: the human node has a guard condition, which rclpy's EventsExecutor refuses.
+    """
+    executor = 'rclpy'
+    monkeypatch.setenv('HRC_EXECUTOR', executor)
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, ARGS, read_rosbag)
+    assert_same(graph_bag, engine_bag, (0, 1, 2))
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize('case', [1, 2, 3, 4, 6])
 def test_every_case_is_the_same_in_the_graph_and_the_engine(tmp_path, ros_domain_id,
                                                            read_rosbag, case):

@@ -435,12 +435,18 @@ class EpisodeFile:
         except OSError as error:
             raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
 
-    def write(self, message: RawMessage, description: TopicDescription) -> None:
-        """Append one message (registering its schema and channel on first use)."""
+    def write(self, message: RawMessage, description) -> None:
+        """Append one message (registering its schema and channel on first use).
+
+        ``description``: the topic's TopicDescription, or a callable returning it, called only
+        when the topic's channel is registered (the recorder asks the ROS graph for it, which
+        costs far more than writing a message).
+        """
         try:
             channel_id = self._channels.get(message.topic)
             if channel_id is None:
-                channel_id = self._add_channel(message.topic, description)
+                channel_id = self._add_channel(
+                    message.topic, description() if callable(description) else description)
             self._writer.add_message(channel_id, log_time=message.log_time,
                                      data=message.data, publish_time=message.publish_time,
                                      sequence=message.sequence & 0xFFFFFFFF)

@@ -356,7 +356,10 @@ class EpisodeRecorder:
 
     def _write(self, episode: OpenEpisode, message: RawMessage) -> None:
         try:
-            episode.file.write(message, self._description(message))
+            # The graph is asked for the topic's description (offered QoS, type hash) when
+            # the file registers its channel, not for every message (a graph query per message
+            # was most of the recorder's CPU at the human's rate).
+            episode.file.write(message, lambda: self._description(message))
         except RecordingError as error:
             raise self._fail(str(error), error)
         except msgdefs.DefinitionNotFound as error:

@@ -410,3 +410,37 @@ def test_a_recorder_on_a_folder_with_an_unusable_metadata_yaml_lists_the_files_a
     with Reader(copy) as reader:
         assert reader.message_count == sum(
             len(bag_reader.scan_file(path).messages) for path in copy.glob('*.mcap'))
+
+
+def test_the_graph_is_asked_once_per_topic_and_file_not_per_message(tmp_path):
+    """The topic's description (a ROS graph query in the node) only when a channel is made.
+
+    Before issue 24 the recorder asked for it at every message: at the human's rate (ten
+    commands a step) that query was most of the recorder's CPU. The files are unchanged: the
+    description is used only to register the channel.
+    """
+    clock = FakeClock()
+    asked = []
+
+    def describe(topic, type_name):
+        asked.append(topic)
+        return TopicDescription(type_name, (PROFILE,), 'RIHS01_' + '0' * 64)
+
+    recorder = EpisodeRecorder(
+        RecorderParams(output_dir=str(tmp_path), session_id='q', close_grace=0.2), describe,
+        clock=clock)
+    feed = Feeder(recorder)
+    for episode in range(2):
+        for step in range(20):
+            feed.send('/hrc/state', TaskState(episode=episode, step=step, truncated=step == 19))
+            for _ in range(10):
+                feed.send('/hrc/human/cmd_wrench', WrenchStamped())
+        feed.send('/hrc/episode', EpisodeSummary(episode=episode))
+        clock.now += 1.0
+        recorder.tick()
+    recorder.close()
+    assert asked == ['/hrc/state', '/hrc/human/cmd_wrench', '/hrc/episode'] * 2
+    with Reader(tmp_path / 'q') as reader:
+        counts = {connection.topic: connection.msgcount for connection in reader.connections}
+        assert counts == {'/hrc/state': 40, '/hrc/human/cmd_wrench': 400, '/hrc/episode': 2}
+        assert all(connection.ext.offered_qos_profiles for connection in reader.connections)

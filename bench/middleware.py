@@ -1,0 +1,222 @@
+#!/usr/bin/env python3
+"""Benchmark: the lockstep graph against the middleware's limit, in one run.
+
+    python bench/middleware.py                          # from any directory (~3-4 min)
+    python bench/middleware.py --repeats 2 --executors lean rclpy
+
+Prints, measured in the same run (so that the machine's load hits every figure alike):
+
+1. ping-pong: round trip (ms) of a bare rclpy exchange between two processes, a TaskState out
+   and a WrenchStamped back (what one lockstep exchange carries), for each executor named
+   (``--executors``; both ends use the same one; 'rclpy' is the issue's "bare round trip");
+2. engine: ms per control step of the in-process engine (``hrc_engine``, bags written) at each
+   human rate (``--human-periods``, default 0.2 and 0.02 s);
+3. graph: ms per control step of the ``session`` graph (sim, agent, human as processes over
+   DDS) without and with the recorder, at each human rate, for each executor of the nodes
+   (``HRC_EXECUTOR``, hrc_common.nodes);
+4. the share of the middleware's limit the graph reaches: graph step / (round trip x round
+   trips per step + engine step), where a lockstep step takes 1 round trip with the human
+   acting once a period and ``control_period / human_period`` round trips at the human's rate
+   (one slice answer each; the robot's answer travels with the first). The round trip is the
+   'rclpy' one when measured (the middleware with rclpy's executor), else the first executor's.
+   The recorder's overhead on the rate and on the nodes' CPU.
+
+Case 5 by default: the human acts from the start (case 2's first episodes are the robot's alone
+and would hide the human's rate). Episodes run 200 steps; updates between episodes are left out
+of the step times (steps are timed within episodes by a listener on /hrc/state).
+"""
+
+import argparse
+import os
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+REPOSITORY = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPOSITORY / 'bench'))
+
+PING = '/bench/ping'
+PONG = '/bench/pong'
+CONTROL_PERIOD_S = 0.2
+
+
+def echo(domain_id: int, executor_name: str) -> int:
+    """Answer every TaskState on PING with a WrenchStamped carrying its stamp (child process)."""
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+    from hrc_common import qos
+    from hrc_common.nodes import make_executor
+    from hrc_msgs.msg import TaskState
+
+    rclpy.init(domain_id=domain_id)
+    node = rclpy.create_node('bench_echo')
+    publisher = node.create_publisher(WrenchStamped, PONG, qos.COMMAND_QOS,
+                                      event_callbacks=qos.NO_PUBLISHER_EVENTS)
+
+    def answer(state):
+        reply = WrenchStamped()
+        reply.header.stamp = state.header.stamp
+        publisher.publish(reply)
+
+    node.create_subscription(TaskState, PING, answer, qos.STATE_QOS,
+                             event_callbacks=qos.NO_SUBSCRIPTION_EVENTS)
+    executor = make_executor(executor_name)
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except Exception:  # noqa: BLE001 - shut down from outside: the parent's SIGTERM
+        pass
+    return 0
+
+
+def ping_pong(domain_id: int, executor_name: str, round_trips: int) -> float:
+    """Return the median round trip (ms) of TaskState -> WrenchStamped with an echo process."""
+    import rclpy
+    from geometry_msgs.msg import WrenchStamped
+    from hrc_common import qos
+    from hrc_common.nodes import make_executor
+    from hrc_msgs.msg import TaskState
+    from rclpy.context import Context
+
+    environment = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
+    child = subprocess.Popen([sys.executable, __file__, '--echo', str(domain_id),
+                              executor_name], env=environment)
+    context = Context()
+    rclpy.init(context=context, domain_id=domain_id)
+    try:
+        node = rclpy.create_node('bench_ping', context=context)
+        publisher = node.create_publisher(TaskState, PING, qos.STATE_QOS,
+                                          event_callbacks=qos.NO_PUBLISHER_EVENTS)
+        received = []
+        subscription = node.create_subscription(
+            WrenchStamped, PONG, lambda reply: received.append(reply), qos.COMMAND_QOS,
+            event_callbacks=qos.NO_SUBSCRIPTION_EVENTS)
+        executor = make_executor(executor_name, context=context)
+        executor.add_node(node)
+        deadline = time.monotonic() + 30
+        while (publisher.get_subscription_count() == 0
+               or subscription.get_publisher_count() == 0) and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        times = []
+        state = TaskState(human_applied=[0.0] * 10)
+        for index in range(round_trips + 100):   # the first 100: warm-up
+            received.clear()
+            state.header.stamp.nanosec = index
+            start = time.perf_counter()
+            publisher.publish(state)
+            while not received:
+                executor.spin_once(timeout_sec=1.0)
+                if time.perf_counter() - start > 5:
+                    raise RuntimeError('the echo process did not answer within 5 s')
+            times.append(time.perf_counter() - start)
+        executor.shutdown()
+        node.destroy_node()
+    finally:
+        rclpy.shutdown(context=context)
+        child.terminate()
+        try:
+            child.wait(timeout=10)
+        except subprocess.TimeoutExpired:   # an executor that ignores SIGTERM (events)
+            child.kill()
+            child.wait()
+    return statistics.median(times[100:]) * 1000
+
+
+def graph_step(case, episodes, seed, record, domain_id, work, human_period, executor_name):
+    """Return graph_rate.graph_rate's result with the nodes on ``executor_name``."""
+    from graph_rate import graph_rate
+    previous = os.environ.get('HRC_EXECUTOR')
+    os.environ['HRC_EXECUTOR'] = executor_name
+    try:
+        return graph_rate(case, episodes, seed, record, domain_id, work, human_period)
+    finally:
+        if previous is None:
+            del os.environ['HRC_EXECUTOR']
+        else:
+            os.environ['HRC_EXECUTOR'] = previous
+
+
+def main() -> int:
+    """Measure everything in rounds and print the figures and ratios."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--case', type=int, default=5)
+    parser.add_argument('--episodes', type=int, default=2, help='episodes per graph run')
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--domain-id', type=int, default=92)
+    parser.add_argument('--repeats', type=int, default=1, help='rounds of every measurement')
+    parser.add_argument('--round-trips', type=int, default=2000)
+    parser.add_argument('--human-periods', type=float, nargs='+', default=[0.2, 0.02])
+    parser.add_argument('--executors', nargs='+', default=['lean', 'rclpy'],
+                        choices=('lean', 'rclpy', 'events'),
+                        help='executors of the nodes and of the ping-pong (HRC_EXECUTOR)')
+    parser.add_argument('--graph-executors', nargs='+', default=None,
+                        choices=('lean', 'rclpy', 'events'),
+                        help='executors of the graph runs (default: --executors)')
+    parser.add_argument('--echo', nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.echo:
+        return echo(int(args.echo[0]), args.echo[1])
+    from graph_rate import engine_rate
+    graph_executors = args.graph_executors or args.executors
+
+    print(f'machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; case {args.case}, '
+          f'{args.episodes} episodes of 200 steps per run, {args.repeats} round(s)', flush=True)
+    rounds = []
+    with tempfile.TemporaryDirectory(prefix='hrc-bench-') as folder:
+        work = pathlib.Path(folder)
+        for index in range(args.repeats):
+            figures = {'rt': {}, 'engine': {}, 'graph': {}}
+            for name in args.executors:
+                figures['rt'][name] = ping_pong(args.domain_id, name, args.round_trips)
+                print(f'round {index + 1}: ping-pong ({name} executor): round trip '
+                      f'{figures["rt"][name]:.3f} ms', flush=True)
+            for period in args.human_periods:
+                rate = engine_rate(args.case, args.episodes, args.seed, work, period)
+                figures['engine'][period] = 1000 / rate
+                print(f'round {index + 1}: engine, human_period {period:g} s: '
+                      f'{1000 / rate:.3f} ms/step ({rate:.0f} steps/s)', flush=True)
+                for name in graph_executors:
+                    for record in (False, True):
+                        result = graph_step(args.case, args.episodes, args.seed, record,
+                                            args.domain_id, work, period, name)
+                        figures['graph'][(period, name, record)] = result
+                        print(f'round {index + 1}: graph ({name}), human_period {period:g} s'
+                              f'{", recorder" if record else ""}: '
+                              f'{1000 / result["rate"]:.3f} ms/step ({result["rate"]:.0f} '
+                              f'steps/s, nodes CPU {result["cpu"]:.1f} s in '
+                              f'{result["wall"]:.1f} s)', flush=True)
+            rounds.append(figures)
+    median = statistics.median
+    reference = 'rclpy' if 'rclpy' in args.executors else args.executors[0]
+    print(f'-- summary (median of {len(rounds)} round(s); limit = {reference} round trip x '
+          f'round trips per step + engine step)')
+    for name in args.executors:
+        print(f'ping-pong round trip, {name:5s} executor     : '
+              f'{median(r["rt"][name] for r in rounds):7.3f} ms')
+    for period in args.human_periods:
+        trips = max(1, round(CONTROL_PERIOD_S / period))
+        engine = median(r['engine'][period] for r in rounds)
+        limit = median(r['rt'][reference] * trips + r['engine'][period] for r in rounds)
+        print(f'human_period {period:g} s ({trips} round trip(s) per step): engine '
+              f'{engine:.3f} ms/step, limit {limit:.3f} ms/step')
+        for name in graph_executors:
+            plain = [r['graph'][(period, name, False)] for r in rounds]
+            recorded = [r['graph'][(period, name, True)] for r in rounds]
+            step = median(1000 / g['rate'] for g in plain)
+            step_recorded = median(1000 / g['rate'] for g in recorded)
+            ratio = median(1000 / r['graph'][(period, name, False)]['rate']
+                           / (r['rt'][reference] * trips + r['engine'][period]) for r in rounds)
+            rate_cost = median(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
+            cpu_cost = median(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
+            print(f'  graph ({name:5s}): {step:7.3f} ms/step, with recorder '
+                  f'{step_recorded:7.3f}; graph / limit {ratio:.2f}; recorder costs '
+                  f'{rate_cost * 100:+.1f}% of the rate, {cpu_cost * 100:+.1f}% nodes CPU')
+    print(f'load average at the end: {os.getloadavg()[0]:.1f}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

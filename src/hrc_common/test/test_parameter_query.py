@@ -1,0 +1,60 @@
+"""ParameterQuery asks again when its request is never answered (issue 24's benchmark hang).
+
+In one graph start of about twenty the human node sent its request for the sim's limits and
+never got an answer: it waited forever and the sim counted every human command missing. Here
+the answer is lost for sure: the service that received the request is destroyed unanswered
+and a new one takes its place; the query must ask again and get the values.
+"""
+
+import time
+
+from rcl_interfaces.msg import ParameterType, ParameterValue
+from rcl_interfaces.srv import GetParameters
+
+from hrc_common.nodes import LeanExecutor
+from hrc_common.parameter_query import ParameterQuery
+
+
+def test_a_request_never_answered_is_asked_again(rclpy_context):
+    import rclpy
+    asker = rclpy.create_node('asker', context=rclpy_context)
+    owner = rclpy.create_node('owner', context=rclpy_context)
+    requests = []
+
+    def answer(request, response):
+        requests.append(list(request.names))
+        response.values = [ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=0.2)]
+        return response
+
+    service = owner.create_service(GetParameters, '/fake_sim/get_parameters', answer)
+    values = []
+    query = ParameterQuery(asker, 'fake_sim', ['control_period'], values.append)
+    query.answer_timeout = 1.0   # s (2 by default)
+    asking = LeanExecutor(context=rclpy_context)
+    asking.add_node(asker)
+    deadline = time.monotonic() + 10
+    while query.future is None:          # the service is seen: the request goes out
+        assert time.monotonic() < deadline
+        query.poll()
+        asking.spin_once(timeout_sec=0.05)
+    lost = query.future
+    # The owner never serves that request: its service goes away with it, a new one comes.
+    time.sleep(0.3)
+    owner.destroy_service(service)
+    owner.create_service(GetParameters, '/fake_sim/get_parameters', answer)
+    answering = LeanExecutor(context=rclpy_context)
+    answering.add_node(owner)
+    query.poll()
+    assert query.future is lost           # within the timeout: still waiting
+    deadline = time.monotonic() + 10
+    while not values:
+        assert time.monotonic() < deadline, 'the query never asked again'
+        query.poll()
+        asking.spin_once(timeout_sec=0.02)
+        answering.spin_once(timeout_sec=0.02)
+    assert values == [{'control_period': 0.2}] and query.done
+    assert requests == [['control_period']]    # the lost request was never served
+    asking.shutdown()
+    answering.shutdown()
+    asker.destroy_node()
+    owner.destroy_node()
