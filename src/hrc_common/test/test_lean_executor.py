@@ -156,34 +156,32 @@ def test_an_unknown_executor_is_a_bad_parameter_with_its_reason(monkeypatch, cap
     assert 'Traceback' not in error
 
 
-def turns_per_second(context, executor_name: str, turns: int) -> float:
-    """Return executor turns/s of a node with an always-due timer and a few idle entities."""
+def test_the_wait_set_is_built_once_not_every_turn(rclpy_context, monkeypatch):
+    """What makes a turn cheaper than rclpy's, checked without a clock (speed: the benchmark).
+
+    rclpy builds a new wait set at every turn; the lean executor builds it once and again only
+    when a node's entities change. (bench/middleware.py measures the turns: 2499 vs 596 turns/s
+    here, 2026-12-02; a timed assertion would flake on a busy 2-core machine.)
+    """
     import rclpy
-    node = rclpy.create_node(f'turns_{executor_name}', context=context)
+    node = rclpy.create_node('turns_lean', context=rclpy_context)
     node.create_timer(0.0, lambda: None)
     for index in range(6):   # about what an hrc node has besides its hot subscription
         node.create_subscription(Int32, f'/turns/idle{index}', lambda m: None, 1)
-    executor = make_executor(executor_name, context=context)
+    executor = make_executor('lean', context=rclpy_context)
+    builds = []
+    original = executor._rebuild
+    monkeypatch.setattr(executor, '_rebuild', lambda key: (builds.append(key), original(key)))
     executor.add_node(node)
+    for _ in range(300):
+        executor.spin_once(timeout_sec=1.0)
+    assert len(builds) == 1
+    node.create_subscription(Int32, '/turns/late', lambda m: None, 1)   # the entities change
     for _ in range(50):
         executor.spin_once(timeout_sec=1.0)
-    started = time.perf_counter()
-    for _ in range(turns):
-        executor.spin_once(timeout_sec=1.0)
-    rate = turns / (time.perf_counter() - started)
+    assert len(builds) == 2
     executor.shutdown()
     node.destroy_node()
-    return rate
-
-
-def test_a_turn_costs_less_than_rclpys(rclpy_context):
-    """Interleaved rounds, best of each (load on a shared machine hits both alike)."""
-    lean, reference = [], []
-    for _ in range(3):
-        lean.append(turns_per_second(rclpy_context, 'lean', 1500))
-        reference.append(turns_per_second(rclpy_context, 'rclpy', 1500))
-    # Measured here (2026-12-02, load 8): lean 2499 turns/s, rclpy 596 (x4.2).
-    assert max(lean) > 1.5 * max(reference), (lean, reference)
 
 
 def test_events_refuses_a_node_with_a_guard_condition(ros_domain_id, monkeypatch, capsys):
