@@ -8,6 +8,19 @@ from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
 import rclpy
 
 
+
+# The label of an episode on its progress line, by EpisodeSummary.kind (0: a bag's episode from
+# before the kinds were recorded: evaluation or training as the flag says).
+EPISODE_LABELS = {EpisodeSummary.KIND_TRAINING: 'training', EpisodeSummary.KIND_JUDGING: 'judging',
+                  EpisodeSummary.KIND_EVALUATION: 'evaluation',
+                  EpisodeSummary.KIND_PRACTICE: 'practice'}
+
+
+def episode_label(summary) -> str:
+    """Return training, judging, evaluation or practice for an EpisodeSummary."""
+    return EPISODE_LABELS.get(summary.kind,
+                              'evaluation' if summary.evaluation else 'training')
+
 class Progress:
     """Listens to /hrc/session and /hrc/episode and prints what happens (one rclpy node)."""
 
@@ -124,8 +137,8 @@ class Progress:
         steps = max(self.status.training_step_count, 1) if self.status else 1
         case = self.status.case_id if self.status else summary.case_id
         self._print(f'[case {case} | step {summary.training_step + 1}/{steps} | episode '
-                    f'{summary.episode:3d} | {"evaluation" if summary.evaluation else "training"}'
-                    f'] return {summary.episode_return:7.1f}  error slider '
+                    f'{summary.episode:3d} | {episode_label(summary)}] return '
+                    f'{summary.episode_return:7.1f}  error slider '
                     f'{summary.slider_error:.3f} m  pendulum {summary.pendulum_error:.3f} rad  '
                     f'ball {summary.ball_error:.3f} m  human '
                     f'{"yes" if summary.human_involved else "no "} ({human_episodes} so far)'
