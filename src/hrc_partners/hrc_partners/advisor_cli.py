@@ -1,6 +1,6 @@
 """role_advisor: calibrate a (simulated) person on each DOF and recommend who drives what.
 
-    ros2 run hrc_partners role_advisor --person person:paper_symmetric:4 --weak rotation:3 \
+    hrc partners advisor --person person:paper_symmetric:4 --weak rotation:3 \
         --robot-rotation runs/partners/c2-population-s0.pt \
         --robot-translation runs/partners/c1-population-s0.pt
 
@@ -24,7 +24,7 @@ from hrc_joystick_node.sim_human import load_profile
 
 def main(argv=None) -> int:
     """Console entry point."""
-    parser = argparse.ArgumentParser(prog='role_advisor', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners advisor', description=__doc__.split('\n\n')[0])
     parser.add_argument('--person', default='person:paper_symmetric:0')
     parser.add_argument('--weak', default='', metavar='DOF:FACTOR')
     parser.add_argument('--robot-rotation', default='', metavar='CHECKPOINT')

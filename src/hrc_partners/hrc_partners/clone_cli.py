@@ -1,6 +1,6 @@
 """clone_human: train a human model from recorded sessions (``input: model`` loads it).
 
-    ros2 run hrc_partners clone_human bags/alice-1 bags/alice-2 bags/alice-3 \
+    hrc partners clone bags/alice-1 bags/alice-2 bags/alice-3 \
         --held-out alice-3 --out models/alice.pt
 
 Reads every session under the paths, keeps the steps a person drove (joystick, /joy or the
@@ -26,7 +26,7 @@ from hrc_partners.recordings import load_demonstrations
 
 def parse_args(argv):
     """Return the parsed command line."""
-    parser = argparse.ArgumentParser(prog='clone_human', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners clone', description=__doc__.split('\n\n')[0])
     parser.add_argument('paths', nargs='+', help='session folders or folders of them')
     parser.add_argument('--out', required=True, help='the model file to write (.pt)')
     parser.add_argument('--held-out', nargs='*', default=None, metavar='SUBJECT',

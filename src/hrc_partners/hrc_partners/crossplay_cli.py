@@ -1,6 +1,6 @@
 """crossplay: evaluate trained agents with partners they may never have met; write the matrix.
 
-    ros2 run hrc_partners crossplay \
+    hrc partners crossplay \
         --agent one=runs/partners/c2-one-s0.pt pop=runs/partners/c2-population-s0.pt \
         --partner profile:novice profile:skilled person:paper:100000 model:models/alice.pt \
         --seeds 0 1 2 --episodes 3 --out runs/crossplay
@@ -22,7 +22,7 @@ from hrc_common.params import ParameterError
 
 def main(argv=None) -> int:
     """Console entry point."""
-    parser = argparse.ArgumentParser(prog='crossplay', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners crossplay', description=__doc__.split('\n\n')[0])
     parser.add_argument('--agent', nargs='+', required=True, metavar='NAME=CHECKPOINT')
     parser.add_argument('--partner', nargs='+', required=True, metavar='SPEC')
     parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2])

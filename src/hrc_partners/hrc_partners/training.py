@@ -1,6 +1,6 @@
 """Train the agents that cross-play compares: one simulated person vs a population (offline).
 
-    ros2 run hrc_partners train_partners_agents --out runs/partners --case 2 --seeds 0 1 \
+    hrc partners train --out runs/partners --case 2 --seeds 0 1 \
         --episodes 250 --profile paper
 
 For each seed, trains a case agent with the simulated human ``--profile`` itself (``one``) and
@@ -61,7 +61,7 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
 
 def main(argv=None) -> int:
     """Train one-person and population agents per seed; print one JSON line per agent."""
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners train', description=__doc__.split('\n\n')[0])
     parser.add_argument('--out', default='runs/partners', help='folder for the checkpoints')
     parser.add_argument('--case', type=int, default=2)
     parser.add_argument('--seeds', nargs='+', type=int, default=[0])
