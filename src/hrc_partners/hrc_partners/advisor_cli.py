@@ -24,7 +24,8 @@ from hrc_joystick_node.sim_human import load_profile
 
 def main(argv=None) -> int:
     """Console entry point."""
-    parser = argparse.ArgumentParser(prog='hrc partners advisor', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners advisor',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('--person', default='person:paper_symmetric:0')
     parser.add_argument('--weak', default='', metavar='DOF:FACTOR')
     parser.add_argument('--robot-rotation', default='', metavar='CHECKPOINT')

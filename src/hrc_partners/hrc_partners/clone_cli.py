@@ -26,7 +26,8 @@ from hrc_partners.recordings import load_demonstrations
 
 def parse_args(argv):
     """Return the parsed command line."""
-    parser = argparse.ArgumentParser(prog='hrc partners clone', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners clone',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('paths', nargs='+', help='session folders or folders of them')
     parser.add_argument('--out', required=True, help='the model file to write (.pt)')
     parser.add_argument('--held-out', nargs='*', default=None, metavar='SUBJECT',

@@ -22,7 +22,8 @@ from hrc_common.params import ParameterError
 
 def main(argv=None) -> int:
     """Console entry point."""
-    parser = argparse.ArgumentParser(prog='hrc partners crossplay', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners crossplay',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('--agent', nargs='+', required=True, metavar='NAME=CHECKPOINT')
     parser.add_argument('--partner', nargs='+', required=True, metavar='SPEC')
     parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2])

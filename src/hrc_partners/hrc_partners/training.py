@@ -61,7 +61,8 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
 
 def main(argv=None) -> int:
     """Train one-person and population agents per seed; print one JSON line per agent."""
-    parser = argparse.ArgumentParser(prog='hrc partners train', description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(prog='hrc partners train',
+                                     description=__doc__.split('\n\n')[0])
     parser.add_argument('--out', default='runs/partners', help='folder for the checkpoints')
     parser.add_argument('--case', type=int, default=2)
     parser.add_argument('--seeds', nargs='+', type=int, default=[0])
