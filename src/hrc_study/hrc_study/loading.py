@@ -1,5 +1,7 @@
 """Session records from recorded bags (through hrc_bag's reader; no rclpy)."""
 
+import math
+
 from hrc_bag.report import load_sessions as load_bag_sessions
 from hrc_common.contract import EpisodeKind
 
@@ -49,6 +51,15 @@ def limits_of(config: dict) -> dict:
     return limits
 
 
+def episode_seconds_of(config: dict) -> float:
+    """Return the session's episode duration (s of simulated time; NaN when not said)."""
+    for path in (('parameters', 'sim', 'episode_duration'), ('sim', 'episode_duration')):
+        value = _nested(config, *path)
+        if isinstance(value, (int, float)) and value > 0:
+            return float(value)
+    return math.nan
+
+
 def episode_limit_of(config: dict) -> int:
     """Return the session's max training episodes (0 when the config does not say)."""
     for path in (('parameters', 'agent', 'max_training_episodes'),
@@ -86,7 +97,8 @@ def record_from_bag_session(session) -> SessionRecord:
                          episode_limit=episode_limit_of(session.config),
                          path=str(session.path),
                          extra={'bag_session': session, 'person': person_of(session.config),
-                                'limits': limits_of(session.config)})
+                                'limits': limits_of(session.config),
+                                'episode_seconds': episode_seconds_of(session.config)})
 
 
 def _kind_label(summary) -> str:

@@ -44,6 +44,8 @@ UNITS_CAVEAT = ("units: our effort is the variance of the normalized command (1 
 TARGET_HUMAN_EPISODES = 20          # issue #13: case 2 median human-involved episodes
 TARGET_CONVERGED = 8                # of 10 seeds, within the episode limit
 TARGET_EFFORT_RATIO = 3.0           # human effort within 3x of the paper's
+TARGET_PERSON_TIME_RATIO = 2.0      # issue #23: the person's time within 2x of the paper's
+PAPER_EPISODE_SECONDS = 40.0        # the paper's episodes (and ours by default): 40 s
 
 
 def cell(interval, decimals: int) -> str:
@@ -150,6 +152,30 @@ def paper_markdown(rows: dict) -> str:
     return '\n'.join(lines) + '\n'
 
 
+def paper_person_minutes(case_id: int) -> float:
+    """Return the paper's person time in a case (its human-involved episodes x 40 s), min."""
+    return PAPER_TABLE2[case_id][0] * PAPER_EPISODE_SECONDS / 60.0
+
+
+def person_time_markdown(rows: dict) -> str:
+    """Return the table of the person's time per case: median [IQR] minutes beside the paper."""
+    lines = ["| case | sessions | person's minutes, median [IQR] | paper (min) | ratio | "
+             'within 2x |', '|---|---|---|---|---|---|']
+    for case_id, values in sorted(rows.items()):
+        minutes = numpy.array([value['person_minutes'] for value in values], dtype=float)
+        minutes = minutes[numpy.isfinite(minutes)]
+        if not len(minutes):
+            continue
+        low, median, high = numpy.percentile(minutes, [25, 50, 75])
+        paper = paper_person_minutes(case_id) if case_id in PAPER_TABLE2 else None
+        ratio = median / paper if paper else None
+        lines.append(f'| {case_id} | {len(minutes)} | {median:.1f} [{low:.1f}, {high:.1f}] | '
+                     + (f'{paper:.1f} | {ratio:.2f}x | '
+                        f'{_met(ratio <= TARGET_PERSON_TIME_RATIO)} |' if paper
+                        else 'not in the paper | | |'))
+    return '\n'.join(lines) + '\n'
+
+
 def targets(rows: dict, experiment: dict) -> list:
     """Return [(target, measured, met)] of issue #13 (and #12's wall time; met None: n/a)."""
     result = []
@@ -179,6 +205,26 @@ def targets(rows: dict, experiment: dict) -> list:
                                  for case_id, ratio in ratios.items()) + f' ({UNITS_CAVEAT})',
                        all(1 / TARGET_EFFORT_RATIO <= ratio <= TARGET_EFFORT_RATIO
                            for ratio in ratios.values())))
+    # issue #23: the paper's converging cases converge; the person's time a lab would budget
+    converging = [case_id for case_id in (1, 2, 3, 4, 6) if case_id in rows]
+    if converging:
+        result.append((f'cases 1, 2, 3, 4, 6 converge in >= {TARGET_CONVERGED}/10 seeds each',
+                       ', '.join(f'case {case_id}: {converged[case_id]}/{counts[case_id]}'
+                                 for case_id in converging),
+                       all(converged[case_id] >= TARGET_CONVERGED * counts[case_id] / 10
+                           for case_id in converging)))
+    budget = {}
+    for case_id in (2, 4, 6):
+        minutes = [value['person_minutes'] for value in rows.get(case_id, [])
+                   if math.isfinite(value['person_minutes'])]
+        if minutes:
+            budget[case_id] = float(numpy.median(minutes)) / paper_person_minutes(case_id)
+    if budget:
+        result.append((f"the person's time within {TARGET_PERSON_TIME_RATIO:g}x of the paper's "
+                       '(median minutes; cases 2, 4, 6: 4.0, 9.3, 10.7 min in the paper)',
+                       ', '.join(f'case {case_id}: {ratio:.2f}x'
+                                 for case_id, ratio in budget.items()),
+                       all(ratio <= TARGET_PERSON_TIME_RATIO for ratio in budget.values())))
     if experiment.get('wall_seconds'):
         result.append(wall_target(experiment))
     return result
@@ -249,7 +295,7 @@ def sessions_csv(sessions) -> str:
     keys = ['human_involved_episodes', 'total_episodes', 'converged',
             'evaluation_episodes'] + [key for key, _, _ in COLUMNS[3:]
                                       if key not in PHYSICAL_EFFORT_KEYS]
-    keys += list(PHYSICAL_EFFORT_KEYS)   # appended: the columns before keep their places
+    keys += list(PHYSICAL_EFFORT_KEYS) + ['person_minutes']   # appended: earlier columns stay
     writer.writerow(['session_id', 'profile', 'person', 'case_id', 'strategy', 'robot_dof',
                      'seed'] + keys)
     for session in sessions:
@@ -379,7 +425,11 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
               "## Beside the paper's Table II", '', paper_markdown(rows),
               'The paper\'s numbers are one person per case; its error is "cumulative" and not '
               'defined further, so only the order of the errors compares, not their size.', '',
-              "## Targets of issue #13 (and #12's wall time)", '',
+              "## The person's time (what a lab budgets)", '', person_time_markdown(rows),
+              "The person's minutes: the human-involved episodes of training (judging "
+              "episodes included) at the session's episode duration; breaks, practice and the "
+              "final evaluation excluded. The paper's: its human-involved episodes x 40 s.", '',
+              "## Targets of issues #13 and #23 (and #12's wall time)", '',
               '| target | measured | met |', '|---|---|---|']
     parts += [f'| {target} | {measured} | {_met(met)} |'
               for target, measured, met in targets(rows, experiment)]

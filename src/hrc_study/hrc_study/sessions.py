@@ -162,6 +162,7 @@ def measures(session: SessionRecord) -> dict:
     Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
     training, not practice), percentage, converged (bool), the four errors and two
     efforts (means over the final evaluation block), evaluation_episodes, practice_episodes,
+    person_minutes (the human-involved episodes at the session's episode duration),
     the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
     PHYSICAL_EFFORT_KEYS).
     """
@@ -180,6 +181,9 @@ def measures(session: SessionRecord) -> dict:
         'converged': converged,
         'evaluation_episodes': float(len(final)),
         'practice_episodes': float(len(session.episodes) - len(training) - len(final)),
+        # What a lab budgets for the person: their episodes during training at the session's
+        # episode duration, breaks and the final evaluation excluded (NaN: duration unknown).
+        'person_minutes': involved * session.extra.get('episode_seconds', math.nan) / 60.0,
     }
     for key in ERROR_KEYS + EFFORT_KEYS:
         samples = [getattr(episode, key) for episode in final]
