@@ -32,7 +32,7 @@ from hrc_common.testing import executable_path
 import pytest
 
 STEPS = 20                       # control steps per episode (episode_duration 4 s)
-EPISODES = 3
+EPISODES = 2
 REPO = pathlib.Path(__file__).resolve().parents[1]
 JS_EVENT_AXIS = 0x02
 COMMAND_TOPIC = '/hrc/human/cmd_wrench'
