@@ -188,12 +188,15 @@ def targets(rows: dict, experiment: dict) -> list:
     converged = {case_id: sum(value['converged'] for value in values)
                  for case_id, values in rows.items()}
     counts = {case_id: len(values) for case_id, values in rows.items()}
+
+    def convergence_row(title, cases):
+        return (title, ', '.join(f'case {case_id}: {converged[case_id]}/{counts[case_id]}'
+                                 for case_id in cases),
+                all(converged[case_id] >= TARGET_CONVERGED * counts[case_id] / 10
+                    for case_id in cases))
     if rows:
-        result.append((f'every case converges in >= {TARGET_CONVERGED}/10 seeds',
-                       ', '.join(f'case {case_id}: {converged[case_id]}/{counts[case_id]}'
-                                 for case_id in rows),
-                       all(converged[case_id] >= TARGET_CONVERGED * counts[case_id] / 10
-                           for case_id in rows)))
+        result.append(convergence_row(f'every case converges in >= {TARGET_CONVERGED}/10 seeds',
+                                      list(rows)))
     ratios = {}
     for case_id, values in rows.items():
         if case_id in PAPER_TABLE2:
@@ -208,11 +211,8 @@ def targets(rows: dict, experiment: dict) -> list:
     # issue #23: the paper's converging cases converge; the person's time a lab would budget
     converging = [case_id for case_id in (1, 2, 3, 4, 6) if case_id in rows]
     if converging:
-        result.append((f'cases 1, 2, 3, 4, 6 converge in >= {TARGET_CONVERGED}/10 seeds each',
-                       ', '.join(f'case {case_id}: {converged[case_id]}/{counts[case_id]}'
-                                 for case_id in converging),
-                       all(converged[case_id] >= TARGET_CONVERGED * counts[case_id] / 10
-                           for case_id in converging)))
+        result.append(convergence_row(
+            f'cases 1, 2, 3, 4, 6 converge in >= {TARGET_CONVERGED}/10 seeds each', converging))
     budget = {}
     for case_id in (2, 4, 6):
         minutes = [value['person_minutes'] for value in rows.get(case_id, [])
