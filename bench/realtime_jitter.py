@@ -15,6 +15,16 @@ Only realtime episodes are measured, whatever the case: an episode whose states 
 than half the control period ran in lockstep (in case 2 the robot's episodes alone do) and is
 left out, and the count of such episodes is printed; with none left the bench says so and exits
 with 1 (use a case whose human acts from the start, 3-6, or more episodes).
+
+``--compare-learning`` (issue 22: "with updates inside episodes, the control period's p99
+jitter no worse than without learning, measured in one run") runs the same session twice per
+round, alternately: without learning inside episodes (``agent.horizon`` larger than an
+episode, so the only update comes after the episode's last state, outside the measurement) and
+with PPO updates inside them (``agent.update_rule=horizon_or_episode_end``,
+``agent.horizon=--inside-horizon``: an update every that many steps, run by the agent's learner
+thread), and prints both and their ratio::
+
+    python bench/realtime_jitter.py --compare-learning --rounds 2
 """
 
 import argparse
@@ -33,8 +43,8 @@ def percentile(values, fraction):
     return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
 
 
-def main() -> int:
-    """Run the realtime session and print the jitter and latency figures."""
+def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
+    """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}."""
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -44,16 +54,8 @@ def main() -> int:
     from hrc_common.testing import executable_path
     from hrc_msgs.msg import TaskState
 
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--case', type=int, default=4,
-                        help='paper case (default 4: the human acts from the first episode, so '
-                             'every episode is realtime)')
-    parser.add_argument('--episodes', type=int, default=1)
-    parser.add_argument('--domain-id', type=int, default=92)
-    args = parser.parse_args()
-
     context = Context()
-    rclpy.init(context=context, domain_id=args.domain_id)
+    rclpy.init(context=context, domain_id=domain_id)
     node = rclpy.create_node('bench_realtime', context=context)
     states = []       # (episode, step, stamp key, receive time)
     commands = {'robot': {}, 'human': {}}  # stamp key -> receive time
@@ -81,18 +83,19 @@ def main() -> int:
     thread = threading.Thread(target=spin, daemon=True)
     thread.start()
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bench-rt-'))
-    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(args.case),
-               '--mode', 'realtime', '--episodes', str(args.episodes), '--eval-episodes', '0',
-               '--domain-id', str(args.domain_id), '--no-record', '--no-report',
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(case),
+               '--mode', 'realtime', '--episodes', str(episodes), '--eval-episodes', '0',
+               '--domain-id', str(domain_id), '--no-record', '--no-report',
                '--runs-dir', str(work / 'runs'), '--session-id', 'bench-realtime']
-    print(f'running a realtime session of {args.episodes} episode(s) of 40 s ...', flush=True)
+    for setting in settings:
+        command += ['--set', setting]
     result = subprocess.run(command, capture_output=True, text=True)
     time.sleep(0.5)
     rclpy.shutdown(context=context)
     thread.join(timeout=5)
     if result.returncode != 0:
-        print(result.stdout, result.stderr, file=sys.stderr)
-        return 1
+        return {'error': f'the session exited {result.returncode}:\n{result.stdout}'
+                         f'{result.stderr}'}
 
     by_episode = {}
     for (episode, step, _, t), (next_episode, next_step, _, next_t) in zip(states, states[1:]):
@@ -100,29 +103,107 @@ def main() -> int:
             by_episode.setdefault(episode, []).append(next_t - t)
     realtime = {episode: values for episode, values in by_episode.items()
                 if statistics.mean(values) > 0.1}
-    lockstep = sorted(set(by_episode) - set(realtime))
-    if lockstep:
-        print(f'left out {len(lockstep)} episode(s) that ran in lockstep (states faster than '
-              f'half the control period): {lockstep}')
+    figures = {'lockstep_episodes': sorted(set(by_episode) - set(realtime))}
     if not realtime:
-        print('no realtime episode to measure: in this case the first episodes are the '
-              "robot's alone, in lockstep; use --case 3..6 or more --episodes", file=sys.stderr)
-        return 1
+        figures['error'] = ("no realtime episode to measure: in this case the first episodes "
+                            "are the robot's alone, in lockstep; use --case 3..6 or more "
+                            '--episodes')
+        return figures
     intervals = [value for values in realtime.values() for value in values]
     realtime_stamps = {stamp for episode, _, stamp, _ in states if episode in realtime}
     jitter_ms = [abs(interval - 0.2) * 1000 for interval in intervals]
-    print(f'states: {len(states)}, consecutive intervals: {len(intervals)}, '
-          f'mean period {statistics.mean(intervals) * 1000:.2f} ms')
-    print(f'period jitter |dt - 200 ms|: p50 {percentile(jitter_ms, 0.5):.2f} ms, '
-          f'p99 {percentile(jitter_ms, 0.99):.2f} ms, max {max(jitter_ms):.2f} ms')
+    figures.update(states=len(states), intervals=len(intervals),
+                   mean_period_ms=statistics.mean(intervals) * 1000,
+                   jitter_p50=percentile(jitter_ms, 0.5), jitter_p99=percentile(jitter_ms, 0.99),
+                   jitter_max=max(jitter_ms))
     state_time = {stamp: t for _, _, stamp, t in states if stamp in realtime_stamps}
     for actor, received in commands.items():
         latency_ms = [(t - state_time[stamp]) * 1000 for stamp, t in received.items()
                       if stamp in state_time]
         if latency_ms:
-            print(f'{actor} command latency (state received -> command received): '
-                  f'p50 {percentile(latency_ms, 0.5):.2f} ms, p99 '
-                  f'{percentile(latency_ms, 0.99):.2f} ms ({len(latency_ms)} commands)')
+            figures[actor] = (percentile(latency_ms, 0.5), percentile(latency_ms, 0.99),
+                              len(latency_ms))
+    return figures
+
+
+def report(figures: dict, label: str = '') -> None:
+    """Print one session's figures as the bench always has."""
+    prefix = f'[{label}] ' if label else ''
+    if figures['lockstep_episodes']:
+        print(f'{prefix}left out {len(figures["lockstep_episodes"])} episode(s) that ran in '
+              f'lockstep (states faster than half the control period): '
+              f'{figures["lockstep_episodes"]}')
+    print(f'{prefix}states: {figures["states"]}, consecutive intervals: '
+          f'{figures["intervals"]}, mean period {figures["mean_period_ms"]:.2f} ms')
+    print(f'{prefix}period jitter |dt - 200 ms|: p50 {figures["jitter_p50"]:.2f} ms, '
+          f'p99 {figures["jitter_p99"]:.2f} ms, max {figures["jitter_max"]:.2f} ms')
+    for actor in ('robot', 'human'):
+        if actor in figures:
+            p50, p99, count = figures[actor]
+            print(f'{prefix}{actor} command latency (state received -> command received): '
+                  f'p50 {p50:.2f} ms, p99 {p99:.2f} ms ({count} commands)')
+
+
+# The two arms of --compare-learning: the agent's settings of each.
+NO_UPDATE_INSIDE = ('agent.update_rule=horizon_or_episode_end', 'agent.horizon=1000000')
+
+
+def main() -> int:
+    """Run the realtime session(s) and print the jitter and latency figures."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--case', type=int, default=4,
+                        help='paper case (default 4: the human acts from the first episode, so '
+                             'every episode is realtime)')
+    parser.add_argument('--episodes', type=int, default=1)
+    parser.add_argument('--domain-id', type=int, default=92)
+    parser.add_argument('--set', dest='settings', action='append', default=[],
+                        metavar='KEY=VALUE', help='a session setting (hrc session --set)')
+    parser.add_argument('--compare-learning', action='store_true',
+                        help='run without and with PPO updates inside episodes, alternately')
+    parser.add_argument('--rounds', type=int, default=1,
+                        help='rounds of the comparison (each: one session of each arm)')
+    parser.add_argument('--inside-horizon', type=int, default=64,
+                        help='steps between updates inside an episode in the learning arm '
+                             '(default 64: 3 updates in a 200-step episode)')
+    args = parser.parse_args()
+    if args.episodes < 1 or args.rounds < 1 or args.inside_horizon < 2:
+        parser.error('--episodes and --rounds must be >= 1, --inside-horizon >= 2')
+
+    if not args.compare_learning:
+        print(f'running a realtime session of {args.episodes} episode(s) of 40 s ...',
+              flush=True)
+        figures = measure(args.case, args.episodes, args.domain_id, args.settings)
+        if 'error' in figures:
+            print(figures['error'], file=sys.stderr)
+            return 1
+        report(figures)
+        return 0
+
+    arms = {'no updates inside episodes': list(args.settings) + list(NO_UPDATE_INSIDE),
+            f'updates every {args.inside_horizon} steps': list(args.settings) + [
+                'agent.update_rule=horizon_or_episode_end',
+                f'agent.horizon={args.inside_horizon}']}
+    results = {label: [] for label in arms}
+    for round_index in range(args.rounds):
+        for label, settings in arms.items():
+            print(f'round {round_index + 1}/{args.rounds}: {label} '
+                  f'({args.episodes} episode(s) of 40 s) ...', flush=True)
+            figures = measure(args.case, args.episodes, args.domain_id, settings)
+            if 'error' in figures:
+                print(figures['error'], file=sys.stderr)
+                return 1
+            report(figures, label)
+            results[label].append(figures)
+    print('median over rounds:')
+    p99 = {}
+    for label, runs in results.items():
+        p99[label] = statistics.median(run['jitter_p99'] for run in runs)
+        robot = statistics.median(run['robot'][1] for run in runs if 'robot' in run)
+        each = ', '.join(f'{run["jitter_p99"]:.2f}' for run in runs)
+        print(f'  {label}: period jitter p99 {p99[label]:.2f} ms (rounds: {each}), robot '
+              f'command latency p99 {robot:.2f} ms')
+    without, with_updates = p99.values()
+    print(f'jitter p99 with / without updates inside episodes: {with_updates / without:.2f}x')
     return 0
 
 
