@@ -6,6 +6,10 @@ the effort on the rotation role that it spends on the translation role, and fit 
 model within the bench's published ranges on both degrees of freedom. ``paper_v2`` (the person
 of stop 26) missed three of them; the same checks on it show that they can fail. Pure: the
 PyBullet physics and SimulatedHuman, about 20 s.
+
+Marked ``slow`` (out of the quick tier, still in ``make test``): each test is a measurement
+over 40-60 simulated episodes whose sample size is part of the target (8 of 10 first
+episodes, the benches' 3 runs per row); smaller samples would measure something else.
 """
 
 import importlib.util
@@ -22,6 +26,8 @@ REPO_PROFILES = BENCH.parent / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 HUMAN_PERIOD = 0.02  # s: the default sim.human_period
 EPISODES = 10        # seeds 0-9, as the benches' documented commands
+
+pytestmark = pytest.mark.slow
 
 
 def bench(name):
