@@ -53,9 +53,21 @@ class Watcher:
                                       qos.SESSION_QOS)
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self.summaries.append,
                                       qos.EPISODE_QOS)
+        # The nodes publishing /hrc/session, each time the set changed (sampled while waiting).
+        self.session_publishers = []
+
+    def sample_session_publishers(self):
+        names = tuple(sorted(info.node_name for info in
+                             self.node.get_publishers_info_by_topic(topics.SESSION)))
+        if not self.session_publishers or self.session_publishers[-1] != names:
+            self.session_publishers.append(names)
+
+    def spin(self):
+        self.executor.spin_once(0.05)
+        self.sample_session_publishers()
 
     def wait(self, condition, timeout=120.0) -> bool:
-        return wait_for(condition, timeout, spin=lambda: self.executor.spin_once(0.05))
+        return wait_for(condition, timeout, spin=self.spin)
 
     def phase(self):
         return self.statuses[-1].phase if self.statuses else None
@@ -336,6 +348,17 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     assert yaml.safe_load(tlx_file.read_text())[0]['session_id'] == 'case2'
     # Practice first: one episode of the person alone (realtime, no robot), recorded apart.
     assert 'practice done: 1 of 1 episodes' in text, text
+    # The agent runs the practice too: the one publisher of /hrc/session, practice or not.
+    # (a writer seen before its node's name is discovered reads '_NODE_NAME_UNKNOWN_')
+    named = {name for names in watcher.session_publishers for name in names}
+    assert named - {'_NODE_NAME_UNKNOWN_'} == {'agent'}, watcher.session_publishers
+    assert max(map(len, watcher.session_publishers)) == 1, watcher.session_publishers
+    practice_statuses = [s for s in watcher.statuses if s.strategy == 'practice']
+    assert practice_statuses and all(
+        s.session_id == 'case2-practice' and list(s.human_subtasks) == ['slider']
+        for s in practice_statuses)
+    assert practice_statuses[-1].message == ('practice: episode 1 of 1, the person alone (the '
+                                             'robot does not act)')
     assert '[session] the human side is driven by: simulated (paper)' in text
     practice = read_rosbag(tmp_path / 'bags' / 'case2-practice')
     assert [(s.episode, s.step) for s in practice['/hrc/state']] == [
@@ -347,6 +370,12 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
         (a.dof, a.source, a.engaged) == (HumanAction.DOF_TRANSLATION,
                                          HumanAction.SOURCE_SIMULATED, True) for a in actions)
     assert not practice.get('/hrc/robot/cmd_wrench')
+    # Labelled practice, and not learned from: no AgentStep, one summary of kind practice.
+    assert not practice.get('/hrc/agent/step')
+    assert [(e.episode, e.kind, e.steps) for e in practice['/hrc/episode']] == [
+        (0, EpisodeSummary.KIND_PRACTICE, SHORT_STEPS)]
+    assert '| practice]' in text
+    assert not (tmp_path / 'runs' / 'checkpoints' / 'case2-practice').exists()
     index = load_index(study)
     assert [(e.subject_id, e.session_id, e.kind, e.position, e.exit_code) for e in index] == [
         ('P07', 'case2-practice', 'practice', 2, 0), ('P07', 'case2', 'condition', 2, 0)]
