@@ -19,7 +19,7 @@ import pathlib
 import numpy
 import pytest
 
-from hrc_joystick_node.sim_human import load_profiles
+from hrc_joystick_node.human_profile import load_profiles
 
 BENCH = pathlib.Path(__file__).resolve().parents[3] / 'bench'
 REPO_PROFILES = BENCH.parent / 'params' / 'sim_human.yaml'

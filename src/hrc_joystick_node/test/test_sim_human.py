@@ -9,8 +9,8 @@ import pytest
 
 from hrc_common.params import ParameterError
 from hrc_joystick_node.evaluation import human_episode, run_episode
-from hrc_joystick_node.sim_human import (HumanProfile, load_profile, load_profiles,
-                                         normalize_subtasks, SimulatedHuman)
+from hrc_joystick_node.human_profile import HumanProfile, load_profile, load_profiles
+from hrc_joystick_node.sim_human import normalize_subtasks, SimulatedHuman
 
 REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
