@@ -508,7 +508,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert runner.returncode == 0, text
     # What the person read, in order (issue 25): the lost joystick (never "stopped by the
     # operator", no FIFO detail), then the countdown of the resume, then their turn again.
-    from hrc_live.display_core import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
+    from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
     banners = page_words.banners()
     assert banners[0] == 'Please wait: the session is starting', banners
     lost = banners.index(INPUT_LOST_BANNER)
