@@ -16,7 +16,6 @@ RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'st
                  'human_effort', 'converged', 'event', 'judging')
 
 
-
 @dataclass(frozen=True)
 class EpisodePlan:
     """What the next episode is: its index in the session, its seed, and its kind.
@@ -44,7 +43,6 @@ class EpisodePlan:
         return self.evaluation or self.judging
 
 
-
 @dataclass
 class StepRecord:
     """The agent's decision in one state and the reward it earned (one AgentStep message)."""
@@ -63,7 +61,6 @@ class StepRecord:
     reward: float = 0.0
 
 
-
 @dataclass
 class Decision:
     """What :meth:`AgentCore.act` returns."""
@@ -73,7 +70,6 @@ class Decision:
     record: StepRecord       # this step (its reward is filled in when the next state arrives)
     previous: StepRecord = None  # the previous step, now complete with its reward
     update: dict = None      # statistics of a PPO update whose weights took over at this step
-
 
 
 @dataclass

@@ -19,7 +19,6 @@ def derive_seed(session_seed: int, episode: int) -> int:
                & 0x7FFFFFFF)
 
 
-
 def observation_of(params: AgentParams, state, partner_action: float) -> np.ndarray:
     """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates).
 
@@ -37,7 +36,6 @@ def observation_of(params: AgentParams, state, partner_action: float) -> np.ndar
                    state.slider_velocity / p.slider_velocity_scale]
     # Clip: a wild state must not saturate the tanh layers into a useless gradient.
     return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
-
 
 
 def applied_command(state, dof: str, limits: SimLimits) -> float:

@@ -129,11 +129,9 @@ class HumanProfile:
                                'beam (m)', low=-0.25, high=0.25)
 
 
-
 def default_profiles_path() -> pathlib.Path:
     """Return ``params/sim_human.yaml`` (``hrc_common.paths.params_file``)."""
     return params_file('sim_human.yaml')
-
 
 
 def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:
@@ -178,7 +176,6 @@ def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:
     if reasons:
         raise ParameterError('; '.join(reasons), reasons)
     return profiles
-
 
 
 def load_profile(name: str, path=None) -> HumanProfile:
