@@ -11,8 +11,8 @@ notice (:func:`state_document`).
 import math
 
 from hrc_common.contract import BODY_COLOURS, rgb8
-from hrc_sim_node.physics import (BEAM_HEIGHT, body_poses, PhysicsParams, PhysicsState,
-                                  ROD_RADIUS, SLIDER_SIZE)
+from hrc_sim_node.body_geometry import BEAM_HEIGHT, body_poses, ROD_RADIUS, SLIDER_SIZE
+from hrc_sim_node.physics import PhysicsParams, PhysicsState
 
 from hrc_live.display_core import Overlay, Snapshot, StateView
 from hrc_live.display_words import episode_label, episodes_with_person, milestone
