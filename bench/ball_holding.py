@@ -150,7 +150,7 @@ def ball_tolerance() -> float:
 
 def main(argv=None) -> int:
     """Print the table of profiles x human periods (and the ablations on request)."""
-    from hrc_joystick_node.sim_human import load_profile
+    from hrc_joystick_node.human_profile import load_profile
 
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--profiles', nargs='+', default=['paper', 'paper_symmetric', 'skilled'])

@@ -158,7 +158,7 @@ def in_range(name: str, value: float) -> str:
 
 def main(argv=None) -> int:
     """Print the crossover fit per profile, degree of freedom and person period."""
-    from hrc_joystick_node.sim_human import load_profile
+    from hrc_joystick_node.human_profile import load_profile
 
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--profiles', nargs='+', default=['paper'])

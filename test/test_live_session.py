@@ -19,6 +19,7 @@ import shlex
 import subprocess
 import urllib.request
 
+from hrc_bringup import cli
 from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
 from hrc_common.testing import executable_path, wait_for
@@ -52,9 +53,21 @@ class Watcher:
                                       qos.SESSION_QOS)
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self.summaries.append,
                                       qos.EPISODE_QOS)
+        # The nodes publishing /hrc/session, each time the set changed (sampled while waiting).
+        self.session_publishers = []
+
+    def sample_session_publishers(self):
+        names = tuple(sorted(info.node_name for info in
+                             self.node.get_publishers_info_by_topic(topics.SESSION)))
+        if not self.session_publishers or self.session_publishers[-1] != names:
+            self.session_publishers.append(names)
+
+    def spin(self):
+        self.executor.spin_once(0.05)
+        self.sample_session_publishers()
 
     def wait(self, condition, timeout=120.0) -> bool:
-        return wait_for(condition, timeout, spin=lambda: self.executor.spin_once(0.05))
+        return wait_for(condition, timeout, spin=self.spin)
 
     def phase(self):
         return self.statuses[-1].phase if self.statuses else None
@@ -335,6 +348,17 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     assert yaml.safe_load(tlx_file.read_text())[0]['session_id'] == 'case2'
     # Practice first: one episode of the person alone (realtime, no robot), recorded apart.
     assert 'practice done: 1 of 1 episodes' in text, text
+    # The agent runs the practice too: the one publisher of /hrc/session, practice or not.
+    # (a writer seen before its node's name is discovered reads '_NODE_NAME_UNKNOWN_')
+    named = {name for names in watcher.session_publishers for name in names}
+    assert named - {'_NODE_NAME_UNKNOWN_'} == {'agent'}, watcher.session_publishers
+    assert max(map(len, watcher.session_publishers)) == 1, watcher.session_publishers
+    practice_statuses = [s for s in watcher.statuses if s.strategy == 'practice']
+    assert practice_statuses and all(
+        s.session_id == 'case2-practice' and list(s.human_subtasks) == ['slider']
+        for s in practice_statuses)
+    assert practice_statuses[-1].message == ('practice: episode 1 of 1, the person alone (the '
+                                             'robot does not act)')
     assert '[session] the human side is driven by: simulated (paper)' in text
     practice = read_rosbag(tmp_path / 'bags' / 'case2-practice')
     assert [(s.episode, s.step) for s in practice['/hrc/state']] == [
@@ -346,6 +370,12 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
         (a.dof, a.source, a.engaged) == (HumanAction.DOF_TRANSLATION,
                                          HumanAction.SOURCE_SIMULATED, True) for a in actions)
     assert not practice.get('/hrc/robot/cmd_wrench')
+    # Labelled practice, and not learned from: no AgentStep, one summary of kind practice.
+    assert not practice.get('/hrc/agent/step')
+    assert [(e.episode, e.kind, e.steps) for e in practice['/hrc/episode']] == [
+        (0, EpisodeSummary.KIND_PRACTICE, SHORT_STEPS)]
+    assert '| practice]' in text
+    assert not (tmp_path / 'runs' / 'checkpoints' / 'case2-practice').exists()
     index = load_index(study)
     assert [(e.subject_id, e.session_id, e.kind, e.position, e.exit_code) for e in index] == [
         ('P07', 'case2-practice', 'practice', 2, 0), ('P07', 'case2', 'condition', 2, 0)]
@@ -478,7 +508,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert runner.returncode == 0, text
     # What the person read, in order (issue 25): the lost joystick (never "stopped by the
     # operator", no FIFO detail), then the countdown of the resume, then their turn again.
-    from hrc_live.display_core import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
+    from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
     banners = page_words.banners()
     assert banners[0] == 'Please wait: the session is starting', banners
     lost = banners.index(INPUT_LOST_BANNER)
@@ -534,14 +564,15 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
 
 
 # --------------------------------------------------------------------------- issue 25
-def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path):
-    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
-                             '233', '--runs-dir', str(tmp_path / 'runs'), '--bags-dir',
-                             str(tmp_path / 'bags')], capture_output=True, text=True,
-                            timeout=120)
-    assert result.returncode == 2, result.stdout + result.stderr
-    assert ('--domain-id 233 is outside the range of DDS domain ids 0..232' in result.stderr)
-    assert 'Traceback' not in result.stderr and not (tmp_path / 'runs').exists()
+def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path, capsys):
+    # In this process (the `hrc` command's entry point; a process of its own spends seconds on
+    # imports only to refuse): a traceback would fail the test, as would a started session.
+    code = cli.main(['session', '--domain-id', '233', '--runs-dir', str(tmp_path / 'runs'),
+                     '--bags-dir', str(tmp_path / 'bags')])
+    output = capsys.readouterr()
+    assert code == 2, output.out + output.err
+    assert '--domain-id 233 is outside the range of DDS domain ids 0..232' in output.err
+    assert 'Traceback' not in output.err and not (tmp_path / 'runs').exists()
 
 
 def test_a_robot_that_does_not_converge_is_said_and_the_pages_addresses_printed(

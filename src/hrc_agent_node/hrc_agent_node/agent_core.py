@@ -60,6 +60,9 @@ Reward timing: the reward of the action taken in state s_k is computed from the 
 s_k+1 (eq. 3-5 on S_x, P_z, B_y of s_k+1). So the record of step k (``StepRecord``) is complete
 when s_k+1 arrives: :meth:`act` returns it for the previous step, :meth:`end_episode` for the
 last one.
+
+The records it plans and returns are in ``episode_records``; what the robot observes (and the
+episodes' seeds) in ``observation``.
 """
 
 from dataclasses import dataclass, field
@@ -68,7 +71,9 @@ import math
 import numpy as np
 
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.episode_records import Decision, EpisodePlan, EpisodeResult, StepRecord
 from hrc_agent_node.learner import make_learner
+from hrc_agent_node.observation import applied_command, derive_seed, observation_of
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import load_cases, StrategyProgress
@@ -76,108 +81,9 @@ from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import checked
 
-RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
-                 'terminated', 'truncated', 'episode_return', 'errors', 'robot_effort',
-                 'human_effort', 'converged', 'event', 'judging')
-
 
 class PopulationStepRefused(ValueError):
     """A population step reached by a runner that has no simulated population to give."""
-
-
-@dataclass(frozen=True)
-class EpisodePlan:
-    """What the next episode is: its index in the session, its seed, and its kind.
-
-    ``evaluation``: the frozen policy after training (Table II); ``judging``: a deterministic
-    episode during training on which the step's condition is judged; neither: training.
-    """
-
-    episode: int
-    seed: int
-    evaluation: bool
-    training_step: int
-    human_involved: bool
-    judging: bool = False
-    partner: str = 'person'   # who acts as the human when involved (strategies.PARTNERS)
-
-    @property
-    def with_person(self) -> bool:
-        """Return True when the session's person acts in this episode (their time counts)."""
-        return self.human_involved and self.partner == 'person'
-
-    @property
-    def deterministic(self) -> bool:
-        """Return True when the policy's mean action is taken (no exploration, no learning)."""
-        return self.evaluation or self.judging
-
-
-@dataclass
-class StepRecord:
-    """The agent's decision in one state and the reward it earned (one AgentStep message)."""
-
-    episode: int
-    step: int
-    observed_human_action: float
-    action: float            # normalized command sent, in [-1, 1]
-    raw_action: float        # Gaussian sample before clipping (what PPO's log-prob refers to)
-    wrench: float            # N or N*m
-    value: float
-    log_prob: float
-    deterministic: bool
-    subtask_ids: tuple = ()
-    reward_components: tuple = ()
-    reward: float = 0.0
-
-
-@dataclass
-class Decision:
-    """What :meth:`AgentCore.act` returns."""
-
-    action: float            # normalized, [-1, 1], on the robot's degree of freedom
-    wrench: float            # the action in N (translation) or N*m (rotation)
-    record: StepRecord       # this step (its reward is filled in when the next state arrives)
-    previous: StepRecord = None  # the previous step, now complete with its reward
-    update: dict = None      # statistics of a PPO update whose weights took over at this step
-
-
-@dataclass
-class EpisodeResult:
-    """Summary of a finished episode (one EpisodeSummary message) and what it changed."""
-
-    episode: int
-    training_step: int
-    human_involved: bool
-    evaluation: bool
-    steps: int
-    terminated: bool
-    truncated: bool
-    episode_return: float
-    errors: dict             # subtask id -> mean |x - mu| over the states reached
-    robot_effort: float      # variance of the robot's normalized action
-    human_effort: float      # variance of the human's normalized action (of every command
-    #                          applied at the human's rate when the states carry them)
-    converged: bool          # the step's condition was met after this episode
-    event: str               # '' | 'advanced' | 'training_finished' | 'evaluation_finished'
-    last_record: StepRecord = None
-    phase_after: Phase = None    # the session's phase after this episode
-    judging: bool = False    # a judging episode (deterministic, counted in the totals)
-
-    def to_plain(self) -> dict:
-        """Return the metrics as plain data (checkpoints; no step record)."""
-        return {name: (dict(self.errors) if name == 'errors' else getattr(self, name))
-                for name in RESULT_FIELDS}
-
-    @classmethod
-    def from_plain(cls, data: dict) -> 'EpisodeResult':
-        """Rebuild a result saved by :meth:`to_plain`."""
-        return cls(**{name: (dict(data[name]) if name == 'errors' else data[name])
-                      for name in RESULT_FIELDS})
-
-    @property
-    def total_error(self) -> float:
-        """Return the sum of the errors (mixed units, as the paper's Table II)."""
-        return float(sum(self.errors.values()))
 
 
 @dataclass
@@ -199,37 +105,6 @@ class _EpisodeLog:
     pending: StepRecord = None
     next_step: int = 0
     segment_start: int = 0   # first sample not handed to the buffer yet (a rollout cut inside)
-
-
-def derive_seed(session_seed: int, episode: int) -> int:
-    """Return the reset seed of an episode, derived from the session seed (31-bit)."""
-    return int(np.random.SeedSequence([int(session_seed), int(episode)]).generate_state(1)[0]
-               & 0x7FFFFFFF)
-
-
-def observation_of(params: AgentParams, state, partner_action: float) -> np.ndarray:
-    """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates).
-
-    Shared by AgentCore and the Gymnasium/PettingZoo environments (hrc_gym); ``params`` gives
-    the scales and ``observe_rates``; ``partner_action`` is the other actor's command.
-    """
-    p = params
-    values = [state.ball_position / p.ball_position_scale,
-              state.pendulum_angle / p.pendulum_angle_scale,
-              state.slider_position / p.slider_position_scale,
-              partner_action]
-    if p.observe_rates:
-        values += [state.ball_velocity / p.ball_velocity_scale,
-                   state.pendulum_angular_velocity / p.pendulum_velocity_scale,
-                   state.slider_velocity / p.slider_velocity_scale]
-    # Clip: a wild state must not saturate the tanh layers into a useless gradient.
-    return np.clip(np.asarray(values, dtype=np.float32), -10.0, 10.0)
-
-
-def applied_command(state, dof: str, limits: SimLimits) -> float:
-    """Return the normalized command the sim applied on ``dof`` in the last control period."""
-    applied = state.applied_force if dof == 'translation' else state.applied_torque
-    return float(applied) / limits.full_scale(dof)
 
 
 class AgentCore:

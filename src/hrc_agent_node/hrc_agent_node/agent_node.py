@@ -34,6 +34,13 @@ loop). The step protocol (docs/architecture.md):
   keep acting; the new ones take over at the first step boundary after it finished
   (``hrc_agent_node.learner``).
 
+Practice (``practice_episodes`` N > 0, the session runner's ``--practice N``): instead of a
+session the node runs N episodes of the person alone (``hrc_agent_node.practice``): it
+announces them on ``/hrc/session`` (strategy ``practice``), resets the sim for each in realtime
+``episode_break`` apart, answers no state (the robot does not act, nothing is learned or
+checkpointed), publishes an ``EpisodeSummary`` of kind practice at each episode's end and exits
+0 after the last. So the agent is the one publisher of ``/hrc/session`` in practice too.
+
 Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``):
 
 * ``/hrc/agent/pause``: takes effect at the next episode boundary (after the update and the
@@ -53,6 +60,7 @@ from geometry_msgs.msg import WrenchStamped
 from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.checkpoint import CheckpointError, load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
+from hrc_agent_node.practice import PracticeRun
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
@@ -79,6 +87,9 @@ TICK_S = 0.02
 # graph may take to match this node's writer before the first episode starts anyway.
 SESSION_MATCH_GRACE_S = 10.0
 
+PRACTICE_NO_PAUSE = ('the practice does not pause: it ends after its episodes (abort stops '
+                     'it)')
+
 SUMMARY = ('The PPO robot of an hrc session: answers every state on /hrc/robot/cmd_wrench, '
            "learns between episodes, moves through the case's training steps, evaluates, "
            'publishes /hrc/session, /hrc/episode and /hrc/agent/step, and exits 0 when done.')
@@ -99,6 +110,14 @@ class AgentNode(Node):
             self.core = AgentCore(self.params)
         except (TaskTreeError, CasesError, ValueError) as error:
             raise ParameterError(f'AgentParams rejected: {error}') from None
+        self.practice = None            # a PracticeRun when this node runs the practice
+        if self.params.practice_episodes:
+            if self.params.resume_from:
+                raise ParameterError('practice_episodes runs a practice, resume_from a session: '
+                                     'give one of them')
+            self.practice = PracticeRun(self.params.practice_episodes, self.core.session_id,
+                                        self.core.case_id, self.core.robot_dof,
+                                        self.core.human_dof, self.core.tree.error)
         if self.params.resume_from:
             try:
                 load_into(self.core, self.params.resume_from,
@@ -110,7 +129,7 @@ class AgentNode(Node):
                 f'({"policy for evaluation" if self.params.evaluation_only else "session"}): '
                 f'{self.core.total_episodes} training episodes done, next episode '
                 f'{self.core.episode}')
-        problem = self.core.population_step_problem()
+        problem = self.core.population_step_problem() if self.practice is None else ''
         if problem:   # partners first without its pre-training: refused, not a traceback
             raise ParameterError(problem)
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
@@ -152,7 +171,7 @@ class AgentNode(Node):
         self.human_timeouts = 0
         self.step_gaps = 0
         self.checkpoint_dir = (os.path.join(self.params.checkpoint_dir, self.core.session_id)
-                               if self.params.checkpoint_dir else '')
+                               if self.params.checkpoint_dir and self.practice is None else '')
         self.publish_session('session starting: ' + self.core.status_line())
         self.get_logger().info(f'session {self.core.session_id}: {self.core.status_line()}; '
                                f'waiting for {topics.RESET_SERVICE}')
@@ -166,6 +185,9 @@ class AgentNode(Node):
         if self.exit_at is not None:
             if now >= self.exit_at:
                 raise SystemExit(self.exit_code)
+            return
+        if self.practice is not None:
+            self.practice_tick(now)
             return
         if self.core.phase == 'done':
             self.finish_session()  # a resumed session that had already finished
@@ -193,6 +215,48 @@ class AgentNode(Node):
                 f'{self.params.human_action_timeout} s: acting on 0 '
                 f'({self.human_timeouts} timeouts so far)', throttle_duration_sec=5.0)
             self.act(state, 0.0)  # same_step: the missing answer is observed as 0
+
+    def practice_tick(self, now: float):
+        """Start the next practice episode once the sim, the listeners and the break allow."""
+        if self.practice.in_episode or self.reset_future is not None \
+                or now < self.next_episode_at or self.core.phase == Phase.ABORTED:
+            return
+        if not self.reset_client.service_is_ready():
+            if now - self.waiting_since > self.params.reset_timeout:
+                self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
+                           f'{self.params.reset_timeout} s')
+            return
+        if self.missing_subscribers(now):
+            return
+        reset = self.practice.start_episode()
+        # As for a session's episode: every listener has the announcement before the state.
+        self.publish_session('')
+        self.session_pub.wait_for_all_acked(Duration(seconds=ANNOUNCE_ACK_TIMEOUT_S))
+        self.reset_future = self.reset_client.call_async(ResetEpisode.Request(
+            seed=reset.seed, episode=reset.episode, clock_mode=reset.clock_mode))
+        self.reset_future.add_done_callback(self.on_reset_done)
+
+    def on_practice_state(self, msg: TaskState):
+        """Follow a practice episode (no answer: the robot does not act); close it at its end."""
+        if self.core.phase == Phase.ABORTED:
+            return
+        fields = self.practice.on_state(msg)
+        if fields is None:
+            return
+        summary = EpisodeSummary(**fields)
+        summary.header.stamp = msg.header.stamp
+        summary.header.frame_id = 'world'
+        self.episode_pub.publish(summary)
+        self.get_logger().info(
+            f'practice episode {summary.episode} done: {summary.steps} steps, mean errors '
+            f'slider {summary.slider_error:.4f} pendulum {summary.pendulum_error:.4f} ball '
+            f'{summary.ball_error:.4f}')
+        self.publish_session('')
+        if self.practice.finished:
+            self.get_logger().info(f'practice done: {self.practice.done} episodes')
+            self.exit_at = time.monotonic() + EXIT_LINGER_S
+        else:
+            self.next_episode_at = time.monotonic() + self.params.episode_break
 
     def missing_subscribers(self, now: float) -> bool:
         """Return True while a node of ``wait_for_subscribers`` is not ready for the session.
@@ -302,7 +366,9 @@ class AgentNode(Node):
     def on_pause(self, request, response):
         """Pause at the next episode boundary (at once when between episodes)."""
         phase = self.core.phase
-        if self.exit_at is not None or phase in ('done', 'aborted'):
+        if self.practice is not None:
+            response.success, response.message = False, PRACTICE_NO_PAUSE
+        elif self.exit_at is not None or phase in ('done', 'aborted'):
             response.success, response.message = False, f'cannot pause: the session is {phase}'
         elif phase == 'paused':
             response.success, response.message = True, 'already paused'
@@ -328,7 +394,9 @@ class AgentNode(Node):
 
     def on_resume(self, request, response):
         """Resume a paused session (or cancel a pause that has not taken effect)."""
-        if self.core.phase == 'paused':
+        if self.practice is not None:
+            response.success, response.message = False, PRACTICE_NO_PAUSE
+        elif self.core.phase == 'paused':
             self.core.resume()
             # A person gets the same break before the next episode as after an episode.
             self.next_episode_at = time.monotonic() + self.break_seconds()
@@ -350,6 +418,11 @@ class AgentNode(Node):
         if self.exit_at is not None:
             response.success = False
             response.message = f'the session is already ending (phase {self.core.phase})'
+            return response
+        if self.practice is not None:   # the robot never acted: nothing to zero or to keep
+            where = f'in the practice ({self.practice.done} of {self.practice.episodes} done)'
+            self.abort(f'by the operator {where}', EXIT_OPERATOR_ABORT)
+            response.success, response.message = True, f'aborted {where}'
             return response
         where = f'before episode {self.core.episode}'
         if self.core.in_episode and self.newest_state is not None:
@@ -412,6 +485,9 @@ class AgentNode(Node):
 
     def on_state(self, msg: TaskState):
         """Answer a state of the running episode (or close the episode on its final state)."""
+        if self.practice is not None:
+            self.on_practice_state(msg)
+            return
         if not self.core.in_episode or self.core.phase not in ('training', 'evaluation'):
             return
         if msg.episode != self.core.episode:
@@ -584,8 +660,19 @@ class AgentNode(Node):
             self.get_logger().error(f'checkpoint {path} not written: {error}')
 
     def publish_session(self, message: str):
-        """Publish the SessionStatus (transient local: late joiners get the newest)."""
+        """Publish the SessionStatus (transient local: late joiners get the newest).
+
+        In practice the practice's status (its own message), or ``message`` once aborted.
+        """
         core = self.core
+        if self.practice is not None:
+            fields = self.practice.status()
+            if core.phase == Phase.ABORTED:
+                fields.update(phase=int(Phase.ABORTED), message=message)
+            msg = SessionStatus(**fields)
+            msg.header.stamp = self.get_clock().now().to_msg()
+            self.session_pub.publish(msg)
+            return
         step = core.training_step
         msg = SessionStatus()
         msg.header.stamp = self.get_clock().now().to_msg()

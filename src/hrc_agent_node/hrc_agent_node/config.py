@@ -74,6 +74,11 @@ class AgentParams:
                                       'to the next reset, so the person rests and sees the '
                                       'result and a countdown (the PPO update runs within it); '
                                       'lockstep never waits', low=0.0, high=600.0)
+    practice_episodes: int = param(0, 'Run this many practice episodes of the person alone '
+                                      "instead of a session (the session runner's --practice): "
+                                      'the robot does not act or learn, the sim runs realtime, '
+                                      'episode_break apart; then exit 0 (practice.py). 0 = a '
+                                      'session', low=0, high=1000)
     torch_threads: int = param(1, 'torch intra-op threads (the sim and the human share the 2 '
                                   'cores)', low=1, high=64)
     # --- strategy criteria (the paper does not define them; see strategies.py)

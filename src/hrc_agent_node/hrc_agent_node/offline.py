@@ -138,7 +138,7 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
                                seed=seed)
     if not kind.startswith('human:'):
         raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
-    from hrc_joystick_node.sim_human import load_profile
+    from hrc_joystick_node.human_profile import load_profile
 
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
                                  limits.human_step, population_every)

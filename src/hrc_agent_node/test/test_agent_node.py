@@ -274,3 +274,61 @@ def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
     assert any(s.applied_torque != 0.0 for s in states)
     assert all(s.applied_force == 0.0 for s in states)
     assert sessions[-1].phase == SessionStatus.PHASE_DONE
+
+
+def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_context,
+                                                            tmp_path):
+    """practice_episodes: the person's episodes alone (realtime), announced, labelled, no robot.
+
+    No human node here: the sim (waiting for no robot) steps on its wall timer; the agent
+    answers no state, refuses a pause, and exits 0 after its episodes.
+    """
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from std_srvs.srv import Trigger
+
+    from hrc_common.session_control import PAUSE_SERVICE
+
+    node = rclpy.create_node('observer', context=rclpy_context)
+    states, sessions, summaries, wrenches, steps = [], [], [], [], []
+    node.create_subscription(TaskState, topics.STATE, states.append, qos.STATE_QOS)
+    node.create_subscription(SessionStatus, topics.SESSION, sessions.append, qos.SESSION_QOS)
+    node.create_subscription(EpisodeSummary, topics.EPISODE, summaries.append, qos.EPISODE_QOS)
+    node.create_subscription(WrenchStamped, topics.ROBOT_CMD_WRENCH, wrenches.append,
+                             qos.COMMAND_QOS)
+    node.create_subscription(AgentStep, topics.AGENT_STEP, steps.append, qos.AGENT_STEP_QOS)
+    pause = node.create_client(Trigger, PAUSE_SERVICE)
+    executor = SingleThreadedExecutor(context=rclpy_context)
+    executor.add_node(node)
+    start_node('hrc_sim_node', 'sim_node', parameters={
+        'mode': 'lockstep', 'expected_actors': ['human'], 'episode_duration': 1.0,
+        'marker_rate': 0.0, 'human_period': 0.2})
+    agent = start_node('hrc_agent_node', 'agent_node', parameters={
+        'case': 2, 'session_id': 'p-practice', 'practice_episodes': 2, 'mode': 'realtime',
+        'episode_break': 0.2, 'checkpoint_dir': str(tmp_path / 'checkpoints'),
+        'wait_for_subscribers': ['observer']})
+    answers = []
+    deadline = time.monotonic() + 90
+    while agent.process.poll() is None and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+        if not answers and pause.service_is_ready():
+            answers.append(pause.call_async(Trigger.Request()))
+    for _ in range(20):
+        executor.spin_once(timeout_sec=0.02)
+    executor.shutdown()
+    node.destroy_node()
+    assert agent.process.poll() == 0, agent.output
+    assert answers and answers[0].done() and not answers[0].result().success
+    assert 'the practice does not pause' in answers[0].result().message
+    # Two realtime episodes of 5 periods each, reset by the agent; nothing from the robot.
+    assert [(s.episode, s.step) for s in states] == \
+        [(episode, step) for episode in range(2) for step in range(6)]
+    assert not wrenches and not steps
+    assert [(s.episode, s.kind, s.steps, s.session_id) for s in summaries] == [
+        (0, EpisodeSummary.KIND_PRACTICE, 5, 'p-practice'),
+        (1, EpisodeSummary.KIND_PRACTICE, 5, 'p-practice')]
+    assert {s.strategy for s in sessions} == {'practice'}
+    assert sessions[-1].message == ('practice: episode 2 of 2, the person alone (the robot '
+                                    'does not act)')
+    assert sessions[-1].total_episodes == 2
+    assert not (tmp_path / 'checkpoints').exists()     # nothing learned, nothing kept

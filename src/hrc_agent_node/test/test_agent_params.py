@@ -7,7 +7,8 @@ import types
 import pytest
 import yaml
 
-from hrc_agent_node.agent_core import AgentCore, derive_seed
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.observation import derive_seed
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
 from hrc_common.params import checked, load_yaml, ParameterError, with_overrides

@@ -8,7 +8,7 @@ from hrc_agent_node.offline import make_partner, run_session
 from hrc_agent_node.partners import SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 PROFILE = load_profile('paper')

@@ -59,6 +59,7 @@ def point_problem(seed: int, steps: int) -> list:
     return distances
 
 
+@pytest.mark.slow   # a training run (500 learning steps): out of the quick tier
 def test_sac_learns_to_move_a_point_to_zero():
     distances = point_problem(seed=0, steps=500)
     print('|x| after 10 steps:', [round(d, 4) for d in distances])

@@ -136,7 +136,8 @@ class InputGuard:
                          and self.last_status.phase not in ACTIVE_PHASES):
             return  # already paused, or nothing runs (done, aborted, paused by the operator)
         if self.last_status is not None and self.last_status.strategy == 'practice':
-            if not self._practice_told:  # no agent to stop: say it, the human node holds 0
+            if not self._practice_told:  # nothing learned to protect: say it, the human node
+                #                              holds 0 and the agent's practice goes on
                 self._practice_told = True
                 print(f'[session] practice: {reason}; the human node holds zero, the practice '
                       f'goes on', flush=True)

@@ -8,7 +8,7 @@ import json
 import pytest
 import yaml
 
-from hrc_bringup.experiment import run_task, SessionTask
+from hrc_bringup.experiment_task import run_task, SessionTask
 from hrc_common.paths import params_dir
 from hrc_study.loading import load_sessions
 

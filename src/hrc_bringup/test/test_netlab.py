@@ -34,12 +34,18 @@ def link_ends():
         end.close()
 
 
-def receive_all(sock, count, timeout):
-    """Return (packets, arrival times) of up to ``count`` packets within ``timeout`` s."""
+def receive_all(sock, count, timeout, accounted=None):
+    """Return (packets, arrival times) of up to ``count`` packets within ``timeout`` s.
+
+    ``accounted(received)``, if given, stops the wait early once it returns True (e.g. every
+    packet sent is either received or counted lost by the emulator).
+    """
     sock.settimeout(0.05)
     packets, times = [], []
     deadline = time.monotonic() + timeout
     while len(packets) < count and time.monotonic() < deadline:
+        if accounted is not None and accounted(len(packets)):
+            break
         try:
             packets.append(sock.recv(2048))
             times.append(time.monotonic())
@@ -72,7 +78,10 @@ def test_loss_is_seeded_and_near_the_probability(link_ends):
         for index in range(50):
             station.send(b'%04d' % (batch * 50 + index))
         time.sleep(0.05)
-        packets += receive_all(trainer, 50, timeout=0.3)[0]
+        # Wait until each packet of the batch arrived or was counted lost (not a fixed 0.3 s).
+        packets += receive_all(trainer, 50, timeout=0.3, accounted=lambda received, sent=(
+            batch + 1) * 50, before=len(packets): (
+                before + received + emulator.counts['lost'] >= sent))[0]
     lost = emulator.counts['lost']
     assert emulator.counts['overflow'] == 0
     assert lost + len(packets) == 500

@@ -172,7 +172,8 @@ SETTING_OPTIONS = {'seed': '--seed', 'mode': '--mode', 'case': '--case', 'input'
                    'profile': '--profile', 'robot_dof': '--case', 'dof': '--case',
                    'session_id': '--session-id', 'max_training_episodes': '--episodes',
                    'evaluation_episodes': '--eval-episodes', 'resume_from': '--resume-from',
-                   'checkpoint_dir': '--runs-dir', 'output_dir': '--bags-dir'}
+                   'checkpoint_dir': '--runs-dir', 'output_dir': '--bags-dir',
+                   'practice_episodes': '--practice'}
 
 
 def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
@@ -191,6 +192,9 @@ def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
     sim['robot_dof'] = case.robot_dof
     human['dof'] = case.human_dof
     agent['case'] = settings.case
+    # A session's agent runs the condition; the practice before it is the runner's --practice
+    # (hrc_bringup.practice sets practice_episodes on the practice's own agent).
+    agent['practice_episodes'] = 0
     agent['session_id'] = settings.session_id
     agent['checkpoint_dir'] = str(pathlib.Path(settings.runs_dir) / 'checkpoints')
     if settings.training_episodes > 0:

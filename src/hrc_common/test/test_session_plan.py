@@ -83,13 +83,17 @@ def test_every_reason_at_once():
 def test_an_override_the_session_overrules_is_refused_not_dropped():
     """``--set human.input=script`` used to vanish under the session's own --human sim."""
     settings = SessionSettings(case=2, seed=1, overrides={
-        'human.input': 'script', 'agent.seed': 4, 'sim.seed': 1, 'agent.horizon': 256})
+        'human.input': 'script', 'agent.seed': 4, 'sim.seed': 1, 'agent.horizon': 256,
+        'agent.practice_episodes': 2})
     with pytest.raises(ValueError) as error:
         compose(settings, PARAMS)
     text = str(error.value)
     assert "--set human.input='script': the session sets human.input itself ('sim'); use " \
         '--human' in text
     assert '--set agent.seed=4: the session sets agent.seed itself (1); use --seed' in text
+    # the condition's agent never runs a practice instead (that is --practice, before it)
+    assert ('--set agent.practice_episodes=2: the session sets agent.practice_episodes itself '
+            '(0); use --practice') in text
     assert 'sim.seed' not in text and 'horizon' not in text   # the same value, or not owned
     settings.human_input, settings.overrides = 'script', {'human.input': 'script'}
     assert compose(settings, PARAMS)['human']['input'] == 'script'

@@ -38,7 +38,7 @@ import numpy as np
 from hrc_common.contract import NS_PER_S
 from hrc_common.params import from_dict
 from hrc_joystick_node.human_model import load_human_model
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, MODEL_PREFIX,
                           NO_HUMAN, POPULATION_PREFIX, RENDER_MODES, ROBOT, SEED_LIMIT, TaskRun)
 from hrc_sim_node.physics import PhysicsParams

@@ -8,7 +8,7 @@ Nothing here is a second implementation: :class:`TaskRun` only wires the cores t
 * roles, training steps, reward: ``hrc_agent_node`` (``params/cases.yaml`` resolved by
   ``strategies.load_cases``; the reward is ``TaskTree.reward`` of the step's subtasks on the
   state reached, eq. 2-5, exactly as ``AgentCore`` computes it);
-* observation: ``hrc_agent_node.agent_core.observation_of`` ({B_y, P_z, S_x, a_partner}, plus
+* observation: ``hrc_agent_node.observation.observation_of`` ({B_y, P_z, S_x, a_partner}, plus
   the three rates when ``observe_rates``), where a_partner is the partner's command *applied in
   the last control period* (``applied_command``, the agent's default ``human_action_source``);
 * the simulated human: the human node's per-step core ``hrc_joystick_node.human_core.HumanCore``
@@ -21,7 +21,7 @@ satisfied when its mean error is within its tolerance, ``params/task_tree.yaml``
 
 from dataclasses import dataclass
 
-from hrc_agent_node.agent_core import applied_command, observation_of
+from hrc_agent_node.observation import applied_command, observation_of
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
@@ -98,7 +98,7 @@ def make_human(spec: str, dof: str, seed: int, limits: SimLimits, involved: bool
     if spec == NO_HUMAN:
         return None
     from hrc_joystick_node.human_core import HumanCore, HumanParams
-    from hrc_joystick_node.sim_human import load_profiles
+    from hrc_joystick_node.human_profile import load_profiles
 
     common = dict(dof=dof, involved=involved, seed=int(seed))
     if spec.startswith(MODEL_PREFIX):

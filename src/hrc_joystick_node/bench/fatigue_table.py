@@ -14,7 +14,8 @@ Usage: ``python src/hrc_joystick_node/bench/fatigue_table.py [--episodes 300]``
 import argparse
 import pathlib
 
-from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman
+from hrc_joystick_node.human_profile import load_profiles
+from hrc_joystick_node.sim_human import SimulatedHuman
 
 REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
 OLD_PER_MINUTE = {'novice': 0.03, 'skilled': 0.01, 'paper': 0.02, 'paper_symmetric': 0.02}

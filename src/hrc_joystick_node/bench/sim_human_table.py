@@ -20,7 +20,8 @@ import time
 import numpy
 
 from hrc_joystick_node.evaluation import human_episode, run_episode
-from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman
+from hrc_joystick_node.human_profile import load_profiles
+from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_sim_node.physics import SliderPendulumBall
 
 REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'

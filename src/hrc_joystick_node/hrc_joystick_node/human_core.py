@@ -37,12 +37,12 @@ import typing
 from hrc_common.contract import InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import param, ParameterError
+from hrc_joystick_node.human_profile import HumanProfile
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
                                       MODEL, PAUSE, SCRIPT, SIM, stick_command, StickReading,
                                       ZERO)
 from hrc_joystick_node.population import person_or_profile
-from hrc_joystick_node.sim_human import (BALL, HumanProfile, normalize_subtasks, OWN_SUBTASK,
-                                         SimulatedHuman)
+from hrc_joystick_node.sim_human import BALL, normalize_subtasks, OWN_SUBTASK, SimulatedHuman
 from hrc_joystick_node.stick_script import StickScript, StickScriptError
 
 # HumanAction.SOURCE_* by input name; a cloned model is a simulated human (its detail names
@@ -176,7 +176,7 @@ def core_from_parameters(parameters: dict, limits: SimLimits) -> 'HumanCore':
     ``limits``: the sim's (as the node reads them from the sim's parameters).
     """
     from hrc_common.params import from_dict
-    from hrc_joystick_node.sim_human import default_profiles_path, load_profiles
+    from hrc_joystick_node.human_profile import default_profiles_path, load_profiles
 
     params = from_dict(HumanParams, dict(parameters))
     path = params.profiles_file or default_profiles_path()

@@ -46,7 +46,8 @@ from sensor_msgs.msg import Joy
 from hrc_joystick_node.human_core import HumanAnswer, HumanCore, HumanParams, InputStatus
 from hrc_joystick_node.inputs import DEVICE, JOY, JoyInput, StickReading
 from hrc_joystick_node.js_event import JoystickDevice
-from hrc_joystick_node.sim_human import default_profiles_path, load_profiles, StateView
+from hrc_joystick_node.human_profile import default_profiles_path, load_profiles
+from hrc_joystick_node.sim_human import StateView
 
 SUMMARY = ('The human side of hrc: reads a Linux joystick device, sensor_msgs/Joy on /joy, or '
            'runs a simulated human, and answers every /hrc/state with /hrc/human/action and '

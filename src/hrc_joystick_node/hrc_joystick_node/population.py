@@ -49,7 +49,7 @@ import typing
 import numpy
 
 from hrc_common.params import spec_of, validate
-from hrc_joystick_node.sim_human import HumanProfile
+from hrc_joystick_node.human_profile import HumanProfile
 
 # Coefficient of variation (std / median) of each log-normally drawn field.
 SPREAD: typing.Dict[str, float] = {

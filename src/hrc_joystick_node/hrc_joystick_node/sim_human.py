@@ -4,7 +4,7 @@ Pure Python and numpy (no rclpy): the human node, the experiment runner and the 
 use :class:`SimulatedHuman` in the same way::
 
     human = SimulatedHuman(load_profile('skilled'), dof='rotation', seed=3,
-                           control_period=0.02)
+                           control_period=0.02)   # load_profile: hrc_joystick_node.human_profile
     human.reset(episode=0)
     command = human.act(state, ['pendulum'])   # float in [-1, 1], once per control_period
 
@@ -210,20 +210,16 @@ ball cue as a complementary filter with its time constant (2 s: the person needs
 ball roll for a while) and its end-stop range, lapses as a Poisson process of fixed length.
 """
 
-from dataclasses import dataclass
 import collections
 import math
-import pathlib
 import typing
 
 import numpy
-import yaml
 
 from hrc_common.dof import check_dof, ROTATION, TRANSLATION
-from hrc_common.params import from_dict, param, ParameterError
-from hrc_common.paths import params_file
 from hrc_joystick_node.adaptation import TwoRateAdaptation
 from hrc_joystick_node.fatigue import Fatigue
+from hrc_joystick_node.human_profile import HumanProfile
 
 SLIDER = 'slider'
 PENDULUM = 'pendulum'
@@ -244,176 +240,6 @@ HISTORY_SECONDS = 12.8
 BALL_CUE_RANGE = 0.2
 # Perception channels with their own noise process, in the order of _Percept.
 PERCEPT_CHANNELS = 6
-
-
-@dataclass
-class HumanProfile:
-    """The parameters of one simulated person (see the module docstring for the model).
-
-    The defaults are the ``skilled`` profile of ``params/sim_human.yaml`` (a test keeps them
-    equal); a profile in the YAML file may leave out the fields it does not change.
-    """
-
-    description: str = param('', 'who this profile models')
-    # perception (noises are the standard deviations of a process correlated over
-    # perception_noise_time; biases are drawn once per episode)
-    slider_noise: float = param(0.0015, 'std of the perceived slider height (m)',
-                                low=0.0, high=0.1)
-    pendulum_noise: float = param(0.015, 'std of the perceived beam angle (rad)',
-                                  low=0.0, high=1.0)
-    ball_noise: float = param(0.004, 'std of the perceived ball position (m)',
-                              low=0.0, high=0.25)
-    slider_bias: float = param(0.0015, 'std of the per-episode misjudged middle of the rod (m)',
-                               low=0.0, high=0.1)
-    pendulum_bias: float = param(0.01, 'std of the per-episode misjudged horizontal (rad)',
-                                 low=0.0, high=1.0)
-    ball_bias: float = param(0.003, 'std of the per-episode misjudged middle of the beam (m)',
-                             low=0.0, high=0.25)
-    velocity_noise: float = param(0.12, 'Weber fraction of perceived speeds (relative std)',
-                                  low=0.0, high=2.0)
-    perception_noise_time: float = param(
-        0.05, 'correlation time of the perception noise (s): a first-order (Ornstein-Uhlenbeck) '
-        'process advanced by the call period; 0 = a fresh sample at every call (profile '
-        'version 1)', low=0.0, high=100.0)
-    ball_cue_time: float = param(
-        2.0, 'time constant (s) over which the rolling ball corrects the judged beam angle '
-        '(a ball that keeps rolling east means the east end is low); 0 = no ball cue '
-        '(profile version 1)', low=0.0, high=1000.0)
-    ball_speed_tilt: float = param(
-        0.2, 'beam angle (rad) the person reads from a rolling speed of 1 m/s of the ball '
-        '(a learned internal model; default physics: m_b * g / ball_damping = 4.9 m/s per '
-        'rad)', low=0.0, high=100.0)
-    # timing
-    reaction_delay: float = param(0.18, 'delay from seeing to acting (s)', low=0.0, high=2.0)
-    prediction: float = param(0.5, 'share of the delay compensated by extrapolation',
-                              low=0.0, high=1.0)
-    # control
-    slider_full_scale: float = param(0.08, 'slider error at which the stick is pushed fully (m)',
-                                     low=1e-4, high=1.0)
-    pendulum_full_scale: float = param(0.32, 'beam angle error at which the stick is pushed '
-                                       'fully (rad)', low=1e-3, high=10.0)
-    lead_time: float = param(0.2, 'look-ahead of the derivative action (s)', low=0.0, high=5.0)
-    integral_time: float = param(
-        1.5, 'integral time of the level-2 hold (s): a person who sees the slider or the beam '
-        'stay off pushes harder against a steady load; 0 = no integral', low=0.0, high=1000.0)
-    ball_tilt: float = param(0.5, 'target beam angle per ball offset (rad/m)', low=0.0,
-                             high=100.0)
-    ball_lead: float = param(0.6, 'look-ahead on the ball (s)', low=0.0, high=5.0)
-    max_tilt: float = param(0.2, 'largest beam angle asked for to move the ball (rad)',
-                            low=0.0, high=1.5)
-    coupling_full_scale: float = param(3.0, 'translation actor: beam angle error that makes it '
-                                       'push fully to nudge the beam through the coupling (rad)',
-                                       low=1e-3, high=100.0)
-    # motor execution
-    max_rate: float = param(8.0, 'fastest stick movement (full scale per s)', low=0.1,
-                            high=1000.0)
-    neuromuscular_time: float = param(0.08, 'time constant of the arm following the intent (s)',
-                                      low=0.0, high=2.0)
-    motor_noise: float = param(0.08, 'motor noise std per unit of command (relative)', low=0.0,
-                               high=2.0)
-    motor_noise_floor: float = param(0.01, 'motor noise std at rest (normalized command)',
-                                     low=0.0, high=1.0)
-    motor_noise_time: float = param(
-        0.1, 'correlation time of the motor noise (s), advanced by the call period; 0 = a '
-        'fresh sample at every call (profile version 1)', low=0.0, high=10.0)
-    lapse_probability: float = param(0.01, 'share of the time the stick is held unchanged '
-                                     '(attention lapses; with lapse_duration 0: the chance '
-                                     'per call)', low=0.0, high=1.0)
-    lapse_duration: float = param(0.2, 'length of one lapse of attention (s); 0 = one call '
-                                  '(profile version 1)', low=0.0, high=10.0)
-    # learning curve
-    untrained_factor: float = param(1.2, 'noises, biases and lapses of the first episode, '
-                                    'relative to the trained person', low=1.0, high=20.0)
-    learning_episodes: float = param(4.0, 'time constant of the learning curve (episodes)',
-                                     low=0.1, high=10000.0)
-    # fatigue (hrc_joystick_node.fatigue)
-    fatigue_onset_minutes: float = param(20.0, 'time on task (simulation min) that takes '
-                                         'fatigue 63 % of the way to its ceiling', low=0.01,
-                                         high=100000.0)
-    recovery_minutes: float = param(5.0, 'rest (simulation min) that removes 63 % of the '
-                                    'fatigue', low=0.01, high=100000.0)
-    fatigue_delay_ceiling: float = param(0.15, 'largest relative increase of the reaction '
-                                         'delay with fatigue', low=0.0, high=10.0)
-    fatigue_noise_ceiling: float = param(0.3, 'largest relative increase of the motor noise '
-                                         'with fatigue', low=0.0, high=10.0)
-    fatigue_lapse_ceiling: float = param(1.0, 'largest relative increase of the lapse '
-                                         'probability with fatigue', low=0.0, high=100.0)
-    rest_between_episodes: float = param(10.0, 'declared break between two episodes (s of '
-                                         'simulation time: reset, countdown, the update)',
-                                         low=0.0, high=100000.0)
-    # adaptation to the partner (hrc_joystick_node.adaptation)
-    fast_retention: float = param(0.6, 'retention per episode of the fast adaptation process',
-                                  low=0.0, high=0.9999)
-    fast_learning_rate: float = param(0.2, 'learning rate per episode of the fast process '
-                                      '(share of the episode error)', low=0.0, high=2.0)
-    slow_retention: float = param(0.97, 'retention per episode of the slow adaptation process',
-                                  low=0.0, high=0.9999)
-    slow_learning_rate: float = param(0.05, 'learning rate per episode of the slow process',
-                                      low=0.0, high=2.0)
-    # a person of the population (hrc_joystick_node.population); 0 in the profiles
-    slider_offset: float = param(0.0, "this person's constant misjudgement of the middle of "
-                                 'the rod (m)', low=-0.1, high=0.1)
-    pendulum_offset: float = param(0.0, "this person's constant misjudgement of the "
-                                   'horizontal (rad)', low=-1.0, high=1.0)
-    ball_offset: float = param(0.0, "this person's constant misjudgement of the middle of the "
-                               'beam (m)', low=-0.25, high=0.25)
-
-
-def default_profiles_path() -> pathlib.Path:
-    """Return ``params/sim_human.yaml`` (``hrc_common.paths.params_file``)."""
-    return params_file('sim_human.yaml')
-
-
-def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:
-    """Read every profile of ``path`` (default: the installed sim_human.yaml).
-
-    The file is checked by shape before use: it must be YAML text holding a mapping with a
-    non-empty mapping ``profiles:`` of name -> mapping of fields. Anything else (missing,
-    unreadable, binary, not YAML, a list, a string) raises ParameterError with every reason.
-    """
-    path = pathlib.Path(path) if path is not None else default_profiles_path()
-    try:
-        text = path.read_text(encoding='utf-8')
-    except UnicodeDecodeError:
-        raise ParameterError(f'{path}: not a YAML text file (binary content)') from None
-    except OSError as error:
-        raise ParameterError(f'{path}: cannot read: {error.strerror or error}') from None
-    try:
-        document = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        where = getattr(error, 'problem_mark', None)
-        at = f' (line {where.line + 1}, column {where.column + 1})' if where else ''
-        raise ParameterError(f'{path}: not valid YAML{at}: '
-                             f'{getattr(error, "problem", None) or error}') from None
-    if not isinstance(document, dict):
-        raise ParameterError(f'{path}: expected a mapping with "profiles:", got '
-                             f'{type(document).__name__}')
-    entries = document.get('profiles')
-    if not isinstance(entries, dict) or not entries:
-        raise ParameterError(f'{path}: expected a non-empty mapping "profiles:"')
-    profiles, reasons = {}, []
-    for name, values in entries.items():
-        if values is not None and not isinstance(values, dict):
-            reasons.append(f'{path}: profile {name!r}: expected a mapping of fields, got '
-                           f'{type(values).__name__}')
-            continue
-        try:
-            profiles[str(name)] = from_dict(HumanProfile, values or {})
-        except ParameterError as error:
-            reasons += [f'{path}: profile {name!r}: {reason}' for reason in error.reasons]
-        except TypeError as error:  # a field of the wrong type the dataclass cannot take
-            reasons.append(f'{path}: profile {name!r}: {error}')
-    if reasons:
-        raise ParameterError('; '.join(reasons), reasons)
-    return profiles
-
-
-def load_profile(name: str, path=None) -> HumanProfile:
-    """Return profile ``name`` from ``path`` (default: the installed sim_human.yaml)."""
-    profiles = load_profiles(path)
-    if name not in profiles:
-        raise ParameterError(f'unknown simulated-human profile {name!r}: known {sorted(profiles)}')
-    return profiles[name]
 
 
 def normalize_subtasks(subtasks) -> typing.Tuple[typing.List[str], typing.List[str]]:

@@ -11,7 +11,8 @@ from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
 from hrc_joystick_node.inputs import DEVICE, JOY, MODEL, SCRIPT, SIM, StickReading, ZERO
 from hrc_joystick_node.population import sample_person
-from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman
+from hrc_joystick_node.human_profile import load_profiles
+from hrc_joystick_node.sim_human import SimulatedHuman
 
 PROFILES = load_profiles(pathlib.Path(__file__).resolve().parents[3] / 'params'
                          / 'sim_human.yaml')

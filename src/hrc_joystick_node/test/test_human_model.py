@@ -11,7 +11,8 @@ import pytest
 from hrc_joystick_node.adaptation import steady_state_compensation, TwoRateAdaptation
 from hrc_joystick_node.fatigue import Fatigue, steady_state_level
 from hrc_joystick_node.population import (OFFSETS, person_or_profile, sample_person, SPREAD)
-from hrc_joystick_node.sim_human import load_profiles, SimulatedHuman, StateView
+from hrc_joystick_node.human_profile import load_profiles
+from hrc_joystick_node.sim_human import SimulatedHuman, StateView
 
 REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)

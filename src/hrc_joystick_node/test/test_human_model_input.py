@@ -13,7 +13,7 @@ from hrc_joystick_node.human_core import HumanCore, HumanParams
 from hrc_joystick_node.human_model import (build_network, ClonedHuman, load_human_model,
                                            save_human_model)
 from hrc_joystick_node.inputs import MODEL
-from hrc_joystick_node.sim_human import load_profiles
+from hrc_joystick_node.human_profile import load_profiles
 
 PROFILES = load_profiles(pathlib.Path(__file__).resolve().parents[3] / 'params'
                          / 'sim_human.yaml')

@@ -18,7 +18,8 @@ from hrc_common.contract import SimLimits
 from hrc_common.testing import serve_sim_parameters
 from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
-from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 

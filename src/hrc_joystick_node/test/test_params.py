@@ -8,7 +8,7 @@ import yaml
 
 from hrc_common.params import as_dict, default_of, load_yaml, ParameterError, with_overrides
 from hrc_joystick_node.human_core import HumanParams
-from hrc_joystick_node.sim_human import HumanProfile, load_profiles
+from hrc_joystick_node.human_profile import HumanProfile, load_profiles
 
 PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
 

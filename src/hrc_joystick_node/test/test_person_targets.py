@@ -6,6 +6,10 @@ the effort on the rotation role that it spends on the translation role, and fit 
 model within the bench's published ranges on both degrees of freedom. ``paper_v2`` (the person
 of stop 26) missed three of them; the same checks on it show that they can fail. Pure: the
 PyBullet physics and SimulatedHuman, about 20 s.
+
+Marked ``slow`` (out of the quick tier, still in ``make test``): each test is a measurement
+over 40-60 simulated episodes whose sample size is part of the target (8 of 10 first
+episodes, the benches' 3 runs per row); smaller samples would measure something else.
 """
 
 import importlib.util
@@ -15,13 +19,15 @@ import pathlib
 import numpy
 import pytest
 
-from hrc_joystick_node.sim_human import load_profiles
+from hrc_joystick_node.human_profile import load_profiles
 
 BENCH = pathlib.Path(__file__).resolve().parents[3] / 'bench'
 REPO_PROFILES = BENCH.parent / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 HUMAN_PERIOD = 0.02  # s: the default sim.human_period
 EPISODES = 10        # seeds 0-9, as the benches' documented commands
+
+pytestmark = pytest.mark.slow
 
 
 def bench(name):

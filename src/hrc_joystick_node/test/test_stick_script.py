@@ -4,7 +4,7 @@ from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams
 from hrc_joystick_node.inputs import SCRIPT
-from hrc_joystick_node.sim_human import default_profiles_path, load_profiles
+from hrc_joystick_node.human_profile import default_profiles_path, load_profiles
 from hrc_joystick_node.stick_script import StickSample, StickScript, StickScriptError
 import pytest
 

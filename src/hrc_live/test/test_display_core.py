@@ -7,10 +7,11 @@ the whole reachable configuration, the console's data and the documents the page
 import json
 import math
 
-from hrc_live.display_core import (AgentPlan, configuration_points, console_document,
-                                   DisplayModel, HumanView, INPUT_LOST_BANNER, INPUT_LOST_NOTICE,
-                                   overlay, ResultView, scene_bounds, SessionView,
-                                   state_document, StateView, status_document)
+from hrc_live.display_core import (AgentPlan, DisplayModel, HumanView, ResultView, SessionView,
+                                   StateView)
+from hrc_live.display_documents import (configuration_points, console_document, scene_bounds,
+                                        state_document, status_document)
+from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay
 from hrc_sim_node.physics import PhysicsParams
 import pytest
 

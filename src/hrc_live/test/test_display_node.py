@@ -28,11 +28,12 @@ from hrc_common import qos, topics
 from hrc_common.contract import BODY_COLOURS, rgb8
 from hrc_common.params import as_dict, load_yaml
 from hrc_common.testing import wait_for
-from hrc_live.display_core import COLORS
+from hrc_live.display_documents import COLORS
 from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
-from hrc_sim_node.physics import body_poses, PhysicsParams, PhysicsState
+from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.physics import PhysicsParams, PhysicsState
 import pytest
 from std_srvs.srv import Trigger
 import yaml

@@ -70,7 +70,7 @@ def test_detects_axis_direction_rest_and_enable_button_and_writes_the_human_yaml
                  + pack_event(25, 1500, JS_EVENT_AXIS, 1)
                  + pack_event(30, 1, JS_EVENT_BUTTON, 4))
 
-    code, output = run_helper(path, '--non-interactive', '--detect', 3, '--show', '-o',
+    code, output = run_helper(path, '--non-interactive', '--detect', 1, '--show', '-o',
                               output_file, until='watching', then=operator_moves)
     assert code == 0, output
     assert 'axes 0:+0.00 1:-0.05 2:-1.00 3:+0.01 | buttons 0:0 1:0 2:0 3:0 4:1 5:0' in output

@@ -1,6 +1,6 @@
 """Who may act on the display (pure): the Host, Origin and secret checks, and the TLX's grid."""
 
-from hrc_live.display_node import host_name, RequestGuard, TOKEN_HEADER
+from hrc_live.page_server import host_name, RequestGuard, TOKEN_HEADER
 from hrc_common.tlx import check_tlx, TLX_STEP
 
 PORT, TOKEN = 8765, 'session-secret'

@@ -29,7 +29,8 @@ from hrc_agent_node.partners import ScriptedPartner
 from hrc_common.contract import other_dof, SimLimits
 from hrc_common.params import with_overrides
 from hrc_joystick_node.population import sample_person
-from hrc_joystick_node.sim_human import load_profile, SimulatedHuman
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.protocol import per_dof, roles
 from hrc_study.statistics import mean_interval

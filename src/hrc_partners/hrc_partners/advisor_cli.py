@@ -19,7 +19,7 @@ import pathlib
 import sys
 
 from hrc_joystick_node.population import sample_person
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 
 
 def main(argv=None) -> int:

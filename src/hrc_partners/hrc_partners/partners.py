@@ -32,7 +32,7 @@ from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
 from hrc_joystick_node.human_model import ClonedHuman
 from hrc_joystick_node.population import sample_person
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 import numpy
 

@@ -12,7 +12,7 @@ import pathlib
 import typing
 
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 import yaml
 
 FAST_SLOW_DELAYS = {'fast': 0.1, 'slow': 0.6}   # s: reaction delays of the demonstration pair

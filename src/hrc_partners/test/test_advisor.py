@@ -4,7 +4,7 @@ The robot is the scripted PD controller with command noise, standing in for a tr
 (said in the advice): fast and deterministic for a seed.
 """
 
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 import pytest
 from hrc_partners import advisor
 

@@ -15,7 +15,7 @@ from hrc_common.contract import EpisodeKind
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
-from hrc_joystick_node.sim_human import load_profile
+from hrc_joystick_node.human_profile import load_profile
 from hrc_partners.partners_first import (default_population, main, person_spec_of,
                                          POPULATION_FIRST_PERSON, prepare_person_session,
                                          pretrain, unlike_people)

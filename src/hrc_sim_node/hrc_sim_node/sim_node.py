@@ -38,8 +38,8 @@ from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.commands import HUMAN, ROBOT, unit_of
-from hrc_sim_node.physics import (body_poses, physics_params_of, PhysicsParams,
-                                  SliderPendulumBall)
+from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.protocol import (ProtocolSettings, stamp_fields, stamp_ns,
                                    StepProtocol, summary_line, WarningThrottle)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams

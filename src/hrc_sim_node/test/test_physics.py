@@ -7,8 +7,8 @@ import numpy
 import pytest
 
 from hrc_common.params import ParameterError
-from hrc_sim_node.physics import (body_poses, JOINTS, PhysicsParams, PhysicsState,
-                                  SliderPendulumBall)
+from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.physics import JOINTS, PhysicsParams, PhysicsState, SliderPendulumBall
 
 # Everything starts exactly in the middle, at rest: effects are measured from zero.
 CENTRED = replace(PhysicsParams(), initial_slider_spread=0.0, initial_angle_spread=0.0,

@@ -9,7 +9,8 @@ import statistics
 from hrc_common.params import as_dict, load_yaml
 from hrc_common.testing import wait_for
 from hrc_msgs.msg import SessionStatus
-from hrc_sim_node.physics import body_poses, PhysicsParams, SliderPendulumBall
+from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_node import SimParams
 import pytest
 import yaml

@@ -1,0 +1,183 @@
+"""One session of an experiment sweep, run on a worker: :func:`run_task` of a :class:`SessionTask`.
+
+A task runs the session with the chosen engine (``inprocess``: ``hrc_engine.run_session`` in
+the worker process; ``graph``: the ``hrc session`` runner on a ROS domain reserved on the
+worker's machine), pre-trains cases 7 and 8 with their simulated population first, and returns
+its outcome as plain data (with the session's bag folder packed when the driver has no shared
+filesystem: :func:`pack_folder` / :func:`unpack_folder`). The sweep itself (executors, command
+line, report) is ``hrc_bringup.experiment``.
+"""
+
+from dataclasses import dataclass
+import io
+import os
+import pathlib
+import resource
+import shutil
+import socket
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+
+from hrc_common.contract import make_session_id
+from hrc_common.domains import DomainReservation
+from hrc_common.executables import executable_path
+from hrc_common.session_plan import parse_overrides
+from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_partners.partners_first import prepare_person_session
+
+
+@dataclass(frozen=True)
+class SessionTask:
+    """One session of the sweep: everything a worker needs, as plain values (picklable)."""
+
+    case: int
+    seed: int
+    profile: str                    # simulated-human profile ('' = the human node's default)
+    session_id: str
+    engine: str                     # inprocess | graph
+    bags_dir: str                   # absolute: <bags-dir>/<name> (the session adds its id)
+    runs_dir: str                   # absolute: <runs-dir>/<name>
+    training_episodes: int          # max training episodes (0 = params/agent.yaml)
+    evaluation_episodes: int        # final evaluation episodes (-1 = params/agent.yaml)
+    overrides: tuple                # ('node.param=value', ...) as given on the command line
+    params_dir: str                 # the parameter files, resolved on the driver
+    pull_bags: bool                 # return the session folder packed (no shared filesystem)
+    checkpoints: bool = False       # in-process: write the agent's checkpoints (resumable)
+    not_after: float = 0.0          # epoch s: a task not started by then is skipped (0: none)
+
+
+def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
+    """Return the session id: 'case2-seed0', with '-<profile>' when several profiles run."""
+    base = make_session_id(case, seed, timestamped=False)
+    return f'{base}-{profile}' if len(profiles) > 1 and profile else base
+
+
+def run_task(task: SessionTask) -> dict:
+    """Run one session on this worker; return its outcome (never raises)."""
+    started, cpu_started = time.monotonic(), _cpu_seconds()
+    outcome = {'session_id': task.session_id, 'case': task.case, 'seed': task.seed,
+               'profile': task.profile, 'engine': task.engine, 'host': socket.gethostname(),
+               'worker_pid': os.getpid(), 'exit_code': 1, 'error': ''}
+    if task.not_after and time.time() > task.not_after:
+        outcome.update(exit_code=None, error='skipped: --stop-after passed', seconds=0.0)
+        return outcome
+    try:
+        node = _ray_node_id()
+        if node:
+            outcome['ray_node'] = node
+        bags_dir = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bags-')) if task.pull_bags \
+            else pathlib.Path(task.bags_dir)
+        runner = run_inprocess if task.engine == 'inprocess' else run_graph
+        try:
+            outcome['exit_code'], outcome['error'] = runner(task, bags_dir)
+            if task.pull_bags:
+                outcome['bag_archive'] = pack_folder(bags_dir / task.session_id)
+        finally:
+            if task.pull_bags:
+                shutil.rmtree(bags_dir, ignore_errors=True)
+    except Exception as error:   # a worker reports every failure back to the driver
+        outcome['error'] = f'{type(error).__name__}: {error}'
+    outcome['seconds'] = time.monotonic() - started
+    # CPU time of this worker and its children (the graph's nodes) during the session: what
+    # the session costs whatever else the machine runs
+    outcome['cpu_seconds'] = _cpu_seconds() - cpu_started
+    return outcome
+
+
+def _cpu_seconds() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def _ray_node_id() -> str:
+    if 'ray' not in sys.modules:
+        return ''
+    import ray  # optional heavy dependency (the --ray executor); loaded by then
+    try:
+        return ray.get_runtime_context().get_node_id() if ray.is_initialized() else ''
+    except Exception:   # not inside a Ray worker
+        return ''
+
+
+def engine_config_of(task: SessionTask, bags_dir: pathlib.Path) -> EngineConfig:
+    """Return the in-process engine's configuration of a task."""
+    return EngineConfig(
+        case=task.case, seed=task.seed, training_episodes=task.training_episodes,
+        evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
+        bags_dir=str(bags_dir), runs_dir=str(pathlib.Path(task.runs_dir) / task.session_id),
+        human_profile=task.profile, overrides=parse_overrides(task.overrides),
+        params_dir=task.params_dir, checkpoints=task.checkpoints)
+
+
+def pretrain_partners_first(task: SessionTask, bags_dir: pathlib.Path):
+    """Pre-train a partners-first task with its population; return the agent's new parameters.
+
+    None for the other cases. The session's parameters are composed as the engine composes
+    them (the graph's agent, sim and human parameters are the same), and the pre-training's
+    files go to the session's run folder.
+    """
+    _, parameters = compose_parameters(engine_config_of(task, bags_dir))
+    session_dir = pathlib.Path(task.runs_dir) / task.session_id / task.session_id
+    session_dir.mkdir(parents=True, exist_ok=True)
+    return prepare_person_session(parameters, session_dir)
+
+
+def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
+    """Run the session with the in-process engine; return (exit code, error text)."""
+    config = engine_config_of(task, bags_dir)
+    start = pretrain_partners_first(task, bags_dir)
+    if start is not None:
+        config.resume_from = start['resume_from']
+        config.training_episodes = start['max_training_episodes']
+    run_session(config)
+    return 0, ''
+
+
+def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
+    """Run the session as the ROS graph on a domain reserved on this machine."""
+    reservation = DomainReservation()
+    try:
+        command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(task.case),
+                   '--seed', str(task.seed), '--session-id', task.session_id,
+                   '--bags-dir', str(bags_dir), '--no-report',
+                   '--runs-dir', str(pathlib.Path(task.runs_dir) / task.session_id),
+                   '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
+        if task.profile:
+            command += ['--profile', task.profile]
+        # partners first: the session starts from the pre-trained checkpoint, its budget on top
+        start = pretrain_partners_first(task, bags_dir)
+        episodes = task.training_episodes if start is None else start['max_training_episodes']
+        if start is not None:
+            command += ['--resume-from', start['resume_from']]
+        if episodes > 0:
+            command += ['--episodes', str(episodes)]
+        if task.evaluation_episodes >= 0:
+            command += ['--eval-episodes', str(task.evaluation_episodes)]
+        for override in task.overrides:
+            command += ['--set', override]
+        pathlib.Path(task.runs_dir).mkdir(parents=True, exist_ok=True)
+        with open(pathlib.Path(task.runs_dir) / f'{task.session_id}.log', 'wb') as log:
+            code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode
+    finally:
+        reservation.release()
+    return code, '' if code == 0 else f'session exited with {code}'
+
+
+def pack_folder(folder: pathlib.Path) -> bytes:
+    """Return ``folder`` as a gzipped tar (its name as the top entry)."""
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode='w:gz') as archive:
+        archive.add(folder, arcname=folder.name)
+    return buffer.getvalue()
+
+
+def unpack_folder(data: bytes, target: pathlib.Path, expected: str) -> None:
+    """Unpack a session archive into ``target`` (only members under ``expected``)."""
+    with tarfile.open(fileobj=io.BytesIO(data), mode='r:gz') as archive:
+        members = [member for member in archive.getmembers()
+                   if member.name == expected or member.name.startswith(expected + '/')]
+        archive.extractall(target, members=members, filter='data')
