@@ -261,11 +261,15 @@ class AgentNode(Node):
     def missing_subscribers(self, now: float) -> bool:
         """Return True while a node of ``wait_for_subscribers`` is not ready for the session.
 
-        Ready: it subscribes to the states and to the session, and every session reader the
-        graph shows is matched by this node's session writer (so the announcement of the first
+        Ready: it subscribes to the states and to the session, every session reader the graph
+        shows is matched by this node's session writer (so the announcement of the first
         episode reaches it before the reset: a human node that had not matched yet answered the
-        first states with its default roles). Checked before the first episode of this process
-        only; after ``reset_timeout`` the session aborts with the names.
+        first states with its default roles), and every matched reader has acknowledged the
+        writer's history (the session's first announcement, sent to a late reader as
+        transient-local history: the writer keeps one sample, so the next announcement would
+        replace it before a slow reader had it, and the recorder's bag would lack it). Checked
+        before the first episode of this process only; after ``reset_timeout`` the session
+        aborts with the names.
         """
         wanted = {name for name in self.params.wait_for_subscribers if name}
         if not wanted or getattr(self, 'subscribers_seen', False):
@@ -278,7 +282,8 @@ class AgentNode(Node):
         if not missing:
             if self.named_nodes_since is None:
                 self.named_nodes_since = now
-            if matched >= len(session_readers):
+            if matched >= len(session_readers) \
+                    and self.session_pub.wait_for_all_acked(Duration(seconds=0)):
                 self.subscribers_seen = True
                 return False
             if now - self.named_nodes_since > SESSION_MATCH_GRACE_S:
@@ -286,7 +291,8 @@ class AgentNode(Node):
                 # the session: the named nodes are there; go on and say so.
                 self.get_logger().warning(
                     f'{len(session_readers)} readers of {topics.SESSION} in the graph, '
-                    f'{matched} matched after {SESSION_MATCH_GRACE_S:g} s: starting anyway')
+                    f'{matched} matched (not all acknowledging the first announcement) after '
+                    f'{SESSION_MATCH_GRACE_S:g} s: starting anyway')
                 self.subscribers_seen = True
                 return False
             return True

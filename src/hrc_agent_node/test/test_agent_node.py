@@ -5,6 +5,7 @@ command, serves /hrc/sim/reset, and plays a human that publishes its action for 
 (sometimes before, sometimes after the state, so the agent's wait-for-stamp is exercised).
 """
 
+import copy
 import pathlib
 import time
 
@@ -246,7 +247,12 @@ def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
 
     node = rclpy.create_node('observer', context=rclpy_context)
     states, sessions = [], []
-    node.create_subscription(TaskState, topics.STATE, states.append, qos.STATE_QOS)
+    # A reader history deeper than the contract's 10 states: in lockstep the sim publishes an
+    # episode's 11 states in a few ms, and this observer takes them only every 50 ms (under load
+    # later), so with depth 10 the middleware replaced unread states (seen in a loaded run).
+    every_state = copy.copy(qos.STATE_QOS)
+    every_state.depth = 1000
+    node.create_subscription(TaskState, topics.STATE, states.append, every_state)
     node.create_subscription(SessionStatus, topics.SESSION, sessions.append, qos.SESSION_QOS)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
@@ -332,3 +338,43 @@ def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_co
                                     'does not act)')
     assert sessions[-1].total_episodes == 2
     assert not (tmp_path / 'checkpoints').exists()     # nothing learned, nothing kept
+
+
+def test_the_first_episode_waits_until_the_session_readers_have_the_first_announcement():
+    """Matched is not enough: every matched reader must have acknowledged the writer's history.
+
+    The session writer keeps one sample (transient local, depth 1); a reader that matched late
+    gets the session's first announcement as history, and the first episode's announcement
+    would replace it before a slow reader (the recorder, under load) had it: its bag then
+    lacked the session's first status (seen in a loaded run of the equivalence tests).
+    """
+    import types
+
+    from hrc_agent_node.agent_node import AgentNode
+
+    class Reader:
+        def __init__(self, node_name):
+            self.node_name = node_name
+
+    class SessionWriter:
+        acknowledged = False
+
+        def get_subscription_count(self):
+            return 2
+
+        def wait_for_all_acked(self, timeout):
+            return self.acknowledged
+
+    readers = [Reader('human'), Reader('recorder')]
+    logged = []
+    node = types.SimpleNamespace(
+        params=types.SimpleNamespace(wait_for_subscribers=['human', 'recorder'],
+                                     reset_timeout=60.0),
+        session_pub=SessionWriter(), named_nodes_since=None, waiting_since=0.0,
+        get_subscriptions_info_by_topic=lambda topic: readers,
+        get_logger=lambda: types.SimpleNamespace(warning=logged.append))
+    wait = AgentNode.missing_subscribers
+    assert wait(node, 1.0) is True            # both matched, the history not acknowledged yet
+    node.session_pub.acknowledged = True
+    assert wait(node, 1.5) is False           # acknowledged: the first episode may start
+    assert node.subscribers_seen and not logged
