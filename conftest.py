@@ -4,7 +4,8 @@ import pathlib
 
 import pytest
 
-from hrc_common.testing import DomainReservation, NodeProcess, ros_environment
+from hrc_common.testing import (DomainReservation, NodeProcess, read_bag_with_rosbags,
+                                ros_environment)
 
 
 @pytest.fixture
@@ -110,16 +111,4 @@ def rosbags_typestore():
 @pytest.fixture
 def read_rosbag(rosbags_typestore):
     """Return a function reading a rosbag2 folder with rosbags: {topic: [decoded messages]}."""
-    import collections
-
-    from rosbags.rosbag2 import Reader
-
-    def read(folder):
-        messages = collections.defaultdict(list)
-        with Reader(folder) as reader:
-            for connection, _, raw in reader.messages():
-                messages[connection.topic].append(
-                    rosbags_typestore.deserialize_cdr(raw, connection.msgtype))
-        return messages
-
-    return read
+    return lambda folder: read_bag_with_rosbags(rosbags_typestore, folder)

@@ -70,18 +70,18 @@ def by_episode(bag):
     return grouped
 
 
-def run_both(tmp_path, domain_id: int, args: list, read_rosbag) -> tuple:
+def run_both(tmp_path, domain_id: int, args: list, read_rosbag, env=None) -> tuple:
     """Run the session of ``args`` through the graph and the engine; return both bags."""
     graph_dir, engine_dir = tmp_path / 'graph', tmp_path / 'engine'
     graph = subprocess.run(
         [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
          '--bags-dir', str(graph_dir / 'bags'), '--runs-dir', str(graph_dir / 'runs'),
-         '--no-report', *args], capture_output=True, text=True, timeout=300)
+         '--no-report', *args], capture_output=True, text=True, timeout=300, env=env)
     assert graph.returncode == 0, graph.stdout + graph.stderr
     engine = subprocess.run(
         [str(executable_path('hrc_bringup', 'hrc')), 'session', '--engine', 'inprocess',
          '--bags-dir', str(engine_dir / 'bags'), '--runs-dir', str(engine_dir / 'runs'),
-         *args], capture_output=True, text=True, timeout=300)
+         *args], capture_output=True, text=True, timeout=300, env=env)
     assert engine.returncode == 0, engine.stdout + engine.stderr
     return read_rosbag(graph_dir / 'bags' / 'same'), read_rosbag(engine_dir / 'bags' / 'same')
 
@@ -120,19 +120,52 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
     assert graph_messages['/hrc/episode'][2][0]['evaluation']
 
 
+OTHER_CASES = (1, 2, 3, 4, 6)
+# Sessions of OTHER_CASES run at once (each graph on a domain of its own, then its engine run):
+# a short graph session spends most of its wall time starting processes and discovering, not
+# computing, so three at a time take about half the wall time of one after another on 2 cores
+# (CI time); lockstep sessions do not depend on timing, so running them together changes
+# nothing they record.
+CONCURRENT_SESSIONS = 3
+
+
+@pytest.fixture(scope='module')
+def other_cases(tmp_path_factory, rosbags_typestore):
+    """Run the short session of every case of OTHER_CASES both ways; {case: result or error}."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from hrc_common.testing import DomainReservation, read_bag_with_rosbags, ros_environment
+
+    def run(case):
+        args = ['--case', str(case), '--episodes', '2', '--eval-episodes', '1', '--session-id',
+                'same', '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
+                '--set', 'agent.minibatch_size=8']
+        reservation = DomainReservation()
+        try:
+            return run_both(tmp_path_factory.mktemp(f'case{case}'), reservation.domain_id, args,
+                            lambda folder: read_bag_with_rosbags(rosbags_typestore, folder),
+                            env=ros_environment(reservation.domain_id))
+        except AssertionError as error:     # reported by the case's own test
+            return error
+        finally:
+            reservation.release()
+
+    with ThreadPoolExecutor(max_workers=CONCURRENT_SESSIONS) as pool:
+        return dict(zip(OTHER_CASES, pool.map(run, OTHER_CASES)))
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize('case', [1, 2, 3, 4, 6])
-def test_every_case_is_the_same_in_the_graph_and_the_engine(tmp_path, ros_domain_id,
-                                                           read_rosbag, case):
+@pytest.mark.parametrize('case', OTHER_CASES)
+def test_every_case_is_the_same_in_the_graph_and_the_engine(other_cases, case):
     """Short sessions of the other cases (10 steps an episode).
 
     Roles that change at an episode boundary included (cases 3 and 4 give the human the ball
     in the evaluation episode); a PPO update after the second episode.
     """
-    args = ['--case', str(case), '--episodes', '2', '--eval-episodes', '1', '--session-id',
-            'same', '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
-            '--set', 'agent.minibatch_size=8']
-    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    outcome = other_cases[case]
+    if isinstance(outcome, AssertionError):
+        raise outcome
+    graph_bag, engine_bag = outcome
     assert_same(graph_bag, engine_bag, (0, 1, 2))
 
 

@@ -5,6 +5,7 @@ each other's nodes. A node is started exactly as ``ros2 run`` would: the executa
 ``<prefix>/lib/<package>/`` through the ament index.
 """
 
+import collections
 import os
 import pathlib
 import signal
@@ -111,3 +112,15 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
     # The human's period, as the sim declares it (the human acts once a period when unset).
     node.declare_parameter('human_period', float(limits.human_step))
     return node
+
+
+def read_bag_with_rosbags(typestore, folder) -> dict:
+    """Read a rosbag2 folder with rosbags: {topic: [decoded messages]}."""
+    from rosbags.rosbag2 import Reader
+
+    messages = collections.defaultdict(list)
+    with Reader(folder) as reader:
+        for connection, _, raw in reader.messages():
+            messages[connection.topic].append(
+                typestore.deserialize_cdr(raw, connection.msgtype))
+    return messages
