@@ -35,7 +35,6 @@ import threading
 import time
 
 
-
 def session_parameters(case: int, seed: int, episodes: int) -> dict:
     """Return the session's composed node parameters (as ``session`` would run them)."""
     from hrc_common.session_plan import SessionSettings

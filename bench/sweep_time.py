@@ -23,6 +23,7 @@ import sys
 import tempfile
 import time
 
+from hrc_common.contract import paper_case_ids
 
 
 def one_session(case: int, seed: int, work: str) -> tuple:
@@ -63,7 +64,7 @@ def cpu_seconds() -> float:
 def main() -> int:
     """Run the sweep and print its timing."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6])
+    parser.add_argument('--cases', type=int, nargs='+', default=list(paper_case_ids()))
     parser.add_argument('--seeds', type=int, default=10)
     parser.add_argument('--workers', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--graph-sample', type=int, default=0,

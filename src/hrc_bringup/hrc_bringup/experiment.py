@@ -44,7 +44,7 @@ import multiprocessing
 import time
 
 from hrc_common import paths
-from hrc_common.contract import case_problem
+from hrc_common.contract import case_problem, paper_case_ids
 from hrc_common.session_plan import package_version, parse_overrides, SessionSettings
 
 from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
@@ -120,8 +120,9 @@ def parse_args(argv=None):
         prog='hrc experiment', description='Run paper cases x seeds (x simulated-human profiles) '
         'headless, each session a task on a local process pool or a Ray cluster, then write '
         'the study of all sessions (hrc_study).')
-    parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6],
-                        help='cases to run (default 1 2 3 4 5 6)')
+    parser.add_argument('--cases', type=int, nargs='+', default=list(paper_case_ids()),
+                        help="cases to run (default: the paper's of params/cases.yaml, "
+                        f"{' '.join(map(str, paper_case_ids()))})")
     parser.add_argument('--seeds', type=int, default=10,
                         help='seeds per case, each a different simulated person (default 10)')
     parser.add_argument('--first-seed', type=int, default=0, help='first seed (default 0)')

@@ -1,17 +1,17 @@
 """hrc_common.session_plan: one consistent parameter set per session."""
 
 from dataclasses import fields
-import pathlib
 
 import pytest
 import yaml
 
+from hrc_common.paths import params_dir
 from hrc_common.params import spec_of
 from hrc_common.session_plan import (compose, new_session_id, override_arguments,
                                      parse_override, parse_overrides, SessionSettings,
                                      write_session_files)
 
-PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
+PARAMS = params_dir()
 
 
 def test_roles_of_the_six_cases():
