@@ -142,29 +142,38 @@ def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     return 0, ''
 
 
+def graph_arguments(settings: SessionSettings, params_dir: str, domain_id: int) -> list:
+    """Return the ``hrc session`` arguments that run ``settings`` as the graph (no report).
+
+    ``hrc session`` parses them back into the same SessionSettings (a test checks it).
+    """
+    arguments = ['--case', str(settings.case), '--seed', str(settings.seed), '--session-id',
+                 settings.session_id, '--bags-dir', settings.bags_dir, '--no-report',
+                 '--runs-dir', settings.runs_dir, '--params-dir', params_dir,
+                 '--domain-id', str(domain_id)]
+    if settings.human_profile:
+        arguments += ['--profile', settings.human_profile]
+    if settings.resume_from:
+        arguments += ['--resume-from', settings.resume_from]
+    if settings.training_episodes > 0:
+        arguments += ['--episodes', str(settings.training_episodes)]
+    if settings.evaluation_episodes >= 0:
+        arguments += ['--eval-episodes', str(settings.evaluation_episodes)]
+    return arguments + override_arguments(settings.overrides)
+
+
 def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
     reservation = DomainReservation()
     try:
-        settings = task.settings
-        command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case',
-                   str(settings.case), '--seed', str(settings.seed), '--session-id',
-                   settings.session_id, '--bags-dir', str(bags_dir), '--no-report',
-                   '--runs-dir', settings.runs_dir,
-                   '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
-        if settings.human_profile:
-            command += ['--profile', settings.human_profile]
+        settings = replace(task.settings, bags_dir=str(bags_dir))
         # partners first: the session starts from the pre-trained checkpoint, its budget on top
         start = pretrain_partners_first(task, bags_dir)
-        episodes = settings.training_episodes if start is None \
-            else start['max_training_episodes']
         if start is not None:
-            command += ['--resume-from', start['resume_from']]
-        if episodes > 0:
-            command += ['--episodes', str(episodes)]
-        if settings.evaluation_episodes >= 0:
-            command += ['--eval-episodes', str(settings.evaluation_episodes)]
-        command += override_arguments(settings.overrides)
+            settings.resume_from = start['resume_from']
+            settings.training_episodes = start['max_training_episodes']
+        command = [str(executable_path('hrc_bringup', 'hrc')), 'session',
+                   *graph_arguments(settings, task.params_dir, reservation.domain_id)]
         task.sweep_runs_dir.mkdir(parents=True, exist_ok=True)
         with open(task.sweep_runs_dir / f'{task.session_id}.log', 'wb') as log:
             code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode
