@@ -10,6 +10,8 @@ without a seed is seeded with the session's seed. The environment's own keywords
 from one place only: given both ways they are refused.
 """
 
+from dataclasses import replace
+
 from hrc_common.params import from_dict, ParameterError
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import compose, SessionSettings
@@ -45,7 +47,7 @@ def session_keywords(session: SessionSettings, keywords: dict, physics_params) -
     if reasons:
         raise ParameterError('session rejected: ' + '; '.join(reasons), reasons)
     # record False: no recorder section to compose (an environment records nothing)
-    parameters = compose(SessionSettings(**{**vars(session), 'record': False}), params_dir())
+    parameters = compose(replace(session, record=False), params_dir())
     sim = from_dict(SimParams, parameters['sim'])
     return (dict(keywords, case=session.case, human=parameters['human']['profile']),
             physics_params_of(sim))
