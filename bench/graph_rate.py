@@ -34,16 +34,13 @@ import tempfile
 import threading
 import time
 
-REPOSITORY = pathlib.Path(__file__).resolve().parents[1]
-
 
 def session_parameters(case: int, seed: int, episodes: int) -> dict:
     """Return the session's composed node parameters (as ``session`` would run them)."""
+    from hrc_common.session_plan import SessionSettings
     from hrc_engine.engine import compose_parameters, EngineConfig
-    params_dir = REPOSITORY / 'params'
-    _, parameters = compose_parameters(EngineConfig(
-        case=case, seed=seed, training_episodes=episodes + 1, session_id='bench',
-        params_dir=str(params_dir) if params_dir.is_dir() else ''))
+    _, parameters = compose_parameters(EngineConfig(SessionSettings(
+        case=case, seed=seed, training_episodes=episodes + 1, session_id='bench')))
     return parameters
 
 
@@ -85,13 +82,13 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
 def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
                 human_period: float = None) -> float:
     """Return median steps/s of the in-process engine's episodes (bags written)."""
+    from hrc_common.session_plan import SessionSettings
     from hrc_engine.engine import EngineConfig, run_session
-    params_dir = REPOSITORY / 'params'
-    result = run_session(EngineConfig(
+    result = run_session(EngineConfig(SessionSettings(
         case=case, seed=seed, training_episodes=episodes, evaluation_episodes=0,
         session_id=f'engine-{time.time_ns()}', bags_dir=str(work / 'bags'),
-        runs_dir=str(work / 'runs'), params_dir=str(params_dir) if params_dir.is_dir() else '',
-        overrides={} if human_period is None else {'sim.human_period': human_period}))
+        runs_dir=str(work / 'runs'),
+        overrides={} if human_period is None else {'sim.human_period': human_period})))
     steps = [episode['steps'] for episode in result.episodes]
     return statistics.median(step / seconds
                              for step, seconds in zip(steps, result.episode_seconds))
@@ -160,8 +157,6 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
                '--seed', str(seed), '--episodes', str(episodes), '--eval-episodes', '0',
                '--domain-id', str(domain_id), '--no-report', '--bags-dir', str(work / 'bags'),
                '--runs-dir', str(work / 'runs'), '--session-id', name]
-    if (REPOSITORY / 'params').is_dir():
-        command += ['--params-dir', str(REPOSITORY / 'params')]
     if not record:
         command.append('--no-record')
     if human_period is not None:

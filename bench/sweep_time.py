@@ -23,23 +23,18 @@ import sys
 import tempfile
 import time
 
-REPOSITORY = pathlib.Path(__file__).resolve().parents[1]
-
-
-def params_dir() -> str:
-    """Return this checkout's params/ when there is one ('' = the installed files)."""
-    folder = REPOSITORY / 'params'
-    return str(folder) if folder.is_dir() else ''
+from hrc_common.contract import paper_case_ids
 
 
 def one_session(case: int, seed: int, work: str) -> tuple:
     """Run one session in this worker; return (case, seed, steps, wall s, evaluation error)."""
+    from hrc_common.session_plan import SessionSettings
     from hrc_engine.engine import EngineConfig, run_session
     started = time.perf_counter()
-    result = run_session(EngineConfig(
+    # the parameter files: hrc_common.paths.params_dir() (this checkout's params/ in a checkout)
+    result = run_session(EngineConfig(SessionSettings(
         case=case, seed=seed, session_id=f'case{case}-seed{seed}',
-        bags_dir=os.path.join(work, 'bags'), runs_dir=os.path.join(work, 'runs'),
-        params_dir=params_dir()))
+        bags_dir=os.path.join(work, 'bags'), runs_dir=os.path.join(work, 'runs'))))
     return (case, seed, result.steps, time.perf_counter() - started,
             result.evaluation.get('total_error', float('nan')))
 
@@ -52,8 +47,6 @@ def graph_session_seconds(case: int, seed: int, work: pathlib.Path, domain_id: i
                str(seed), '--domain-id', str(domain_id), '--no-report', '--bags-dir',
                str(work / 'graph-bags'), '--runs-dir', str(work / 'graph-runs'),
                '--session-id', f'graph-case{case}-seed{seed}']
-    if params_dir():
-        command += ['--params-dir', params_dir()]
     started = time.perf_counter()
     done = subprocess.run(command, capture_output=True, text=True, cwd=work)
     if done.returncode != 0:
@@ -71,7 +64,7 @@ def cpu_seconds() -> float:
 def main() -> int:
     """Run the sweep and print its timing."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6])
+    parser.add_argument('--cases', type=int, nargs='+', default=list(paper_case_ids()))
     parser.add_argument('--seeds', type=int, default=10)
     parser.add_argument('--workers', type=int, default=os.cpu_count() or 1)
     parser.add_argument('--graph-sample', type=int, default=0,

@@ -19,6 +19,7 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import make_partner, run_session
+from hrc_common.contract import paper_case_ids
 from hrc_common.params import with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
@@ -40,7 +41,7 @@ def main(argv=None) -> int:
     """Run the grid (one process per core) and print a table and JSON lines."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--presets', nargs='+', default=['paper', 'tuned'])
-    parser.add_argument('--cases', nargs='+', type=int, default=[1, 2, 3, 4, 5, 6])
+    parser.add_argument('--cases', nargs='+', type=int, default=list(paper_case_ids()))
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--episodes', type=int, default=300, help='max training episodes')
     parser.add_argument('--evaluation-episodes', type=int, default=5)

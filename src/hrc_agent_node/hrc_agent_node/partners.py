@@ -85,6 +85,8 @@ def person_seed(session_seed: int, draw: int) -> int:
 class SimulatedHumanPartner:
     """``hrc_joystick_node``'s simulated human as an offline partner, alone or as a population.
 
+    ``control_period``: the sim's (``SimLimits.control_period``), the s between calls; no default.
+
     ``population_every`` 0: one person, the profile itself, for the whole session (fatigue,
     practice and adaptation carry over between episodes). N > 0: population training, a new
     person drawn with ``sample_person(profile, person_seed(seed, episode // N))`` every N
@@ -94,7 +96,7 @@ class SimulatedHumanPartner:
     offline loop does).
     """
 
-    def __init__(self, profile, dof: str, seed: int = 0, control_period: float = 0.2,
+    def __init__(self, profile, dof: str, seed: int, control_period: float,
                  population_every: int = 0):
         if population_every < 0:
             raise ValueError(f'population_every must be >= 0, got {population_every}')

@@ -11,6 +11,7 @@ from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
 PROFILE = load_profile('paper')
 
 
@@ -24,24 +25,28 @@ def persons(partner, episodes):
 
 
 def test_without_population_one_person_the_profile_itself():
-    partner = SimulatedHumanPartner(PROFILE, 'rotation', seed=3)
+    partner = SimulatedHumanPartner(PROFILE, 'rotation', seed=3, control_period=CONTROL_PERIOD)
     partner.start_episode(0)
     human = partner.human
     assert persons(partner, 4) == [PROFILE] * 4 and partner.human is human
 
 
 def test_a_new_person_every_episode_reproducible_from_the_seed():
-    met = persons(SimulatedHumanPartner(PROFILE, 'rotation', seed=3, population_every=1), 5)
+    met = persons(SimulatedHumanPartner(PROFILE, 'rotation', seed=3, population_every=1,
+                                        control_period=CONTROL_PERIOD), 5)
     assert len({person.reaction_delay for person in met}) == 5
     assert all(person != PROFILE for person in met)
     assert met == persons(SimulatedHumanPartner(PROFILE, 'rotation', seed=3,
-                                                population_every=1), 5)
-    other = persons(SimulatedHumanPartner(PROFILE, 'rotation', seed=4, population_every=1), 5)
+                                                population_every=1,
+                                                control_period=CONTROL_PERIOD), 5)
+    other = persons(SimulatedHumanPartner(PROFILE, 'rotation', seed=4, population_every=1,
+                                          control_period=CONTROL_PERIOD), 5)
     assert [p.reaction_delay for p in other] != [p.reaction_delay for p in met]
 
 
 def test_a_new_person_every_batch_of_episodes():
-    met = persons(SimulatedHumanPartner(PROFILE, 'translation', seed=1, population_every=3), 7)
+    met = persons(SimulatedHumanPartner(PROFILE, 'translation', seed=1, population_every=3,
+                                        control_period=CONTROL_PERIOD), 7)
     assert met[0] == met[1] == met[2] != met[3]
     assert met[3] == met[4] == met[5] != met[6]
 

@@ -44,8 +44,8 @@ import multiprocessing
 import time
 
 from hrc_common import paths
-from hrc_common.contract import case_problem
-from hrc_common.session_plan import package_version, parse_overrides
+from hrc_common.contract import case_problem, paper_case_ids
+from hrc_common.session_plan import package_version, parse_overrides, SessionSettings
 
 from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
 from hrc_bringup.time_left import TimeLeft
@@ -120,8 +120,9 @@ def parse_args(argv=None):
         prog='hrc experiment', description='Run paper cases x seeds (x simulated-human profiles) '
         'headless, each session a task on a local process pool or a Ray cluster, then write '
         'the study of all sessions (hrc_study).')
-    parser.add_argument('--cases', type=int, nargs='+', default=[1, 2, 3, 4, 5, 6],
-                        help='cases to run (default 1 2 3 4 5 6)')
+    parser.add_argument('--cases', type=int, nargs='+', default=list(paper_case_ids()),
+                        help="cases to run (default: the paper's of params/cases.yaml, "
+                        f"{' '.join(map(str, paper_case_ids()))})")
     parser.add_argument('--seeds', type=int, default=10,
                         help='seeds per case, each a different simulated person (default 10)')
     parser.add_argument('--first-seed', type=int, default=0, help='first seed (default 0)')
@@ -217,19 +218,21 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
     planned = sorted(((seed_index / seeds, order.index(profile), seed_index, profile)
                       for profile, seeds in options.profile_seeds.items()
                       for seed_index in range(seeds)))
-    return [SessionTask(case=case, seed=options.first_seed + seed_index, profile=profile,
-                        session_id=session_id_of(case, options.first_seed + seed_index,
-                                                 profile, order),
-                        engine=options.engine, bags_dir=str(bags_dir.resolve()),
-                        runs_dir=str(runs_dir.resolve()),
+    return [SessionTask(
+        SessionSettings(case=case, seed=options.first_seed + seed_index, human_profile=profile,
+                        session_id=(session_id := session_id_of(
+                            case, options.first_seed + seed_index, profile, order)),
+                        bags_dir=str(bags_dir.resolve()),
+                        runs_dir=str(runs_dir.resolve() / session_id),
                         training_episodes=options.episodes,
                         evaluation_episodes=options.eval_episodes,
-                        overrides=person_override(options, options.first_seed + seed_index)
-                        + tuple(options.overrides), params_dir=params_dir,
-                        pull_bags=options.pull_bags, checkpoints=options.checkpoints,
-                        not_after=not_after)
-            for _, _, seed_index, profile in planned
-            for case in options.cases]
+                        overrides=parse_overrides(
+                            person_override(options, options.first_seed + seed_index)
+                            + tuple(options.overrides))),
+        engine=options.engine, params_dir=params_dir, pull_bags=options.pull_bags,
+        checkpoints=options.checkpoints, not_after=not_after)
+        for _, _, seed_index, profile in planned
+        for case in options.cases]
 
 
 def person_override(options, seed: int) -> tuple:

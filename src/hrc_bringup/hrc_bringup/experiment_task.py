@@ -8,7 +8,7 @@ filesystem: :func:`pack_folder` / :func:`unpack_folder`). The sweep itself (exec
 line, report) is ``hrc_bringup.experiment``.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import io
 import os
 import pathlib
@@ -24,29 +24,36 @@ import time
 from hrc_common.contract import make_session_id
 from hrc_common.domains import DomainReservation
 from hrc_common.executables import executable_path
-from hrc_common.session_plan import parse_overrides
+from hrc_common.session_plan import override_arguments, SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_partners.partners_first import prepare_person_session
 
 
 @dataclass(frozen=True)
 class SessionTask:
-    """One session of the sweep: everything a worker needs, as plain values (picklable)."""
+    """One session of the sweep: everything a worker needs, as plain values (picklable).
 
-    case: int
-    seed: int
-    profile: str                    # simulated-human profile ('' = the human node's default)
-    session_id: str
+    ``settings`` is the session (the one session configuration, as ``hrc session`` takes it):
+    its ``bags_dir`` is ``<bags-dir>/<name>`` and its ``runs_dir`` ``<runs-dir>/<name>/<id>``,
+    both absolute; the other fields are how the sweep runs it.
+    """
+
+    settings: SessionSettings
     engine: str                     # inprocess | graph
-    bags_dir: str                   # absolute: <bags-dir>/<name> (the session adds its id)
-    runs_dir: str                   # absolute: <runs-dir>/<name>
-    training_episodes: int          # max training episodes (0 = params/agent.yaml)
-    evaluation_episodes: int        # final evaluation episodes (-1 = params/agent.yaml)
-    overrides: tuple                # ('node.param=value', ...) as given on the command line
     params_dir: str                 # the parameter files, resolved on the driver
     pull_bags: bool                 # return the session folder packed (no shared filesystem)
     checkpoints: bool = False       # in-process: write the agent's checkpoints (resumable)
     not_after: float = 0.0          # epoch s: a task not started by then is skipped (0: none)
+
+    @property
+    def session_id(self) -> str:
+        """Return the session's id (its bag and run folders' name)."""
+        return self.settings.session_id
+
+    @property
+    def sweep_runs_dir(self) -> pathlib.Path:
+        """Return the sweep's runs folder (each session's log lands there)."""
+        return pathlib.Path(self.settings.runs_dir).parent
 
 
 def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
@@ -58,9 +65,11 @@ def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
 def run_task(task: SessionTask) -> dict:
     """Run one session on this worker; return its outcome (never raises)."""
     started, cpu_started = time.monotonic(), _cpu_seconds()
-    outcome = {'session_id': task.session_id, 'case': task.case, 'seed': task.seed,
-               'profile': task.profile, 'engine': task.engine, 'host': socket.gethostname(),
-               'worker_pid': os.getpid(), 'exit_code': 1, 'error': ''}
+    settings = task.settings
+    outcome = {'session_id': settings.session_id, 'case': settings.case, 'seed': settings.seed,
+               'profile': settings.human_profile, 'engine': task.engine,
+               'host': socket.gethostname(), 'worker_pid': os.getpid(), 'exit_code': 1,
+               'error': ''}
     if task.not_after and time.time() > task.not_after:
         outcome.update(exit_code=None, error='skipped: --stop-after passed', seconds=0.0)
         return outcome
@@ -69,7 +78,7 @@ def run_task(task: SessionTask) -> dict:
         if node:
             outcome['ray_node'] = node
         bags_dir = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bags-')) if task.pull_bags \
-            else pathlib.Path(task.bags_dir)
+            else pathlib.Path(settings.bags_dir)
         runner = run_inprocess if task.engine == 'inprocess' else run_graph
         try:
             outcome['exit_code'], outcome['error'] = runner(task, bags_dir)
@@ -104,13 +113,9 @@ def _ray_node_id() -> str:
 
 
 def engine_config_of(task: SessionTask, bags_dir: pathlib.Path) -> EngineConfig:
-    """Return the in-process engine's configuration of a task."""
-    return EngineConfig(
-        case=task.case, seed=task.seed, training_episodes=task.training_episodes,
-        evaluation_episodes=task.evaluation_episodes, session_id=task.session_id,
-        bags_dir=str(bags_dir), runs_dir=str(pathlib.Path(task.runs_dir) / task.session_id),
-        human_profile=task.profile, overrides=parse_overrides(task.overrides),
-        params_dir=task.params_dir, checkpoints=task.checkpoints)
+    """Return the in-process engine's configuration of a task (its bags in ``bags_dir``)."""
+    return EngineConfig(replace(task.settings, bags_dir=str(bags_dir)),
+                        params_dir=task.params_dir, checkpoints=task.checkpoints)
 
 
 def pretrain_partners_first(task: SessionTask, bags_dir: pathlib.Path):
@@ -121,7 +126,7 @@ def pretrain_partners_first(task: SessionTask, bags_dir: pathlib.Path):
     files go to the session's run folder.
     """
     _, parameters = compose_parameters(engine_config_of(task, bags_dir))
-    session_dir = pathlib.Path(task.runs_dir) / task.session_id / task.session_id
+    session_dir = pathlib.Path(task.settings.runs_dir) / task.session_id
     session_dir.mkdir(parents=True, exist_ok=True)
     return prepare_person_session(parameters, session_dir)
 
@@ -131,36 +136,46 @@ def run_inprocess(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     config = engine_config_of(task, bags_dir)
     start = pretrain_partners_first(task, bags_dir)
     if start is not None:
-        config.resume_from = start['resume_from']
-        config.training_episodes = start['max_training_episodes']
+        config.settings.resume_from = start['resume_from']
+        config.settings.training_episodes = start['max_training_episodes']
     run_session(config)
     return 0, ''
+
+
+def graph_arguments(settings: SessionSettings, params_dir: str, domain_id: int) -> list:
+    """Return the ``hrc session`` arguments that run ``settings`` as the graph (no report).
+
+    ``hrc session`` parses them back into the same SessionSettings (a test checks it).
+    """
+    arguments = ['--case', str(settings.case), '--seed', str(settings.seed), '--session-id',
+                 settings.session_id, '--bags-dir', settings.bags_dir, '--no-report',
+                 '--runs-dir', settings.runs_dir, '--params-dir', params_dir,
+                 '--domain-id', str(domain_id)]
+    if settings.human_profile:
+        arguments += ['--profile', settings.human_profile]
+    if settings.resume_from:
+        arguments += ['--resume-from', settings.resume_from]
+    if settings.training_episodes > 0:
+        arguments += ['--episodes', str(settings.training_episodes)]
+    if settings.evaluation_episodes >= 0:
+        arguments += ['--eval-episodes', str(settings.evaluation_episodes)]
+    return arguments + override_arguments(settings.overrides)
 
 
 def run_graph(task: SessionTask, bags_dir: pathlib.Path) -> tuple:
     """Run the session as the ROS graph on a domain reserved on this machine."""
     reservation = DomainReservation()
     try:
-        command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(task.case),
-                   '--seed', str(task.seed), '--session-id', task.session_id,
-                   '--bags-dir', str(bags_dir), '--no-report',
-                   '--runs-dir', str(pathlib.Path(task.runs_dir) / task.session_id),
-                   '--params-dir', task.params_dir, '--domain-id', str(reservation.domain_id)]
-        if task.profile:
-            command += ['--profile', task.profile]
+        settings = replace(task.settings, bags_dir=str(bags_dir))
         # partners first: the session starts from the pre-trained checkpoint, its budget on top
         start = pretrain_partners_first(task, bags_dir)
-        episodes = task.training_episodes if start is None else start['max_training_episodes']
         if start is not None:
-            command += ['--resume-from', start['resume_from']]
-        if episodes > 0:
-            command += ['--episodes', str(episodes)]
-        if task.evaluation_episodes >= 0:
-            command += ['--eval-episodes', str(task.evaluation_episodes)]
-        for override in task.overrides:
-            command += ['--set', override]
-        pathlib.Path(task.runs_dir).mkdir(parents=True, exist_ok=True)
-        with open(pathlib.Path(task.runs_dir) / f'{task.session_id}.log', 'wb') as log:
+            settings.resume_from = start['resume_from']
+            settings.training_episodes = start['max_training_episodes']
+        command = [str(executable_path('hrc_bringup', 'hrc')), 'session',
+                   *graph_arguments(settings, task.params_dir, reservation.domain_id)]
+        task.sweep_runs_dir.mkdir(parents=True, exist_ok=True)
+        with open(task.sweep_runs_dir / f'{task.session_id}.log', 'wb') as log:
             code = subprocess.run(command, stdout=log, stderr=subprocess.STDOUT).returncode
     finally:
         reservation.release()

@@ -9,6 +9,7 @@ import pytest
 import yaml
 
 from hrc_bringup.experiment_task import run_task, SessionTask
+from hrc_common.session_plan import parse_overrides, SessionSettings
 from hrc_common.paths import params_dir
 from hrc_study.loading import load_sessions
 
@@ -20,13 +21,16 @@ def test_a_case_8_task_pretrains_then_runs_the_person_from_the_checkpoint(tmp_pa
         subtask['tolerance'] = 100.0
     easy = tmp_path / 'easy_tree.yaml'
     easy.write_text(yaml.safe_dump(tree))
-    task = SessionTask(
-        case=8, seed=0, profile='', session_id='case8-seed0', engine='inprocess',
-        bags_dir=str(tmp_path / 'bags'), runs_dir=str(tmp_path / 'runs'), training_episodes=30,
-        evaluation_episodes=1, params_dir=str(params_dir()), pull_bags=False,
-        overrides=('sim.episode_duration=2.0', 'agent.horizon=20', 'agent.minibatch_size=10',
-                   'agent.convergence_window=1', 'agent.judging_rule=in_a_row',
-                   f'agent.task_tree_file={easy}', 'human.person=0'))
+    settings = SessionSettings(
+        case=8, seed=0, session_id='case8-seed0', bags_dir=str(tmp_path / 'bags'),
+        runs_dir=str(tmp_path / 'runs' / 'case8-seed0'), training_episodes=30,
+        evaluation_episodes=1,
+        overrides=parse_overrides(('sim.episode_duration=2.0', 'agent.horizon=20',
+                                   'agent.minibatch_size=10', 'agent.convergence_window=1',
+                                   'agent.judging_rule=in_a_row',
+                                   f'agent.task_tree_file={easy}', 'human.person=0')))
+    task = SessionTask(settings, engine='inprocess', params_dir=str(params_dir()),
+                       pull_bags=False)
     outcome = run_task(task)
     assert outcome['exit_code'] == 0, outcome['error']
     record = json.loads((tmp_path / 'runs' / 'case8-seed0' / 'case8-seed0'

@@ -408,6 +408,9 @@ class CaseSpec:
     strategy: str
     robot_dof: str
     human_dof: str
+    # A step of its strategy trains with a simulated population (``partner: population``, the
+    # partners-first strategy this project adds): not one of the paper's cases.
+    population_steps: bool = False
 
 
 def cases_file_path() -> str:
@@ -475,7 +478,11 @@ def check_case_table(document) -> tuple:
             problems.append(f'case {case_id}: robot_action {robot!r} is not an action; the '
                             f'actions: {list(DOFS)}')
         elif known_strategy:
-            table[case_id] = CaseSpec(case_id, strategy, robot, other_dof(robot))
+            steps = strategies[strategy].get('steps') if isinstance(strategies[strategy],
+                                                                    dict) else None
+            population = any(isinstance(step, dict) and step.get('partner') == 'population'
+                             for step in (steps if isinstance(steps, list) else ()))
+            table[case_id] = CaseSpec(case_id, strategy, robot, other_dof(robot), population)
     return dict(sorted(table.items())), problems
 
 
@@ -488,6 +495,17 @@ def case_table() -> dict:
 def case_ids() -> tuple:
     """Return the ids of the defined cases, ascending."""
     return tuple(case_table())
+
+
+def paper_case_ids() -> tuple:
+    """Return the ids of the paper's cases of params/cases.yaml, ascending (1..6 in the file).
+
+    A paper case: its strategy has no step with a simulated population (partners first, cases
+    7-8, is this project's addition). The one definition for whatever studies, sweeps or
+    figures "the paper's six cases".
+    """
+    return tuple(case_id for case_id, spec in case_table().items()
+                 if not spec.population_steps)
 
 
 def case_problem(case) -> str:

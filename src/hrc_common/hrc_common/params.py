@@ -51,10 +51,16 @@ class ParamSpec:
 
 
 def param(default, description, *, low=None, high=None, choices=None, read_only=True):
-    """Make a dataclass field with its documentation and bounds (lists are copied per instance)."""
+    """Make a dataclass field with its documentation and bounds.
+
+    Lists and dicts are copied per instance (a dict: the session's ``--set`` overrides; no
+    node parameter is a mapping).
+    """
     spec = ParamSpec(description, low, high, tuple(choices) if choices else None, read_only)
     if isinstance(default, list):
         return field(default_factory=lambda: list(default), metadata={'spec': spec})
+    if isinstance(default, dict):
+        return field(default_factory=lambda: dict(default), metadata={'spec': spec})
     return field(default=default, metadata={'spec': spec})
 
 
@@ -101,9 +107,19 @@ def _check_value(name, value, default, spec):
             if unknown:
                 reasons.append(f'{name}: {unknown} not among {list(spec.choices)}')
         return reasons
+    elif isinstance(default, dict):
+        if not isinstance(value, dict):
+            return [f'{name}: expected a mapping, got {value!r}']
+        return reasons
     if spec.choices is not None and value not in spec.choices:
         reasons.append(f'{name}: {value!r} is not one of {list(spec.choices)}')
     return reasons
+
+
+def field_problems(dataclass_field, value) -> list:
+    """Return the reasons ``value`` does not fit one field made with :func:`param`."""
+    return _check_value(dataclass_field.name, value, default_of(dataclass_field),
+                        spec_of(dataclass_field))
 
 
 def validate(instance) -> list:

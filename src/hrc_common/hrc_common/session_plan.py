@@ -12,7 +12,7 @@ sim at run time): an override those settings overrule is refused with the option
 node plus a ``session.yaml`` describing the whole session (it travels in every bag).
 """
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, fields
 import datetime
 import pathlib
 import subprocess
@@ -21,6 +21,7 @@ import yaml
 
 from hrc_common.contract import (atomic_write, case_problem, case_table, id_problem,
                                  make_session_id, PERSONAL_FILE_MODE)
+from hrc_common.params import field_problems, param
 
 # Node name -> (package, executable, parameter file). The node name is the section of the file.
 NODES = {
@@ -49,41 +50,70 @@ def study_learning_arguments() -> list:
             for item in ('--set', f'{key}={value}')]
 
 
+# The settings a session owns that are not one node's parameter: checked here, not by a node.
+SESSION_MODES = ('lockstep', 'realtime')
+
+
 @dataclass
 class SessionSettings:
-    """What a user chooses for a session; everything else comes from the parameter files."""
+    """What a user chooses for one session: the one session configuration (issue 20).
 
-    case: int = 2
-    seed: int = 0
-    mode: str = 'lockstep'
-    human_input: str = 'sim'
-    human_profile: str = ''
-    training_episodes: int = 0
-    evaluation_episodes: int = -1
-    session_id: str = ''
-    bags_dir: str = 'bags'
-    runs_dir: str = 'runs'
-    record: bool = True
-    resume_from: str = ''
-    subject_id: str = ''
-    notes: str = ''
-    overrides: dict = field(default_factory=dict)
+    The graph runner (``hrc session``), the in-process engine (``hrc_engine.engine``), the
+    experiment's tasks (``hrc_bringup.experiment_task``) and the Gymnasium environment
+    (``hrc_gym``: case, seed, profile, overrides) all take one of these; everything else comes
+    from the parameter files (``params/<node>.yaml``) through :func:`compose`. Each field is
+    documented with :func:`hrc_common.params.param`; :meth:`check` returns every reason at once.
+    """
+
+    case: int = param(2, 'Case of params/cases.yaml (the only case table): strategy and which '
+                         "degree of freedom the robot drives; 1..6 the paper's, 7-8 partners "
+                         'first')
+    seed: int = param(0, 'Session seed, given to the sim, the agent and the human', low=0)
+    mode: str = param('lockstep', 'Clock: lockstep (the sim waits for both commands) or '
+                                  'realtime (wall-clock periods; a person at a device)',
+                      choices=SESSION_MODES)
+    human_input: str = param('sim', "The human node's input (human.yaml's input: sim, model, "
+                                    'script, device, joy, auto; the human node checks it)')
+    human_profile: str = param('', "Simulated-human profile of params/sim_human.yaml ('' = "
+                                   "human.yaml's)")
+    training_episodes: int = param(0, "Max training episodes (0 = agent.yaml's "
+                                      'max_training_episodes)', low=0)
+    evaluation_episodes: int = param(-1, "Evaluation episodes (-1 = agent.yaml's)", low=-1)
+    session_id: str = param('', "Session id, names the bag and run folders ('' = "
+                                'case<N>-seed<S>-<time>)')
+    bags_dir: str = param('bags', 'Bags land in <bags_dir>/<session_id>/')
+    runs_dir: str = param('runs', 'session.yaml in <runs_dir>/<session_id>/, checkpoints in '
+                                  '<runs_dir>/checkpoints/<session_id>/')
+    record: bool = param(True, 'Record the session (the recorder node; the engine writes the '
+                               'same bags)')
+    resume_from: str = param('', "A checkpoint to continue from ('' = a new agent)")
+    subject_id: str = param('', "The person's study id (kept in session.yaml, owner-only; never "
+                                'in a file name)')
+    notes: str = param('', 'Free text kept in session.yaml (owner-only)')
+    overrides: dict = param({}, "Node parameters over the files: {'node.name': value} (--set "
+                                'node.name=value, YAML values)')
 
     def check(self) -> list:
-        """Return the reasons these settings are unusable (empty if fine)."""
+        """Return every reason these settings are unusable at once (empty if fine)."""
         reasons = []
+        for dataclass_field in fields(self):
+            if dataclass_field.name in ('case', 'mode', 'seed'):
+                continue   # their own reasons below (the case from the case table)
+            reasons += field_problems(dataclass_field, getattr(self, dataclass_field.name))
         problem = case_problem(self.case)
         if problem:
             reasons.append(problem)
-        if self.mode not in ('lockstep', 'realtime'):
+        if self.mode not in SESSION_MODES:
             reasons.append(f"mode must be 'lockstep' or 'realtime', got {self.mode!r}")
-        if self.seed < 0:
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
+            reasons.append(f'seed must be an integer >= 0, got {self.seed!r}')
+        elif self.seed < 0:
             reasons.append(f'seed must be >= 0, got {self.seed}')
-        for key in self.overrides:
+        for key in self.overrides if isinstance(self.overrides, dict) else ():
             if key.split('.', 1)[0] not in NODES:
                 reasons.append(f'--set {key}: the node must be one of {sorted(NODES)}')
         for value, what in ((self.session_id, 'session id'), (self.subject_id, 'subject id')):
-            problem = value and id_problem(value, what)
+            problem = isinstance(value, str) and value and id_problem(value, what)
             if problem:
                 reasons.append(problem)
         return reasons
@@ -119,6 +149,19 @@ def parse_overrides(texts) -> dict:
     if reasons:
         raise ValueError('; '.join(reasons))
     return overrides
+
+
+def override_arguments(overrides: dict) -> list:
+    """Return ``overrides`` ({'node.name': value}) as ``['--set', 'node.name=value', ...]``.
+
+    Each value in YAML flow syntax, so :func:`parse_overrides` reads back the same value.
+    """
+    arguments = []
+    for key, value in overrides.items():
+        text = yaml.safe_dump(value, default_flow_style=True, width=float('inf'))
+        text = text[:-len('...\n')] if text.endswith('\n...\n') else text
+        arguments += ['--set', f'{key}={text.strip()}']
+    return arguments
 
 
 def load_node_parameters(params_dir: pathlib.Path, node: str) -> dict:

@@ -8,9 +8,21 @@ two packages, so it lives here (hrc_bag sits below hrc_live). The rest of the st
 
 from dataclasses import dataclass
 
+from hrc_common.contract import paper_case_ids
+
 INDEX_FILE = 'index.yaml'
 SESSION_KINDS = ('practice', 'condition')
-PAPER_CASES = (1, 2, 3, 4, 5, 6)
+
+
+def __getattr__(name):
+    """Return ``PAPER_CASES``: the paper's cases of params/cases.yaml (``paper_case_ids``).
+
+    Read when first asked for (not at import: a broken cases file is reported by whoever needs
+    the cases, with its reasons), never a copy of the case table.
+    """
+    if name == 'PAPER_CASES':
+        return paper_case_ids()
+    raise AttributeError(f'module {__name__!r} has no attribute {name!r}')
 
 
 @dataclass

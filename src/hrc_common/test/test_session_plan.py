@@ -1,14 +1,17 @@
 """hrc_common.session_plan: one consistent parameter set per session."""
 
-import pathlib
+from dataclasses import fields
 
 import pytest
 import yaml
 
-from hrc_common.session_plan import (compose, new_session_id, parse_override, SessionSettings,
+from hrc_common.paths import params_dir
+from hrc_common.params import spec_of
+from hrc_common.session_plan import (compose, new_session_id, override_arguments,
+                                     parse_override, parse_overrides, SessionSettings,
                                      write_session_files)
 
-PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
+PARAMS = params_dir()
 
 
 def test_roles_of_the_six_cases():
@@ -110,3 +113,34 @@ def test_the_study_learning_settings_are_agent_parameters_the_session_takes():
         assert name in defaults and defaults[name] != value, key   # a real change of default
         assert agent[name] == value
     assert study_learning_arguments()[:2] == ['--set', 'agent.update_rule=horizon_or_episode_end']
+
+
+def test_every_setting_is_documented_and_checked_with_every_reason_at_once():
+    """The one session configuration: each field carries its description (params.param)."""
+    for setting in fields(SessionSettings):
+        assert len(spec_of(setting).description) > 15, setting.name
+    # types of every field, beside the domain reasons, in one list
+    settings = SessionSettings(case=9, record='yes', training_episodes=-3, overrides=['x'],
+                               human_profile=3, session_id='a/b')
+    reasons = settings.check()
+    for expected in ('case must be one of 1..8, got 9', 'record: expected a boolean',
+                     'training_episodes: -3 is below the minimum 0',
+                     'overrides: expected a mapping', 'human_profile: expected a string',
+                     "session id 'a/b' is not valid"):
+        assert any(expected in reason for reason in reasons), (expected, reasons)
+    assert SessionSettings().check() == []
+    # a dict default is copied per instance, as a list default is
+    first, second = SessionSettings(), SessionSettings()
+    first.overrides['sim.seed'] = 1
+    assert second.overrides == {}
+
+
+def test_overrides_go_back_to_the_command_line_unchanged():
+    """The experiment's graph tasks pass the session's overrides as --set texts."""
+    overrides = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'human.profile': 'novice',
+                 'sim.expected_actors': ['robot'], 'agent.resume_from': '', 'agent.flag': True,
+                 'agent.learning_rate': 0.0003, 'human.script_file': '/tmp/a b: c.csv'}
+    arguments = override_arguments(overrides)
+    assert arguments[0::2] == ['--set'] * len(overrides)
+    assert parse_overrides(arguments[1::2]) == overrides
+    assert arguments[1] == 'sim.episode_duration=2.0'

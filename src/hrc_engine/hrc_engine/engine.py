@@ -20,13 +20,14 @@ engine's wall clock, and nothing waits (no lockstep timeout can fire, nothing is
 
 API (picklable, for Ray or a process pool)::
 
+    from hrc_common.session_plan import SessionSettings
     from hrc_engine.engine import EngineConfig, run_session
-    result = run_session(EngineConfig(case=2, seed=0, training_episodes=30,
-                                      bags_dir='bags', runs_dir='runs'))
+    result = run_session(EngineConfig(SessionSettings(case=2, seed=0, training_episodes=30,
+                                                      bags_dir='bags', runs_dir='runs')))
     result.evaluation['total_error'], result.bag_dir
 """
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 import os
 import pathlib
 import time
@@ -36,7 +37,9 @@ import yaml
 
 from hrc_common import qos_table
 from hrc_common.contract import Phase, SimLimits
+from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
+from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
 
@@ -47,22 +50,17 @@ OFFERED_QOS = {topic: (qos.reliable, qos.transient_local, qos.deadline_ns)
 
 @dataclass
 class EngineConfig:
-    """One session to run in process: what a user gives ``session`` (plain values, picklable)."""
+    """One session to run in process: the session's settings and the engine's own run options.
 
-    case: int = 2                       # paper case 1..6
-    seed: int = 0                       # session seed (agent, sim, human)
-    training_episodes: int = 0          # > 0: max training episodes (else agent.yaml's)
-    evaluation_episodes: int = -1       # >= 0: evaluation episodes (else agent.yaml's)
-    session_id: str = ''                # '' = case<N>-seed<S>-<time>
-    bags_dir: str = 'bags'              # bags land in <bags_dir>/<session_id>/
-    runs_dir: str = 'runs'              # session.yaml and checkpoints in <runs_dir>/...
-    record: bool = True                 # write the bags
+    What the session is (case, seed, episodes, folders, human, overrides, ...) is the one
+    session configuration, :class:`hrc_common.session_plan.SessionSettings`, as ``hrc session``
+    builds it; the fields beside it are how this engine runs it. Plain values, picklable.
+    The engine runs lockstep only: ``settings.mode`` must be 'lockstep'.
+    """
+
+    settings: SessionSettings = field(default_factory=SessionSettings)
     checkpoints: bool = True            # write latest.pt after each episode, final.pt
-    human_profile: str = ''             # simulated-human profile ('' = human.yaml's)
-    human_input: str = 'sim'            # sim | model | script: inputs without wall time
-    overrides: dict = field(default_factory=dict)   # {'sim.episode_duration': 8.0, ...}
-    params_dir: str = ''                # '' = ./params in a checkout, else the installed ones
-    resume_from: str = ''               # a checkpoint to continue from
+    params_dir: str = ''                # '' = hrc_common.paths.params_dir()
     parameters: typing.Optional[dict] = None  # composed {node: {...}}; None = compose here
     quiet: bool = True                  # False: one line per episode on stdout
 
@@ -89,16 +87,14 @@ class SessionResult:
 
 
 def compose_parameters(config: EngineConfig) -> tuple:
-    """Return (SessionSettings, {node: parameters}) exactly as ``session`` composes them."""
-    from hrc_common.paths import params_dir as default_params_dir
-    from hrc_common.session_plan import compose, new_session_id, SessionSettings
+    """Return (SessionSettings, {node: parameters}) exactly as ``session`` composes them.
 
-    settings = SessionSettings(
-        case=config.case, seed=config.seed, mode='lockstep', human_input=config.human_input,
-        human_profile=config.human_profile, training_episodes=config.training_episodes,
-        evaluation_episodes=config.evaluation_episodes, session_id=config.session_id,
-        bags_dir=config.bags_dir, runs_dir=config.runs_dir, record=config.record,
-        resume_from=config.resume_from, overrides=dict(config.overrides))
+    The settings returned are a copy of ``config.settings`` with the session id filled in.
+    """
+    settings = replace(config.settings, overrides=dict(config.settings.overrides))
+    if settings.mode != 'lockstep':
+        raise ValueError(f'mode {settings.mode!r}: the in-process engine runs lockstep only; '
+                         'use --engine graph')
     if not settings.session_id:
         settings.session_id = new_session_id(settings)
     params_dir = pathlib.Path(config.params_dir) if config.params_dir else default_params_dir()
@@ -181,8 +177,6 @@ class InProcessSession:
     # -- recording --------------------------------------------------------------------------
     def _open_bags(self) -> None:
         from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
-        from hrc_common.session_plan import write_session_files
-
         _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
         text = config_path.read_text()
         self._types = dict(TOPIC_TYPES)
@@ -213,7 +207,7 @@ class InProcessSession:
     def run(self) -> SessionResult:
         """Run the session to its end (phase done); return its result."""
         started = time.perf_counter()
-        if self.config.record:
+        if self.settings.record:
             self._open_bags()
         core = self.core
         try:

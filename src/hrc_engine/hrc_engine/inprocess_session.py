@@ -11,7 +11,7 @@ import json
 import sys
 
 from hrc_common.params import ParameterError
-from hrc_common.session_plan import parse_overrides
+from hrc_common.session_plan import parse_overrides, SessionSettings
 
 from hrc_engine.engine import EngineConfig, run_session
 
@@ -71,14 +71,14 @@ def parse_args(argv=None) -> EngineConfig:
     if reasons:
         parser.exit(2, ''.join(f'hrc session --engine inprocess: {reason}\n'
                                 for reason in reasons))
-    return EngineConfig(
-        case=options.case, seed=options.seed, training_episodes=options.episodes,
-        evaluation_episodes=options.eval_episodes, session_id=options.session_id,
-        bags_dir=options.bags_dir, runs_dir=options.runs_dir, record=not options.no_record,
-        checkpoints=not options.no_checkpoints, human_profile=options.human_profile,
-        human_input=options.human_input,
-        overrides=overrides, params_dir=options.params_dir,
-        resume_from=options.resume_from, quiet=options.json), options.json
+    settings = SessionSettings(
+        case=options.case, seed=options.seed, mode=options.mode,
+        human_input=options.human_input, human_profile=options.human_profile,
+        training_episodes=options.episodes, evaluation_episodes=options.eval_episodes,
+        session_id=options.session_id, bags_dir=options.bags_dir, runs_dir=options.runs_dir,
+        record=not options.no_record, resume_from=options.resume_from, overrides=overrides)
+    return EngineConfig(settings, checkpoints=not options.no_checkpoints,
+                        params_dir=options.params_dir, quiet=options.json), options.json
 
 
 def main(argv=None) -> int:

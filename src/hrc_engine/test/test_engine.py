@@ -4,26 +4,28 @@ No rclpy, picklable for process pools and Ray, bags the report reads, the graph'
 metadata, bad input refused with every reason.
 """
 
+import dataclasses
 import pickle
 import subprocess
 import sys
 import textwrap
 
+from hrc_common.session_plan import SessionSettings
 from hrc_common.testing import executable_path
-from hrc_engine.engine import EngineConfig, OFFERED_QOS, run_session
-from hrc_engine.inprocess_session import main
+from hrc_engine.engine import compose_parameters, EngineConfig, OFFERED_QOS, run_session
+from hrc_engine.inprocess_session import main, parse_args
 import pytest
 
 SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10}
 
 
-def short_config(tmp_path, **fields):
+def short_config(tmp_path, checkpoints=True, **fields):
     """Return the config of a tiny session (10 steps per episode) under tmp_path."""
     values = dict(case=1, seed=3, training_episodes=2, evaluation_episodes=1,
                   session_id='tiny', bags_dir=str(tmp_path / 'bags'),
                   runs_dir=str(tmp_path / 'runs'), overrides=dict(SHORT))
     values.update(fields)
-    return EngineConfig(**values)
+    return EngineConfig(SessionSettings(**values), checkpoints=checkpoints)
 
 
 @pytest.mark.slow
@@ -31,10 +33,12 @@ def test_a_session_runs_without_rclpy_and_its_result_pickles(tmp_path):
     script = textwrap.dedent(f"""
         import pickle, sys
         sys.modules['rclpy'] = None          # any import of rclpy now fails
+        from hrc_common.session_plan import SessionSettings
         from hrc_engine.engine import EngineConfig, run_session
-        config = EngineConfig(case=1, seed=3, training_episodes=2, evaluation_episodes=1,
-                              session_id='tiny', bags_dir={str(tmp_path / 'bags')!r},
-                              runs_dir={str(tmp_path / 'runs')!r}, overrides={SHORT!r})
+        config = EngineConfig(SessionSettings(
+            case=1, seed=3, training_episodes=2, evaluation_episodes=1, session_id='tiny',
+            bags_dir={str(tmp_path / 'bags')!r}, runs_dir={str(tmp_path / 'runs')!r},
+            overrides={SHORT!r}))
         result = run_session(pickle.loads(pickle.dumps(config)))
         sys.stdout.buffer.write(pickle.dumps(result))
     """)
@@ -142,3 +146,20 @@ def test_the_fast_encoder_gives_rclpys_bytes_up_to_the_padding():
         data = cdr.encode(type_name, plain_values(message))
         assert len(data) == len(serialize_message(message)), type_name
         assert deserialize_message(data, type(message)) == message, type_name
+
+
+def test_the_engine_takes_the_one_session_configuration():
+    """EngineConfig keeps the engine's own run options beside a SessionSettings, no copy."""
+    own = {field.name for field in dataclasses.fields(EngineConfig)}
+    assert own == {'settings', 'checkpoints', 'params_dir', 'parameters', 'quiet'}
+    assert not own & {field.name for field in dataclasses.fields(SessionSettings)}
+    config, as_json = parse_args(['--case', '3', '--seed', '4', '--profile', 'novice',
+                                  '--set', 'sim.episode_duration=2', '--no-checkpoints'])
+    assert config.settings == SessionSettings(case=3, seed=4, human_profile='novice',
+                                              overrides={'sim.episode_duration': 2})
+    assert not config.checkpoints and not as_json
+    settings, parameters = compose_parameters(config)
+    assert settings.session_id.startswith('case3-seed4-') and not config.settings.session_id
+    assert parameters['human']['profile'] == 'novice' and parameters['sim']['seed'] == 4
+    with pytest.raises(ValueError, match='lockstep only'):
+        compose_parameters(EngineConfig(SessionSettings(mode='realtime')))

@@ -12,6 +12,7 @@ rate fails here.
 import hashlib
 import json
 
+from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import EngineConfig, InProcessSession
 import pytest
 
@@ -82,11 +83,11 @@ BEFORE_HUMAN_SLICES = {
 
 
 def config(case: int, human_period: float, profile: str = 'paper_v1') -> EngineConfig:
-    return EngineConfig(case=case, seed=0, training_episodes=2, evaluation_episodes=1,
-                        session_id='golden', record=False, checkpoints=False,
-                        overrides={'sim.episode_duration': 8.0, 'agent.horizon': 80,
-                                   'sim.human_period': human_period,
-                                   'human.profile': profile})
+    return EngineConfig(SessionSettings(
+        case=case, seed=0, training_episodes=2, evaluation_episodes=1, session_id='golden',
+        record=False, overrides={'sim.episode_duration': 8.0, 'agent.horizon': 80,
+                                 'sim.human_period': human_period, 'human.profile': profile}),
+        checkpoints=False)
 
 
 @pytest.mark.parametrize('case', sorted(BEFORE_HUMAN_SLICES))

@@ -27,6 +27,10 @@
 * **Seeding**: ``reset(seed=s)`` seeds the episode-start generator (``self.np_random``) and a
   fresh simulated human (seed derived from s, no practice yet); later ``reset()`` calls go on
   with both (the human practices across episodes, as in the project's sessions).
+* **A session**: ``session=SessionSettings(case=2, seed=0, human_profile='novice',
+  overrides={'sim.max_torque': 0.8})`` (the configuration ``hrc session`` and the engines take)
+  gives the case, the human's profile, the physics (``params/sim.yaml`` with the ``sim.*``
+  overrides) and the seed of the first ``reset()`` (``hrc_gym.session``).
 * **Rendering**: ``render_mode='rgb_array'``: a 240 x 320 RGB image from PyBullet's tiny
   renderer (no display needed).
 """
@@ -37,10 +41,12 @@ import numpy as np
 
 from hrc_common.contract import NS_PER_S
 from hrc_common.params import from_dict
+from hrc_common.session_plan import SessionSettings
 from hrc_joystick_node.human_model import load_human_model
 from hrc_joystick_node.human_profile import load_profile
 from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, MODEL_PREFIX,
                           NO_HUMAN, POPULATION_PREFIX, RENDER_MODES, ROBOT, SEED_LIMIT, TaskRun)
+from hrc_gym.session import session_keywords
 from hrc_sim_node.physics import PhysicsParams
 
 
@@ -67,8 +73,13 @@ class SliderPendulumBallEnv(gymnasium.Env):
     metadata = {'render_modes': RENDER_MODES, 'render_fps': 5}
 
     def __init__(self, render_mode=None, human_model=None, physics_params: PhysicsParams = None,
-                 **params):
+                 session: SessionSettings = None, **params):
         check_render_mode(render_mode)
+        # The session-level settings (case, seed, profile, sim overrides) from the one session
+        # configuration when given (hrc_gym.session), else the keywords as documented.
+        self.session = session
+        if session is not None:
+            params, physics_params = session_keywords(session, params, physics_params)
         self.config = from_dict(GymParams, params)
         check_human_spec(self.config.human)
         self.render_mode = render_mode
@@ -92,6 +103,8 @@ class SliderPendulumBallEnv(gymnasium.Env):
 
     def reset(self, *, seed=None, options=None):
         """Start an episode (see the module docstring for seeding); return (obs, info)."""
+        if seed is None and not self._human_ready and self.session is not None:
+            seed = self.session.seed   # the session's seed seeds its first episode
         super().reset(seed=seed)
         if seed is not None or not self._human_ready:
             # A new person (no practice yet) and a new session clock for every seeded run.

@@ -25,7 +25,7 @@ from hrc_agent_node.observation import applied_command, observation_of
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
-from hrc_common.contract import SimLimits
+from hrc_common.contract import case_problem, SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.commands import wrench_on
@@ -50,8 +50,9 @@ def check_render_mode(render_mode) -> None:
 class TaskParams:
     """Which case, training step and reward the environments pose (shared by both)."""
 
-    case: int = param(2, 'Paper case 1..6 (params/cases.yaml): strategy and which degree of '
-                         'freedom the robot drives (cases 2, 4, 6: rotation)', low=1, high=6)
+    case: int = param(2, "Case of params/cases.yaml (the paper's 1..6; 7-8 partners first): "
+                         'strategy and which degree of freedom the robot drives (even cases: '
+                         'rotation)', low=1)
     training_step: int = param(0, "Index of the case's training step (0 = first); -1 = the "
                                   'last: its subtasks make the reward, it says whether the '
                                   'human acts', low=-1, high=9)
@@ -60,6 +61,11 @@ class TaskParams:
                                               'tuned = sigma scaled to each range)')
     observe_rates: bool = param(False, "Add dB_y/dt, dP_z/dt, dS_x/dt to the paper's "
                                        'observation {B_y, P_z, S_x, a_h}')
+
+    def check(self) -> list:
+        """Return why the case is not one of params/cases.yaml (the one case table), if so."""
+        problem = case_problem(self.case)
+        return [problem] if problem else []
 
 
 @dataclass

@@ -13,6 +13,7 @@ import pytest
 
 import hrc_gym
 from hrc_common.params import ParameterError
+from hrc_common.session_plan import SessionSettings
 from hrc_gym.compare import train_ours
 from hrc_gym.env import SliderPendulumBallEnv
 from hrc_sim_node.physics import PhysicsParams
@@ -244,3 +245,52 @@ def test_the_human_acts_at_its_rate_and_the_old_rate_reproduces_the_old_episodes
     applied = env.task.human_applied
     assert len(applied) == 10 and len(set(applied)) > 1, applied
     assert episodes_digest(env) != BEFORE_HUMAN_SLICES
+
+
+def test_a_session_gives_the_case_the_seed_the_profile_and_the_physics():
+    """The one session configuration drives the environment as the keywords do."""
+    actions = [np.array([np.sin(0.1 * k)], dtype=np.float32) for k in range(200)]
+    by_keywords = SliderPendulumBallEnv(case=6, human='novice', preset='tuned')
+    session = SessionSettings(case=6, seed=7, human_profile='novice')
+    by_session = SliderPendulumBallEnv(session=session, preset='tuned')
+    try:
+        assert by_session.config == by_keywords.config
+        assert by_session.task.physics.params == PhysicsParams()   # params/sim.yaml's
+        expected = _trajectory(by_keywords, 7, actions)
+        # the first reset() without a seed takes the session's seed
+        np.testing.assert_array_equal(_trajectory(by_session, None, actions), expected)
+    finally:
+        by_keywords.close()
+        by_session.close()
+    # --set sim.* makes the physics; --set human.profile picks the human
+    env = SliderPendulumBallEnv(session=SessionSettings(
+        case=2, overrides={'sim.max_torque': 0.8, 'human.profile': 'skilled'}))
+    try:
+        assert env.task.physics.params.max_torque == 0.8 and env.task.limits.max_torque == 0.8
+        assert env.config.human == 'skilled' and env.config.case == 2
+    finally:
+        env.close()
+
+
+def test_a_session_and_keywords_saying_the_same_thing_are_refused_with_every_reason():
+    with pytest.raises(ParameterError) as caught:
+        SliderPendulumBallEnv(session=SessionSettings(case=9, seed=-1))
+    assert 'case must be one of 1..8, got 9' in str(caught.value)
+    assert 'seed must be >= 0' in str(caught.value)
+    with pytest.raises(ParameterError) as caught:
+        SliderPendulumBallEnv(session=SessionSettings(overrides={'agent.horizon': 20}),
+                              case=3, human='paper', physics_params=PhysicsParams())
+    for reason in ('case: given by the session', 'human: given by the session',
+                   'physics_params: given by the session', "overrides 'agent.horizon'"):
+        assert reason in str(caught.value)
+
+
+def test_the_case_is_checked_against_params_cases_yaml():
+    """No case range of its own: a case of params/cases.yaml is accepted, another refused."""
+    env = SliderPendulumBallEnv(case=8, training_step=-1)
+    try:
+        assert env.task.case.strategy == 'partners_first'
+    finally:
+        env.close()
+    with pytest.raises(ParameterError, match='case must be one of 1..8, got 9'):
+        SliderPendulumBallEnv(case=9)

@@ -12,12 +12,13 @@ Usage: ``python src/hrc_joystick_node/bench/fatigue_table.py [--episodes 300]``
 """
 
 import argparse
-import pathlib
 
+from hrc_common.paths import params_file
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_joystick_node.sim_human import SimulatedHuman
 
-REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
+REPO_PROFILES = params_file('sim_human.yaml')
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
 OLD_PER_MINUTE = {'novice': 0.03, 'skilled': 0.01, 'paper': 0.02, 'paper_symmetric': 0.02}
 ANSWERED_STATES = 199
 
@@ -41,7 +42,7 @@ def main():
           'old model: delay (s) | old: x noise |')
     print('|---|---|---|---|---|---|---|---|')
     for name, profile in load_profiles(REPO_PROFILES).items():
-        human = SimulatedHuman(profile, 'rotation', seed=0)
+        human = SimulatedHuman(profile, 'rotation', seed=0, control_period=CONTROL_PERIOD)
         for episode in range(args.episodes):
             human.reset(episode)
             for _ in range(ANSWERED_STATES):

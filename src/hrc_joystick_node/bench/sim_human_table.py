@@ -14,17 +14,18 @@ Usage: ``python src/hrc_joystick_node/bench/sim_human_table.py [--episodes 20] [
 """
 
 import argparse
-import pathlib
 import time
 
 import numpy
 
 from hrc_joystick_node.evaluation import human_episode, run_episode
+from hrc_common.paths import params_file
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_sim_node.physics import SliderPendulumBall
 
-REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
+REPO_PROFILES = params_file('sim_human.yaml')
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
 CASES = [  # (label, degree of freedom, subtasks, subtask whose error is reported)
     ('translation: slider', 'translation', ['slider'], 'slider'),
     ('rotation: pendulum', 'rotation', ['pendulum'], 'pendulum'),
@@ -38,7 +39,8 @@ def measure(physics, profile, dof, subtasks, episodes, seed, practiced):
     errors, efforts = [], []
     for index in range(episodes):
         # Person `index` in their first episode (after `practiced` earlier ones).
-        human = SimulatedHuman(profile, dof, seed=seed + index, practiced_episodes=practiced)
+        human = SimulatedHuman(profile, dof, seed=seed + index, practiced_episodes=practiced,
+                               control_period=CONTROL_PERIOD)
         result = human_episode(physics, human, practiced, seed + index, subtasks)
         errors.append(result.errors)
         efforts.append(result.effort)

@@ -148,9 +148,13 @@ def load_human_model(path) -> tuple:
 
 
 class ClonedHuman:
-    """A cloned human model driving one degree of freedom, as a SimulatedHuman does."""
+    """A cloned human model driving one degree of freedom, as a SimulatedHuman does.
 
-    def __init__(self, path, dof: str, seed: int = 0, control_period: float = 0.2):
+    ``control_period``: the s between calls (the sim's control period, from its limits); no
+    default. A model recorded at another period runs, with a note saying so.
+    """
+
+    def __init__(self, path, dof: str, seed: int = 0, *, control_period: float):
         self.config, self.network = load_human_model(path)
         self.path = str(path)
         self.dof = dof

@@ -302,12 +302,15 @@ def _interpolate(older: _Percept, newer: _Percept, weight_newer: float) -> _Perc
 class SimulatedHuman:
     """One simulated person driving one degree of freedom (see the module docstring).
 
-    ``practiced_episodes`` starts the learning curve further on (e.g. a person who already
-    practiced); it counts up by one for every episode in which :meth:`act` is called.
+    ``control_period``: the s between calls of :meth:`act`, from the sim's limits (its control
+    period, or ``SimLimits.human_step`` at the human's rate); no default, so no caller runs a
+    person at a period the sim does not have. ``practiced_episodes`` starts the learning curve
+    further on (e.g. a person who already practiced); it counts up by one for every episode in
+    which :meth:`act` is called.
     """
 
-    def __init__(self, profile: HumanProfile, dof: str, seed: int = 0,
-                 control_period: float = 0.2, practiced_episodes: int = 0):
+    def __init__(self, profile: HumanProfile, dof: str, seed: int = 0, *,
+                 control_period: float, practiced_episodes: int = 0):
         if control_period <= 0:
             raise ValueError(f'control_period must be > 0 s, got {control_period}')
         self.profile = profile

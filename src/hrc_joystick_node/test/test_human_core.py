@@ -2,10 +2,10 @@
 
 import dataclasses
 import math
-import pathlib
 
 import pytest
 
+from hrc_common.paths import params_dir
 from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
@@ -14,7 +14,8 @@ from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_joystick_node.sim_human import SimulatedHuman
 
-PROFILES = load_profiles(pathlib.Path(__file__).resolve().parents[3] / 'params'
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
+PROFILES = load_profiles(params_dir()
                          / 'sim_human.yaml')
 PERIOD_NS = 200_000_000
 
@@ -85,7 +86,8 @@ def test_the_simulated_human_answers_on_the_simulation_clock_and_repeats_do_not_
     params = HumanParams(input='sim', profile='paper', seed=3)
     core = core_of(params)
     core.on_inputs(False, '', False, '')
-    reference = SimulatedHuman(PROFILES['paper'], 'rotation', seed=3)
+    reference = SimulatedHuman(PROFILES['paper'], 'rotation', seed=3,
+                               control_period=CONTROL_PERIOD)
     reference.reset(0)
     for state in states(20):
         answer = core.answer(0, state.step, stamp(0, state.step), state)
@@ -182,7 +184,7 @@ def test_a_core_from_composed_parameters_as_the_in_process_engine_builds_it():
 
     from hrc_joystick_node.human_core import core_from_parameters
 
-    path = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'human.yaml'
+    path = params_dir() / 'human.yaml'
     parameters = yaml.safe_load(path.read_text())['human']['ros__parameters']
     parameters.update(input='sim', person=2, seed=5)
     core = core_from_parameters(parameters, LIMITS)

@@ -2,19 +2,20 @@
 
 import dataclasses
 import math
-import pathlib
 import time
 
 import numpy
 import pytest
 
+from hrc_common.paths import params_dir
 from hrc_joystick_node.adaptation import steady_state_compensation, TwoRateAdaptation
 from hrc_joystick_node.fatigue import Fatigue, steady_state_level
 from hrc_joystick_node.population import (OFFSETS, person_or_profile, sample_person, SPREAD)
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_joystick_node.sim_human import SimulatedHuman, StateView
 
-REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
+REPO_PROFILES = params_dir() / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 STEPS = 200  # control steps of a 40 s episode at 0.2 s
 
@@ -43,7 +44,7 @@ def test_fatigue_is_bounded_after_300_episodes():
     # Was: 1 + fatigue_per_minute * minutes = a delay of 1.25 s and 5x the noise after 300
     # episodes (paper profile). Now it approaches a ceiling and the breaks pull it back.
     profile = PROFILES['paper']
-    human = SimulatedHuman(profile, 'rotation', seed=0)
+    human = SimulatedHuman(profile, 'rotation', seed=0, control_period=CONTROL_PERIOD)
     run_episodes(human, 300)
     delay = profile.reaction_delay * human.fatigue.delay_factor
     assert delay <= profile.reaction_delay * (1.0 + profile.fatigue_delay_ceiling)
@@ -75,9 +76,9 @@ def test_breaks_restore_part_of_the_fatigue():
     assert tired.level == pytest.approx(before / math.e)
     assert 0.0 < tired.level < before
     # The same work with breaks between the episodes leaves the person less tired.
-    with_breaks = SimulatedHuman(PROFILES['paper'], 'rotation')
+    with_breaks = SimulatedHuman(PROFILES['paper'], 'rotation', control_period=CONTROL_PERIOD)
     no_breaks = SimulatedHuman(dataclasses.replace(PROFILES['paper'], rest_between_episodes=0),
-                               'rotation')
+                               'rotation', control_period=CONTROL_PERIOD)
     run_episodes(with_breaks, 40)
     run_episodes(no_breaks, 40)
     assert with_breaks.fatigue.level < 0.8 * no_breaks.fatigue.level
@@ -87,16 +88,16 @@ def test_breaks_restore_part_of_the_fatigue():
 def test_fatigue_runs_on_the_simulation_clock_not_the_wall_clock(monkeypatch):
     profile = PROFILES['paper']
     # The state stamps: episodes the person sits out are rest.
-    continuous = SimulatedHuman(profile, 'rotation', seed=1)
+    continuous = SimulatedHuman(profile, 'rotation', seed=1, control_period=CONTROL_PERIOD)
     run_episodes(continuous, 20, stamps=True)
-    sitting_out = SimulatedHuman(profile, 'rotation', seed=1)
+    sitting_out = SimulatedHuman(profile, 'rotation', seed=1, control_period=CONTROL_PERIOD)
     run_episodes(sitting_out, 20, stamps=True, episode_stride=3)
     assert continuous.fatigue.seconds_on_task == pytest.approx(
         sitting_out.fatigue.seconds_on_task)
     assert sitting_out.fatigue.level < 0.7 * continuous.fatigue.level
     # Stamps of consecutive states = the periods acted: the same person as without stamps
     # (plus the one period of the unanswered last state per episode, as rest).
-    without_stamps = SimulatedHuman(profile, 'rotation', seed=1)
+    without_stamps = SimulatedHuman(profile, 'rotation', seed=1, control_period=CONTROL_PERIOD)
     run_episodes(without_stamps, 20)
     assert continuous.fatigue.level == pytest.approx(without_stamps.fatigue.level, rel=0.01)
 
@@ -104,11 +105,11 @@ def test_fatigue_runs_on_the_simulation_clock_not_the_wall_clock(monkeypatch):
     def broken_clock():
         raise AssertionError('the simulated human read the wall clock')
 
-    first = SimulatedHuman(profile, 'rotation', seed=2)
+    first = SimulatedHuman(profile, 'rotation', seed=2, control_period=CONTROL_PERIOD)
     run_episodes(first, 3, stamps=True)
     for name in ('time', 'monotonic', 'perf_counter', 'time_ns', 'monotonic_ns'):
         monkeypatch.setattr(time, name, broken_clock)
-    second = SimulatedHuman(profile, 'rotation', seed=2)
+    second = SimulatedHuman(profile, 'rotation', seed=2, control_period=CONTROL_PERIOD)
     run_episodes(second, 3, stamps=True)
     assert second.snapshot() == first.snapshot()
 
@@ -142,7 +143,7 @@ def disturbed_episodes(physics, profile, disturbances, seed=1):
     the person corrects it, stick units: what adaptation learns from) and the mean |slider
     height| over the first 10 s (m).
     """
-    human = SimulatedHuman(profile, 'translation', seed=seed)
+    human = SimulatedHuman(profile, 'translation', seed=seed, control_period=CONTROL_PERIOD)
     corrections, early_errors = [], []
     for episode, disturbance in enumerate(disturbances):
         human.reset(episode)
@@ -203,7 +204,7 @@ def test_ten_seeds_are_ten_different_reproducible_people():
     # Different people act differently in the same episode of the same states.
     commands = []
     for person in people[:3]:
-        human = SimulatedHuman(person, 'rotation', seed=0)
+        human = SimulatedHuman(person, 'rotation', seed=0, control_period=CONTROL_PERIOD)
         commands.append([human.act(STILL, ['pendulum']) for _ in range(20)])
     assert commands[0] != commands[1] != commands[2]
 

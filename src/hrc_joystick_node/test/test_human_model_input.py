@@ -1,12 +1,12 @@
 """``input: model``: a cloned human-model checkpoint loaded safely and driven like a person."""
 
 import os
-import pathlib
 import pickle
 
 import pytest
 import torch
 
+from hrc_common.paths import params_dir
 from hrc_common.contract import SimLimits
 from hrc_common.params import ParameterError
 from hrc_joystick_node.human_core import HumanCore, HumanParams
@@ -15,7 +15,8 @@ from hrc_joystick_node.human_model import (build_network, ClonedHuman, load_huma
 from hrc_joystick_node.inputs import MODEL
 from hrc_joystick_node.human_profile import load_profiles
 
-PROFILES = load_profiles(pathlib.Path(__file__).resolve().parents[3] / 'params'
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
+PROFILES = load_profiles(params_dir()
                          / 'sim_human.yaml')
 CONFIG = {'history_steps': 3, 'hidden': [8], 'dof': 'rotation', 'control_period': 0.2,
           'description': 'a test model'}
@@ -39,7 +40,7 @@ def model_file(tmp_path):
 
 
 def test_a_cloned_model_loads_and_acts_deterministically(model_file):
-    human = ClonedHuman(model_file, 'rotation')
+    human = ClonedHuman(model_file, 'rotation', control_period=CONTROL_PERIOD)
     states = [State(0.3 - 0.01 * step, -0.05) for step in range(10)]
     first = [human.act(state, ['pendulum']) for state in states]
     human.reset(1)
@@ -48,8 +49,8 @@ def test_a_cloned_model_loads_and_acts_deterministically(model_file):
     human.reset(2)
     assert [human.act(state, ['pendulum', 'ball']) for state in states] != first
     assert human.note == ''
-    assert 'cloned on rotation, driving translation' in ClonedHuman(model_file,
-                                                                   'translation').note
+    assert 'cloned on rotation, driving translation' in ClonedHuman(
+        model_file, 'translation', control_period=CONTROL_PERIOD).note
 
 
 class Payload:
@@ -118,7 +119,8 @@ def test_the_core_drives_the_human_with_the_model(model_file):
     answer = core.answer(0, 0, 0, State(0.3))
     assert answer.source == MODEL and answer.source_code == 2 and answer.engaged
     assert answer.detail == f'model {model_file}'
-    assert answer.command == ClonedHuman(model_file, 'rotation').act(State(0.3), ['pendulum'])
+    model = ClonedHuman(model_file, 'rotation', control_period=CONTROL_PERIOD)
+    assert answer.command == model.act(State(0.3), ['pendulum'])
     assert core.input_status.state == 'ok'
     with pytest.raises(ParameterError, match='input model needs a checkpoint path'):
         from hrc_common.params import checked

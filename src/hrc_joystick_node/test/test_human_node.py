@@ -1,7 +1,6 @@
 """The human node in its own process over DDS: lockstep answers, session, /joy, device, auto."""
 
 import os
-import pathlib
 import time
 import uuid
 
@@ -13,6 +12,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Joy
 
+from hrc_common.paths import params_dir
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.testing import serve_sim_parameters
@@ -23,9 +23,10 @@ from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
 WAIT = 15.0  # s: generous bound for anything over DDS on a busy 2-core machine
 SIM_LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)  # the sim's defaults
-PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
+PARAMS = params_dir()
 
 
 class Harness:
@@ -186,7 +187,8 @@ def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_n
     process = harness.start(start_node, parameters={'input': 'sim', 'profile': 'paper',
                                                     'seed': 3})
     harness.wait_for_human_node(process)
-    reference = SimulatedHuman(load_profile('paper'), 'rotation', seed=3)
+    reference = SimulatedHuman(load_profile('paper'), 'rotation', seed=3,
+                               control_period=CONTROL_PERIOD)
     reference.reset(0)
     with SliderPendulumBall() as physics:
         physics_state = physics.reset(seed=11)

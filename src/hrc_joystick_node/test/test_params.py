@@ -1,16 +1,16 @@
 """params/human.yaml and params/sim_human.yaml mirror the code; bad values are refused."""
 
 from dataclasses import fields
-import pathlib
 
 import pytest
 import yaml
 
+from hrc_common.paths import params_dir
 from hrc_common.params import as_dict, default_of, load_yaml, ParameterError, with_overrides
 from hrc_joystick_node.human_core import HumanParams
 from hrc_joystick_node.human_profile import HumanProfile, load_profiles
 
-PARAMS = pathlib.Path(__file__).resolve().parents[3] / 'params'
+PARAMS = params_dir()
 
 
 def test_human_yaml_mirrors_the_defaults():

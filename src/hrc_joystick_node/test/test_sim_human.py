@@ -2,17 +2,18 @@
 
 import dataclasses
 import math
-import pathlib
 
 import numpy
 import pytest
 
+from hrc_common.paths import params_dir
 from hrc_common.params import ParameterError
 from hrc_joystick_node.evaluation import human_episode, run_episode
 from hrc_joystick_node.human_profile import HumanProfile, load_profile, load_profiles
 from hrc_joystick_node.sim_human import normalize_subtasks, SimulatedHuman
 
-REPO_PROFILES = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim_human.yaml'
+CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
+REPO_PROFILES = params_dir() / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 SEEDS = range(4)  # initial states and people per measurement: 4 episodes of 40 s
 
@@ -75,7 +76,7 @@ def states_of(physics, seed, steps=60):
 
 
 def commands(profile, dof, seed, states, subtasks, episode=0):
-    human = SimulatedHuman(profile, dof, seed=seed)
+    human = SimulatedHuman(profile, dof, seed=seed, control_period=CONTROL_PERIOD)
     human.reset(episode)
     return [human.act(state, subtasks) for state in states]
 
@@ -89,7 +90,7 @@ def test_deterministic_with_a_seed_and_different_across_seeds(physics):
     assert commands(profile, 'rotation', 7, states, ['pendulum'], episode=1) != first
     assert all(-1.0 <= value <= 1.0 for value in first)
     # An episode reproduces from (seed, episode) whatever the person did before.
-    human = SimulatedHuman(profile, 'rotation', seed=7)
+    human = SimulatedHuman(profile, 'rotation', seed=7, control_period=CONTROL_PERIOD)
     human.reset(3)
     [human.act(state, ['pendulum']) for state in states]
     human.reset(0)
@@ -97,7 +98,7 @@ def test_deterministic_with_a_seed_and_different_across_seeds(physics):
     person_state = human.snapshot()
     again = [human.act(state, ['pendulum']) for state in states]
     # Another instance in the same state (practice, fatigue, adaptation) acts the same.
-    fresh = SimulatedHuman(profile, 'rotation', seed=7)
+    fresh = SimulatedHuman(profile, 'rotation', seed=7, control_period=CONTROL_PERIOD)
     fresh.restore(person_state)
     fresh.reset(0)
     assert again == [fresh.act(state, ['pendulum']) for state in states]
@@ -114,9 +115,10 @@ def test_nothing_in_reach_means_no_action(physics):
 
 def test_learning_curve_moves_the_right_way():
     profile = PROFILES['novice']
-    human = SimulatedHuman(profile, 'translation', seed=0)
+    human = SimulatedHuman(profile, 'translation', seed=0, control_period=CONTROL_PERIOD)
     assert human.practice_factor == pytest.approx(profile.untrained_factor)
-    assert SimulatedHuman(profile, 'translation', practiced_episodes=30).practice_factor < 1.1
+    assert SimulatedHuman(profile, 'translation', practiced_episodes=30,
+                          control_period=CONTROL_PERIOD).practice_factor < 1.1
     assert human.fatigue_factor == 1.0
 
 
@@ -126,7 +128,7 @@ def mean_error(physics, subtask, dof, seeds, profile=None, subtasks=None):
         if profile is None:
             errors.append(run_episode(physics, dof, seed).errors[subtask])
         else:
-            human = SimulatedHuman(profile, dof, seed=seed)
+            human = SimulatedHuman(profile, dof, seed=seed, control_period=CONTROL_PERIOD)
             errors.append(human_episode(physics, human, 0, seed, subtasks).errors[subtask])
     return float(numpy.mean(errors))
 
@@ -173,7 +175,7 @@ def test_translation_actor_nudges_the_beam_through_the_coupling(physics):
                                 ball_noise=0.0, ball_bias=0.0, lapse_probability=0.0)
     tilted = dataclasses.replace(state, slider_position=0.0, pendulum_angle=0.3,
                                  ball_position=0.0)
-    human = SimulatedHuman(quiet, 'translation', seed=0)
+    human = SimulatedHuman(quiet, 'translation', seed=0, control_period=CONTROL_PERIOD)
     assert human.act(tilted, ['slider', 'ball']) > 0.0
     human.reset(1)
     assert human.act(tilted, ['slider']) == 0.0
@@ -218,7 +220,7 @@ SUBTASKS_OF = {'rotation': ['pendulum', 'ball'], 'translation': ['slider', 'ball
 def command_digest(profile, dof, stamps=False):
     import hashlib
 
-    human = SimulatedHuman(profile, dof, seed=3)
+    human = SimulatedHuman(profile, dof, seed=3, control_period=CONTROL_PERIOD)
     commands = []
     for episode in (0, 1):
         human.reset(episode)
@@ -279,7 +281,8 @@ def test_a_person_of_the_version_1_population_reproduces_too(name):
     import hashlib
     from hrc_joystick_node.population import sample_person
 
-    human = SimulatedHuman(sample_person(PROFILES[f'{name}_v1'], 4), 'rotation', seed=3)
+    human = SimulatedHuman(sample_person(PROFILES[f'{name}_v1'], 4), 'rotation', seed=3,
+                           control_period=CONTROL_PERIOD)
     human.reset(0)
     commands = [human.act(state, ['pendulum', 'ball']) for state in synthetic_states()]
     assert hashlib.sha256(repr(commands).encode()).hexdigest()[:16] == VERSION_1_PERSON_4[name]

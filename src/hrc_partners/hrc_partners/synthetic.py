@@ -11,6 +11,7 @@ import dataclasses
 import pathlib
 import typing
 
+from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.human_profile import load_profile
 import yaml
@@ -60,14 +61,13 @@ def record_sessions(bags_dir, runs_dir, profiles_file, people, seeds, case: int 
     folders = []
     for person in people:
         for seed in seeds:
-            result = run_session(EngineConfig(
+            result = run_session(EngineConfig(SessionSettings(
                 case=case, seed=int(seed), training_episodes=int(episodes),
                 evaluation_episodes=0, session_id=f'{person}-seed{seed}',
-                bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
-                human_profile=person,
+                bags_dir=str(bags_dir), runs_dir=str(runs_dir), human_profile=person,
                 overrides={'sim.episode_duration': float(seconds),
                            'sim.human_period': float(human_period),
-                           'human.profiles_file': str(profiles_file)}))
+                           'human.profiles_file': str(profiles_file)}), checkpoints=False))
             folders.append(result.bag_dir)
     return folders
 
@@ -79,10 +79,10 @@ def record_with_model(bags_dir, runs_dir, model_file, seed: int = 0, case: int =
     The engine's human side is the human node's core with ``input: model`` (the session's
     composed parameters, with the human's input switched to the model).
     """
-    config = EngineConfig(case=case, seed=int(seed), training_episodes=int(episodes),
-                          evaluation_episodes=0, session_id=f'model-seed{seed}',
-                          bags_dir=str(bags_dir), runs_dir=str(runs_dir), checkpoints=False,
-                          overrides={'sim.episode_duration': float(seconds)})
+    config = EngineConfig(SessionSettings(
+        case=case, seed=int(seed), training_episodes=int(episodes), evaluation_episodes=0,
+        session_id=f'model-seed{seed}', bags_dir=str(bags_dir), runs_dir=str(runs_dir),
+        overrides={'sim.episode_duration': float(seconds)}), checkpoints=False)
     _, parameters = compose_parameters(config)
     parameters['human'].update(input='model', model_file=str(model_file))
     config.parameters = parameters

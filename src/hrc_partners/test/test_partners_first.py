@@ -14,6 +14,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_common.contract import EpisodeKind
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
+from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.human_profile import load_profile
 from hrc_partners.partners_first import (default_population, main, person_spec_of,
@@ -86,19 +87,18 @@ def test_pretraining_meets_the_population_only_and_stops_at_the_persons_step(tmp
 @pytest.mark.parametrize('case', [7, 8])
 def test_a_partners_first_session_in_the_engine_runs_its_phases_in_order(tmp_path, easy_tree,
                                                                        case):
-    config = EngineConfig(case=case, seed=1, training_episodes=40, evaluation_episodes=1,
-                          session_id=f'pf{case}', bags_dir=str(tmp_path / 'bags'),
-                          runs_dir=str(tmp_path / 'runs'),
-                          overrides=dict(SHORT, **{'agent.task_tree_file': easy_tree,
-                                                   'human.person': 1}))
+    config = EngineConfig(SessionSettings(
+        case=case, seed=1, training_episodes=40, evaluation_episodes=1, session_id=f'pf{case}',
+        bags_dir=str(tmp_path / 'bags'), runs_dir=str(tmp_path / 'runs'),
+        overrides=dict(SHORT, **{'agent.task_tree_file': easy_tree, 'human.person': 1})))
     _, parameters = compose_parameters(config)
     start = prepare_person_session(parameters, tmp_path / 'runs' / f'pf{case}')
     record = json.loads((tmp_path / 'runs' / f'pf{case}' / 'pretrain.json').read_text())
     assert record['person'] == 'person:paper:1' and record['reached_person_step']
     assert record['person'] not in record['population']
     assert start['max_training_episodes'] == record['episodes'] + 40
-    config.resume_from = start['resume_from']
-    config.training_episodes = start['max_training_episodes']
+    config.settings.resume_from = start['resume_from']
+    config.settings.training_episodes = start['max_training_episodes']
     result = run_session(config)
     assert result.converged and result.strategy == 'partners_first'
     kinds = [(EpisodeKind(e['kind']).label, e['training_step']) for e in result.episodes]
@@ -111,7 +111,8 @@ def test_a_partners_first_session_in_the_engine_runs_its_phases_in_order(tmp_pat
     first = record['episodes']
     assert bags == [f'pf{case}_ep{first:04d}.mcap', f'pf{case}_ep{first + 1:04d}.mcap']
     # the paper's cases need no pre-training
-    _, paper = compose_parameters(EngineConfig(case=2, overrides=dict(SHORT)))
+    _, paper = compose_parameters(EngineConfig(SessionSettings(case=2,
+                                                                    overrides=dict(SHORT))))
     assert prepare_person_session(paper, tmp_path / 'none') is None
 
 

@@ -34,7 +34,10 @@ import typing
 
 from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, SimLimits, TRANSLATION
 from hrc_sim_node.commands import ACTORS, Command, HUMAN, read_command, ROBOT
+from hrc_sim_node.physics import PhysicsParams
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME
+
+_PHYSICS_DEFAULTS = PhysicsParams()
 
 # Episode indices travel as uint32 (TaskState.episode, ResetEpisode.episode).
 MAX_EPISODE = 2 ** 32 - 1
@@ -135,9 +138,11 @@ class ProtocolSettings:
     expected_actors: tuple = (ROBOT, HUMAN)
     lockstep_timeout: float = 1.0          # wall s
     command_timeout: float = 0.5           # wall s
-    control_period: float = 0.2            # s of simulation time per state
-    max_force: float = 2.0                 # N
-    max_torque: float = 0.5                # N*m
+    # The sim's limits; a bare ProtocolSettings() (tests) has the physics' defaults, never a
+    # copy of their numbers (ProtocolSettings.of(sim_params) is what the sim uses).
+    control_period: float = _PHYSICS_DEFAULTS.control_period   # s of simulation time per state
+    max_force: float = _PHYSICS_DEFAULTS.max_force             # N
+    max_torque: float = _PHYSICS_DEFAULTS.max_torque           # N*m
     robot_dof: str = TRANSLATION
     human_period: typing.Optional[float] = None   # s: the human's command is applied this
     #                                         often; None: once a period (the sim passes its own)

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import math
 import warnings
 
-from hrc_common.contract import other_dof
+from hrc_common.contract import other_dof, paper_case_ids
 import numpy
 
 from hrc_study.sessions import (final_block_start, kind_of, kinds_known, measures,
@@ -178,7 +178,7 @@ def figure_actions(sessions, profile: str, path, seconds: float = 4.0) -> None:
     for axis in axes.flat:
         axis.set_visible(False)
     for case_id, members in groups.items():
-        if case_id not in range(1, 7):
+        if case_id not in paper_case_ids():   # the paper's 2 x 3 panels
             continue
         axis = axes[(case_id + 1) % 2][(case_id - 1) // 2]
         axis.set_visible(True)

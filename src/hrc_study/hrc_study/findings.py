@@ -53,6 +53,8 @@ import math
 
 import numpy
 
+from hrc_common.contract import paper_case_ids
+
 from hrc_study.sessions import measures
 from hrc_study.statistics import (holm, logrank_faster, mann_whitney_less,
                                   stratified_logrank_faster, TestResult, wilcoxon_less)
@@ -296,7 +298,6 @@ def finding_e(data: CaseData, profile: str, key: str = 'e') -> Finding:
     return finding
 
 
-ALL_CASES = (1, 2, 3, 4, 5, 6)
 CLAIMS = {'a': 'Learn task first gives the best team performance',
           'b': 'Learn task first needs the least human involvement',
           'c': 'Learn human first converges fastest',
@@ -315,14 +316,14 @@ def evaluate_findings(sessions, primary_profile: str = '', alpha: float = ALPHA)
     findings = []
     for builder in builders:
         key = builder.__name__[-1]
-        missing = _missing(data, primary, ALL_CASES)
+        missing = _missing(data, primary, paper_case_ids())
         if missing:
             findings.append(Finding(key, CLAIMS[key], '', '', missing=missing))
         else:
             findings.append(builder(data, primary))
     for index, profile in enumerate(other for other in profiles if other != primary):
         key = "e'" + "'" * index
-        missing = _missing(data, profile, ALL_CASES)
+        missing = _missing(data, profile, paper_case_ids())
         if missing:
             findings.append(Finding(key, f'{CLAIMS["e"]} (simulated human: {profile})', '', '',
                                     missing=missing))

@@ -2,6 +2,8 @@
 
 import numpy
 
+from hrc_common.contract import paper_case_ids
+
 from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord, strategy_step_counts
 
 
@@ -62,7 +64,7 @@ def paper_like(seeds: int = 10, profile: str = 'paper', seed: int = 0, flip: boo
     length = {1: 120, 2: 110, 3: 60, 4: 50, 5: 300, 6: 90}
     human_episodes = {1: 20, 2: 15}      # task first: the human joins for the last ones
     sessions = []
-    for case_id in range(1, 7):
+    for case_id in paper_case_ids():   # the values above are the paper's six cases
         for person in range(seeds):
             episodes = int(length[case_id] * rng.uniform(0.8, 1.2)) if case_id != 5 else 300
             sessions.append(make_session(
