@@ -116,6 +116,7 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
 
 def read_bag_with_rosbags(typestore, folder) -> dict:
     """Read a rosbag2 folder with rosbags: {topic: [decoded messages]}."""
+    # lazy: rosbags (the independent reader) only for the tests that read bags back
     from rosbags.rosbag2 import Reader
 
     messages = collections.defaultdict(list)
