@@ -134,6 +134,22 @@ def boundary_event(type_name: str, message):
     return None
 
 
+def boundary_event_of_cdr(type_name: str, data: bytes, deserialize: typing.Callable):
+    """Return the event of a message given as CDR bytes (or None), deserializing only if needed.
+
+    A TaskState (one every step) is read from its bytes (:func:`hrc_bag.cdr_peek.task_state`);
+    the rare EpisodeSummary and SessionStatus, and a TaskState whose layout the reader does
+    not know, are deserialized with ``deserialize(data)``.
+    """
+    if type_name == TASK_STATE_TYPE:
+        peeked = cdr_peek.task_state(data)
+        if peeked is not None:
+            return StateSeen(*peeked)
+    if type_name in BOUNDARY_TYPES:
+        return boundary_event(type_name, deserialize(data))
+    return None
+
+
 @dataclass
 class OpenEpisode:
     """An episode file being written, and when and why it is to be closed."""
@@ -398,6 +414,32 @@ class EpisodeRecorder:
         self._lags.append((now, lag))
         self.tick()
 
+    def record_batch(self, messages: list) -> None:
+        """Record ``(message, event)`` pairs taken together, with one release at the end.
+
+        The node drains its subscriptions in batches. The files are those of :meth:`record` of each
+        in turn (messages are handled in log-time order either way); only a message older than
+        the reorder window when it arrives could be placed differently, and in the batch it
+        takes its place in log-time order among the batch's others.
+
+        The executor's lag is counted once per batch, as the lag of its oldest message (every
+        message of the batch was taken at the same moment, so that lag is the batch's largest).
+        """
+        if self.failed is not None:
+            raise self.failed
+        if messages:
+            oldest = messages[0][0].log_time
+            for message, event in messages:
+                heapq.heappush(self._reorder,
+                               (message.log_time, next(self._arrivals), message, event))
+                oldest = min(oldest, message.log_time)
+            now = self._wall_clock()
+            lag = now - oldest
+            while self._lags and self._lags[-1][1] <= lag:
+                self._lags.pop()
+            self._lags.append((now, lag))
+        self.tick()
+
     def waiting_window(self, now: int) -> int:
         """Return how long (ns) a message waits for others: reorder_window or the lag.
 
@@ -419,6 +461,19 @@ class EpisodeRecorder:
         while self._reorder and (everything or self._reorder[0][0] <= threshold):
             _, _, message, event = heapq.heappop(self._reorder)
             self._handle(message, event)
+            # a file due to close (at once after its EpisodeSummary, by default) closes before
+            # the next message is handled, however many are released together: the files do
+            # not depend on how the messages were batched
+            self._close_due()
+
+    def _close_due(self) -> None:
+        """Close the open files whose close time has come."""
+        if not any(episode.close_at is not None for episode in self.open_files.values()):
+            return
+        now = self._clock()
+        for episode in list(self.open_files.values()):
+            if episode.close_at is not None and now >= episode.close_at:
+                self._close(episode, episode.reason)
 
     def _episode_of(self, message: RawMessage, event) -> typing.Optional[int]:
         """Return the episode a message belongs to, or None when it does not say."""
@@ -491,10 +546,8 @@ class EpisodeRecorder:
         if self.failed is not None:
             raise self.failed
         self._release()
+        self._close_due()
         now = self._clock()
-        for episode in list(self.open_files.values()):
-            if episode.close_at is not None and now >= episode.close_at:
-                self._close(episode, episode.reason)
         if now - self._last_flush >= self.params.flush_period:
             self._last_flush = now
             for episode in self.open_files.values():
