@@ -23,6 +23,10 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    the recorder process's own CPU (its last log line), for each recorder variant named
    (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
    ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
+5. with ``--compose sim,human ...``: the graph with those nodes in one process
+   (``HRC_COMPOSE``, hrc_bringup.compose_nodes) against the same graph with a process per node:
+   a composition with the recorder runs with the (batched) recorder and is compared with the
+   separate graph with it, one without against the graph without a recorder.
 
 Case 5 by default: the human acts from the start (case 2's first episodes are the robot's alone
 and would hide the human's rate). Episodes run 200 steps; updates between episodes are left out
@@ -138,15 +142,18 @@ def recorder_cpu(work: pathlib.Path, session_id: str) -> float:
     return float(found[-1]) if found else float('nan')
 
 
-def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, executor_name):
+def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, executor_name,
+               compose=''):
     """Return graph_rate.graph_rate's result with the nodes on ``executor_name``.
 
     ``recorder``: None (no recorder) or a name of RECORDERS; then the result also holds the
-    recorder process's CPU (``recorder_cpu``, s).
+    recorder process's CPU (``recorder_cpu``, s; nan when composed: its process is shared).
+    ``compose``: HRC_COMPOSE of the session ('' = a process per node).
     """
     from graph_rate import graph_rate
     previous = os.environ.get('HRC_EXECUTOR')
     os.environ['HRC_EXECUTOR'] = executor_name
+    os.environ['HRC_COMPOSE'] = compose
     try:
         result = graph_rate(case, episodes, seed, recorder is not None, domain_id, work,
                             human_period, RECORDERS.get(recorder, ()))
@@ -154,6 +161,7 @@ def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, ex
             result['recorder_cpu'] = recorder_cpu(work, result['session_id'])
         return result
     finally:
+        del os.environ['HRC_COMPOSE']
         if previous is None:
             del os.environ['HRC_EXECUTOR']
         else:
@@ -179,6 +187,9 @@ def main() -> int:
     parser.add_argument('--recorders', nargs='+', default=['batched'],
                         choices=tuple(RECORDERS),
                         help='recorder variants measured against the graph without one')
+    parser.add_argument('--compose', nargs='*', default=[], metavar='NODES',
+                        help='compositions (HRC_COMPOSE, e.g. sim,human) measured against a '
+                             'process per node')
     parser.add_argument('--echo', nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo:
@@ -214,6 +225,15 @@ def main() -> int:
                               f'{1000 / result["rate"]:.3f} ms/step ({result["rate"]:.0f} '
                               f'steps/s, nodes CPU {result["cpu"]:.1f} s{own} in '
                               f'{result["wall"]:.1f} s)', flush=True)
+                    for compose in args.compose:
+                        recorder = 'batched' if 'recorder' in compose.split(',') else None
+                        result = graph_step(args.case, args.episodes, args.seed, recorder,
+                                            args.domain_id, work, period, name, compose)
+                        figures['graph'][(period, name, compose)] = result
+                        print(f'round {index + 1}: graph ({name}), human_period {period:g} s, '
+                              f'composed {compose}: {1000 / result["rate"]:.3f} ms/step '
+                              f'({result["rate"]:.0f} steps/s, nodes CPU {result["cpu"]:.1f} s '
+                              f'in {result["wall"]:.1f} s)', flush=True)
             rounds.append(figures)
     median = statistics.median
     reference = 'rclpy' if 'rclpy' in args.executors else args.executors[0]
@@ -247,6 +267,20 @@ def main() -> int:
                       f'..{rate_costs[-1] * 100:+.1f}), {cpu_cost * 100:+.1f}% nodes CPU '
                       f'({cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f}); recorder '
                       f'process {own:.2f} s CPU')
+            for compose in args.compose:
+                separate = 'batched' if 'recorder' in compose.split(',') else None
+                if (period, name, separate) not in rounds[0]['graph']:
+                    print(f'    composed {compose}: (no separate graph with recorder '
+                          f'{separate} measured: add --recorders {separate})')
+                    continue
+                composed = [r['graph'][(period, name, compose)] for r in rounds]
+                apart = [r['graph'][(period, name, separate)] for r in rounds]
+                ratios = sorted(p['rate'] / c['rate'] for c, p in zip(composed, apart))
+                cpu = median(c['cpu'] / p['cpu'] for c, p in zip(composed, apart))
+                composed_step = median(1000 / c['rate'] for c in composed)
+                print(f'    composed {compose:19s}: {composed_step:7.3f} ms/step; step time '
+                      f'composed / a process per node {median(ratios):.2f} (rounds '
+                      f'{ratios[0]:.2f}..{ratios[-1]:.2f}), nodes CPU x{cpu:.2f}')
     print(f'load average at the end: {os.getloadavg()[0]:.1f}')
     return 0
 
