@@ -175,7 +175,7 @@ class RecorderNode(Node):
         """Never called: _drain takes these subscriptions' messages."""
 
     def _take_waiting(self) -> list:
-        """Return (RawMessage, event) of every message waiting in the tap's subscriptions.
+        """Return (RawMessage, event) of every message waiting in the recording subscriptions.
 
         At most ``subscription_depth`` per subscription and call (what its history holds),
         so that a publisher faster than this loop cannot keep it here.
@@ -273,7 +273,6 @@ class RecorderNode(Node):
         self.get_logger().info(
             f'{sum(info.message_count for info in self.core.closed_files)} messages recorded '
             f'in {len(self.core.closed_files)} files; process CPU {time.process_time():.2f} s')
-
 
 
 def main(args=None):
