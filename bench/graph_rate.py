@@ -147,8 +147,12 @@ class StateTimer:
 
 
 def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int,
-               work: pathlib.Path, human_period: float = None) -> dict:
-    """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s}."""
+               work: pathlib.Path, human_period: float = None, settings=()) -> dict:
+    """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s, ...}.
+
+    ``settings``: more ``NODE.PARAM=VALUE`` overrides (``hrc session --set``). The result also
+    names the session (``session_id``; its logs are in ``work/runs/<session_id>/logs``).
+    """
     from hrc_common.executables import executable_path
 
     timer = StateTimer(domain_id)
@@ -161,6 +165,8 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
         command.append('--no-record')
     if human_period is not None:
         command += ['--set', f'sim.human_period={human_period}']
+    for setting in settings:
+        command += ['--set', setting]
     before = os.times()
     start = time.perf_counter()
     result = subprocess.run(command, capture_output=True, text=True, cwd=work)
@@ -173,7 +179,8 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
     rates = timer.episode_rates()
     return {'rate': statistics.median(rates) if rates else float('nan'), 'episodes': len(rates),
             'cpu': (after.children_user + after.children_system)
-            - (before.children_user + before.children_system), 'wall': wall}
+            - (before.children_user + before.children_system), 'wall': wall,
+            'session_id': name}
 
 
 def main() -> int:

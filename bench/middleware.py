@@ -19,7 +19,14 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    acting once a period and ``control_period / human_period`` round trips at the human's rate
    (one slice answer each; the robot's answer travels with the first). The round trip is the
    'rclpy' one when measured (the middleware with rclpy's executor), else the first executor's.
-   The recorder's overhead on the rate and on the nodes' CPU.
+   The recorder's overhead on the rate and on the nodes' CPU (all the session's processes), and
+   the recorder process's own CPU (its last log line), for each recorder variant named
+   (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
+   ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
+5. with ``--compose sim,human ...``: the graph with those nodes in one process
+   (``HRC_COMPOSE``, hrc_bringup.compose_nodes) against the same graph with a process per node:
+   a composition with the recorder runs with the (batched) recorder and is compared with the
+   separate graph with it, one without against the graph without a recorder.
 
 Case 5 by default: the human acts from the start (case 2's first episodes are the robot's alone
 and would hide the human's rate). Episodes run 200 steps; updates between episodes are left out
@@ -29,6 +36,7 @@ of the step times (steps are timed within episodes by a listener on /hrc/state).
 import argparse
 import os
 import pathlib
+import re
 import statistics
 import subprocess
 import sys
@@ -41,6 +49,8 @@ sys.path.insert(0, str(REPOSITORY / 'bench'))
 PING = '/bench/ping'
 PONG = '/bench/pong'
 CONTROL_PERIOD_S = 0.2
+# recorder variant -> its `hrc session --set` overrides
+RECORDERS = {'batched': (), 'per-message': ('recorder.batch_period=0.0',)}
 
 
 def echo(domain_id: int, executor_name: str) -> int:
@@ -125,14 +135,33 @@ def ping_pong(domain_id: int, executor_name: str, round_trips: int) -> float:
     return statistics.median(times[100:]) * 1000
 
 
-def graph_step(case, episodes, seed, record, domain_id, work, human_period, executor_name):
-    """Return graph_rate.graph_rate's result with the nodes on ``executor_name``."""
+def recorder_cpu(work: pathlib.Path, session_id: str) -> float:
+    """Return the recorder process's CPU (s) from its last log line (nan if not found)."""
+    log = work / 'runs' / session_id / 'logs' / 'recorder.log'
+    found = re.findall(r'process CPU ([0-9.]+) s', log.read_text() if log.is_file() else '')
+    return float(found[-1]) if found else float('nan')
+
+
+def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, executor_name,
+               compose=''):
+    """Return graph_rate.graph_rate's result with the nodes on ``executor_name``.
+
+    ``recorder``: None (no recorder) or a name of RECORDERS; then the result also holds the
+    recorder process's CPU (``recorder_cpu``, s; nan when composed: its process is shared).
+    ``compose``: HRC_COMPOSE of the session ('' = a process per node).
+    """
     from graph_rate import graph_rate
     previous = os.environ.get('HRC_EXECUTOR')
     os.environ['HRC_EXECUTOR'] = executor_name
+    os.environ['HRC_COMPOSE'] = compose
     try:
-        return graph_rate(case, episodes, seed, record, domain_id, work, human_period)
+        result = graph_rate(case, episodes, seed, recorder is not None, domain_id, work,
+                            human_period, RECORDERS.get(recorder, ()))
+        if recorder is not None:
+            result['recorder_cpu'] = recorder_cpu(work, result['session_id'])
+        return result
     finally:
+        del os.environ['HRC_COMPOSE']
         if previous is None:
             del os.environ['HRC_EXECUTOR']
         else:
@@ -155,6 +184,12 @@ def main() -> int:
     parser.add_argument('--graph-executors', nargs='+', default=None,
                         choices=('lean', 'rclpy', 'events'),
                         help='executors of the graph runs (default: --executors)')
+    parser.add_argument('--recorders', nargs='+', default=['batched'],
+                        choices=tuple(RECORDERS),
+                        help='recorder variants measured against the graph without one')
+    parser.add_argument('--compose', nargs='*', default=[], metavar='NODES',
+                        help='compositions (HRC_COMPOSE, e.g. sim,human) measured against a '
+                             'process per node')
     parser.add_argument('--echo', nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo:
@@ -179,15 +214,27 @@ def main() -> int:
                 print(f'round {index + 1}: engine, human_period {period:g} s: '
                       f'{1000 / rate:.3f} ms/step ({rate:.0f} steps/s)', flush=True)
                 for name in graph_executors:
-                    for record in (False, True):
-                        result = graph_step(args.case, args.episodes, args.seed, record,
-                                            args.domain_id, work, period, name)
-                        figures['graph'][(period, name, record)] = result
+                    # the variants in a rotated order each round: at human_period 0.2 s the
+                    # second graph run of a round was slower than the third in 7 of 8 rounds
+                    # (by 10-77%), whichever recorder it ran (cause not found)
+                    variants = ([(None, '')] + [(recorder, '') for recorder in args.recorders]
+                                + [('batched' if 'recorder' in compose.split(',') else None,
+                                    compose) for compose in args.compose])
+                    shift = index % len(variants)
+                    for recorder, compose in variants[shift:] + variants[:shift]:
+                        result = graph_step(args.case, args.episodes, args.seed, recorder,
+                                            args.domain_id, work, period, name, compose)
+                        figures['graph'][(period, name, compose or recorder)] = result
+                        if compose:
+                            what = f', composed {compose}'
+                        else:
+                            what = f', recorder {recorder}' if recorder else ''
+                        own = (f', recorder process {result["recorder_cpu"]:.2f} s'
+                               if recorder and not compose else '')
                         print(f'round {index + 1}: graph ({name}), human_period {period:g} s'
-                              f'{", recorder" if record else ""}: '
-                              f'{1000 / result["rate"]:.3f} ms/step ({result["rate"]:.0f} '
-                              f'steps/s, nodes CPU {result["cpu"]:.1f} s in '
-                              f'{result["wall"]:.1f} s)', flush=True)
+                              f'{what}: {1000 / result["rate"]:.3f} ms/step '
+                              f'({result["rate"]:.0f} steps/s, nodes CPU {result["cpu"]:.1f} s'
+                              f'{own} in {result["wall"]:.1f} s)', flush=True)
             rounds.append(figures)
     median = statistics.median
     reference = 'rclpy' if 'rclpy' in args.executors else args.executors[0]
@@ -203,17 +250,38 @@ def main() -> int:
         print(f'human_period {period:g} s ({trips} round trip(s) per step): engine '
               f'{engine:.3f} ms/step, limit {limit:.3f} ms/step')
         for name in graph_executors:
-            plain = [r['graph'][(period, name, False)] for r in rounds]
-            recorded = [r['graph'][(period, name, True)] for r in rounds]
+            plain = [r['graph'][(period, name, None)] for r in rounds]
             step = median(1000 / g['rate'] for g in plain)
-            step_recorded = median(1000 / g['rate'] for g in recorded)
-            ratio = median(1000 / r['graph'][(period, name, False)]['rate']
+            ratio = median(1000 / r['graph'][(period, name, None)]['rate']
                            / (r['rt'][reference] * trips + r['engine'][period]) for r in rounds)
-            rate_cost = median(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
-            cpu_cost = median(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
-            print(f'  graph ({name:5s}): {step:7.3f} ms/step, with recorder '
-                  f'{step_recorded:7.3f}; graph / limit {ratio:.2f}; recorder costs '
-                  f'{rate_cost * 100:+.1f}% of the rate, {cpu_cost * 100:+.1f}% nodes CPU')
+            print(f'  graph ({name:5s}): {step:7.3f} ms/step; graph / limit {ratio:.2f}')
+            for recorder in args.recorders:
+                recorded = [r['graph'][(period, name, recorder)] for r in rounds]
+                step_recorded = median(1000 / g['rate'] for g in recorded)
+                rate_cost = median(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
+                rate_costs = sorted(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
+                cpu_cost = median(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
+                cpu_costs = sorted(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
+                own = median(g['recorder_cpu'] for g in recorded)
+                print(f'    with recorder {recorder:11s}: {step_recorded:7.3f} ms/step; costs '
+                      f'{rate_cost * 100:+.1f}% of the rate (rounds {rate_costs[0] * 100:+.1f}'
+                      f'..{rate_costs[-1] * 100:+.1f}), {cpu_cost * 100:+.1f}% nodes CPU '
+                      f'({cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f}); recorder '
+                      f'process {own:.2f} s CPU')
+            for compose in args.compose:
+                separate = 'batched' if 'recorder' in compose.split(',') else None
+                if (period, name, separate) not in rounds[0]['graph']:
+                    print(f'    composed {compose}: (no separate graph with recorder '
+                          f'{separate} measured: add --recorders {separate})')
+                    continue
+                composed = [r['graph'][(period, name, compose)] for r in rounds]
+                apart = [r['graph'][(period, name, separate)] for r in rounds]
+                ratios = sorted(p['rate'] / c['rate'] for c, p in zip(composed, apart))
+                cpu = median(c['cpu'] / p['cpu'] for c, p in zip(composed, apart))
+                composed_step = median(1000 / c['rate'] for c in composed)
+                print(f'    composed {compose:19s}: {composed_step:7.3f} ms/step; step time '
+                      f'composed / a process per node {median(ratios):.2f} (rounds '
+                      f'{ratios[0]:.2f}..{ratios[-1]:.2f}), nodes CPU x{cpu:.2f}')
     print(f'load average at the end: {os.getloadavg()[0]:.1f}')
     return 0
 

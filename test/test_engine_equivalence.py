@@ -229,3 +229,22 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(
     mixed = [state for state in graph_messages['/hrc/state'][0][1:]
              if len(set(state['human_applied'])) > 1]
     assert len(mixed) >= 5, graph_messages['/hrc/state'][0][1]
+
+
+def test_sim_human_and_recorder_in_one_process_give_the_same_session(tmp_path, ros_domain_id,
+                                                                     read_rosbag, monkeypatch):
+    """``HRC_COMPOSE=sim,human,recorder`` (hrc_bringup.compose_nodes): one process, one executor.
+
+    The sim, the human node and the recorder run as three nodes of one process on one
+    LeanExecutor (the agent in its own): the session is bit for bit the engine's, and the
+    recorder composed with them writes it whole. A short session (10 steps an episode).
+    """
+    monkeypatch.setenv('HRC_COMPOSE', 'sim,human,recorder')
+    args = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
+            '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
+            '--set', 'agent.minibatch_size=8']
+    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
+    assert all(len(graph_messages['/hrc/state'][episode]) == 11 for episode in (0, 1, 2))
+    logs = sorted(path.name for path in (tmp_path / 'graph' / 'runs' / 'same' / 'logs').iterdir())
+    assert logs == ['agent.log', 'sim+human+recorder.log'], logs

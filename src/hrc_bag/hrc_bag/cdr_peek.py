@@ -17,7 +17,7 @@ import functools
 import struct
 import typing
 
-from hrc_common.contract import HUMAN_ACTION_TYPE, NS_PER_S
+from hrc_common.contract import HUMAN_ACTION_TYPE, NS_PER_S, TASK_STATE_TYPE
 
 from hrc_bag import msgdefs
 
@@ -95,3 +95,56 @@ def human_action(data: bytes) -> typing.Optional[tuple]:
     except struct.error:
         return None
     return seconds * NS_PER_S + nanoseconds, episode, step, source, bool(engaged)
+
+
+# the fields task_state() reads or steps over, in the order of the .msg (checked at run time)
+_TASK_STATE_LAYOUT = ([('std_msgs/Header', 'header'), ('uint32', 'episode'), ('uint32', 'step')]
+                      + [('float64', name) for name in (
+                          'slider_position', 'slider_velocity', 'pendulum_angle',
+                          'pendulum_angular_velocity', 'ball_position', 'ball_velocity',
+                          'applied_force', 'applied_torque')]
+                      + [('bool', 'robot_command_missing'), ('bool', 'human_command_missing'),
+                         ('uint16', 'slice'), ('float64[]', 'human_applied'),
+                         ('bool', 'terminated'), ('bool', 'truncated')])
+
+
+@functools.lru_cache(maxsize=None)
+def _task_state_readable() -> bool:
+    try:
+        return msgdefs.fields(TASK_STATE_TYPE) == _TASK_STATE_LAYOUT
+    except (msgdefs.DefinitionNotFound, ValueError):
+        return False
+
+
+def task_state(data: bytes) -> typing.Optional[tuple]:
+    """Return (episode, step, final) of a CDR TaskState (final: terminated or truncated).
+
+    What the recorder needs of every state to find the episode boundaries, without a
+    deserialization (which costs ten times more). None when the installed TaskState has other
+    fields than this reader knows or the bytes do not add up (the caller then deserializes):
+    the two bools are the last bytes of the payload, up to 3 bytes of end padding.
+    """
+    if not _task_state_readable() or len(data) < ENCAPSULATION + 12:
+        return None
+    order = '<' if data[1] == 1 else '>'
+    size = len(data) - ENCAPSULATION
+    try:
+        (length,) = struct.unpack_from(order + 'I', data, ENCAPSULATION + 8)   # frame_id
+        position = 12 + length
+        position += -position % 4
+        episode, step = struct.unpack_from(order + 'II', data, ENCAPSULATION + position)
+        position += 8
+        position += -position % 8 + 8 * 8           # the eight float64
+        position += 2                               # the two command_missing bools
+        position += -position % 2 + 2               # uint16 slice
+        position += -position % 4
+        (count,) = struct.unpack_from(order + 'I', data, ENCAPSULATION + position)
+        position += 4
+        if count:
+            position += -position % 8 + 8 * count   # float64[] human_applied
+        if not 0 <= size - (position + 2) < 4:
+            return None
+        terminated, truncated = struct.unpack_from('BB', data, ENCAPSULATION + position)
+    except struct.error:
+        return None
+    return episode, step, bool(terminated or truncated)

@@ -42,18 +42,22 @@ Episode boundaries (the rule; the node turns messages into the events used here)
   ``<session_id>_end.mcap``.
 
 Messages are handled in the order DDS received them (their log time), after ``reorder_window``
-seconds: rclpy's executor takes one message per subscription in turn, so a recorder that lags
-behind gets a topic's messages later than another topic's received after them. When it lags
-more than that (a loaded machine), the wait follows the lag (1.5 times the largest of the last
-second), so an episode file is not closed before its messages queued in DDS are in.
+seconds: the node takes its subscriptions' messages topic after topic (in batches,
+:meth:`EpisodeRecorder.record_batch`; or rclpy's executor one message per subscription in turn),
+so a recorder that lags behind gets a topic's messages later than another topic's received
+after them. A file due to close closes before the next message is handled, so the files do not
+depend on how many messages are handled together. When it lags more than that (a loaded
+machine), the wait follows the lag (1.5 times the largest of the last second), so an episode
+file is not closed before its messages queued in DDS are in.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
-exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus
-the ``reorder_window`` (defaults 0.1 + 0.2 s) of the open episode; a finished episode's file
-is closed (summary, indexes, footer, fsync) about ``reorder_window`` after its EpisodeSummary
-arrived, and metadata.yaml lists only closed files. A later recorder of the same session
-finishes the files a killed one left open (``recover``). Write errors (disk full,
-permissions) raise :class:`RecordingError`, which stops the recorder with a clear message.
+exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus the
+``reorder_window`` and what waits in DDS for the node's next batch (defaults 0.1 + 0.2 + 0.05
+s) of the open episode; a finished episode's file is closed (summary, indexes, footer, fsync)
+about ``reorder_window`` after its EpisodeSummary arrived, and metadata.yaml lists only closed
+files. A later recorder of the same session finishes the files a killed one left open
+(``recover``). Write errors (disk full, permissions) raise :class:`RecordingError`, which stops
+the recorder with a clear message.
 """
 
 import collections
@@ -131,6 +135,22 @@ def boundary_event(type_name: str, message):
         return SummarySeen(int(message.episode), str(message.session_id))
     if type_name == SESSION_STATUS_TYPE:
         return SessionSeen(plain_values(message))
+    return None
+
+
+def boundary_event_of_cdr(type_name: str, data: bytes, deserialize: typing.Callable):
+    """Return the event of a message given as CDR bytes (or None), deserializing only if needed.
+
+    A TaskState (one every step) is read from its bytes (:func:`hrc_bag.cdr_peek.task_state`);
+    the rare EpisodeSummary and SessionStatus, and a TaskState whose layout the reader does
+    not know, are deserialized with ``deserialize(data)``.
+    """
+    if type_name == TASK_STATE_TYPE:
+        peeked = cdr_peek.task_state(data)
+        if peeked is not None:
+            return StateSeen(*peeked)
+    if type_name in BOUNDARY_TYPES:
+        return boundary_event(type_name, deserialize(data))
     return None
 
 
@@ -398,6 +418,32 @@ class EpisodeRecorder:
         self._lags.append((now, lag))
         self.tick()
 
+    def record_batch(self, messages: list) -> None:
+        """Record ``(message, event)`` pairs taken together, with one release at the end.
+
+        The node drains its subscriptions in batches. The files are those of :meth:`record` of each
+        in turn (messages are handled in log-time order either way); only a message older than
+        the reorder window when it arrives could be placed differently, and in the batch it
+        takes its place in log-time order among the batch's others.
+
+        The executor's lag is counted once per batch, as the lag of its oldest message (every
+        message of the batch was taken at the same moment, so that lag is the batch's largest).
+        """
+        if self.failed is not None:
+            raise self.failed
+        if messages:
+            oldest = messages[0][0].log_time
+            for message, event in messages:
+                heapq.heappush(self._reorder,
+                               (message.log_time, next(self._arrivals), message, event))
+                oldest = min(oldest, message.log_time)
+            now = self._wall_clock()
+            lag = now - oldest
+            while self._lags and self._lags[-1][1] <= lag:
+                self._lags.pop()
+            self._lags.append((now, lag))
+        self.tick()
+
     def waiting_window(self, now: int) -> int:
         """Return how long (ns) a message waits for others: reorder_window or the lag.
 
@@ -419,6 +465,19 @@ class EpisodeRecorder:
         while self._reorder and (everything or self._reorder[0][0] <= threshold):
             _, _, message, event = heapq.heappop(self._reorder)
             self._handle(message, event)
+            # a file due to close (at once after its EpisodeSummary, by default) closes before
+            # the next message is handled, however many are released together: the files do
+            # not depend on how the messages were batched
+            self._close_due()
+
+    def _close_due(self) -> None:
+        """Close the open files whose close time has come."""
+        if not any(episode.close_at is not None for episode in self.open_files.values()):
+            return
+        now = self._clock()
+        for episode in list(self.open_files.values()):
+            if episode.close_at is not None and now >= episode.close_at:
+                self._close(episode, episode.reason)
 
     def _episode_of(self, message: RawMessage, event) -> typing.Optional[int]:
         """Return the episode a message belongs to, or None when it does not say."""
@@ -491,10 +550,8 @@ class EpisodeRecorder:
         if self.failed is not None:
             raise self.failed
         self._release()
+        self._close_due()
         now = self._clock()
-        for episode in list(self.open_files.values()):
-            if episode.close_at is not None and now >= episode.close_at:
-                self._close(episode, episode.reason)
         if now - self._last_flush >= self.params.flush_period:
             self._last_flush = now
             for episode in self.open_files.values():

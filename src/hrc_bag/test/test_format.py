@@ -5,7 +5,7 @@ import os
 import subprocess
 import sys
 
-from hrc_msgs.msg import HumanAction, SessionStatus
+from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
 from rclpy.serialization import serialize_message
@@ -218,6 +218,21 @@ def test_the_human_action_is_read_from_cdr_whatever_the_string_lengths(frame_id,
     message.header.frame_id = frame_id
     assert cdr_peek.human_action(serialize_message(message)) == (5_000_000_009, 7, 3,
                                                                  HumanAction.SOURCE_JOY, True)
+
+
+@pytest.mark.parametrize('frame_id', ['', 'w', 'world', 'abcdefgh'])
+@pytest.mark.parametrize('applied', [[], [0.5], [0.1] * 10])
+def test_the_task_state_boundary_fields_are_read_from_cdr(frame_id, applied):
+    """The batched recorder reads episode, step and the end flags without deserializing."""
+    for terminated, truncated in ((False, False), (True, False), (False, True), (True, True)):
+        state = TaskState(episode=70000, step=199, slice=3, robot_command_missing=True,
+                          human_applied=applied, terminated=terminated, truncated=truncated)
+        state.header.frame_id = frame_id
+        data = serialize_message(state)
+        assert cdr_peek.task_state(data) == (70000, 199, terminated or truncated)
+        assert cdr_peek.task_state(data + bytes(2)) == (70000, 199, terminated or truncated)
+        assert cdr_peek.task_state(data[:-2]) is None          # cut: the caller deserializes
+        assert cdr_peek.task_state(data + bytes(4)) is None    # not a TaskState's length
 
 
 def test_each_episode_records_which_input_drove_the_human(tmp_path):

@@ -16,9 +16,9 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.recording import boundary_event, boundary_event_of_cdr, EpisodeRecorder
 from hrc_bag.synthetic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
-                               type_name_of)
+                               SyntheticSession, type_name_of)
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
@@ -444,3 +444,62 @@ def test_the_graph_is_asked_once_per_topic_and_file_not_per_message(tmp_path):
         counts = {connection.topic: connection.msgcount for connection in reader.connections}
         assert counts == {'/hrc/state': 40, '/hrc/human/cmd_wrench': 400, '/hrc/episode': 2}
         assert all(connection.ext.offered_qos_profiles for connection in reader.connections)
+
+
+def test_batches_give_the_files_of_one_message_at_a_time(tmp_path):
+    """The node drains its subscriptions in batches (issue 24): the files, message for message.
+
+    The same stream (a synthetic session: statuses between episodes, states, commands, steps,
+    summaries) with the same log times goes in one message at a time (the recorder before
+    issue 24: each TaskState deserialized) and in batches of 50 (each taken 1 ms after its
+    last message arrived; TaskState read from its bytes). A file due to close (at once after
+    its EpisodeSummary) closes before the next message of a batch is handled.
+    """
+    stream = []
+    session = SyntheticSession(sink=lambda topic, message: stream.append((topic, message)),
+                               session_id='b', seed=3)
+    for episode in range(3):
+        session.publish_status(episode, human_involved=True)
+        session.publish_episode(episode, steps=12, human_involved=True)
+    session.publish_status(3, SessionStatus.PHASE_DONE)
+    start = 1_700_000_000_000_000_000
+    messages = [(RawMessage(topic, type_name_of(message), serialize_message(message),
+                            start + index * 1_000_000, start + index * 1_000_000 - 500, index),
+                 type(message)) for index, (topic, message) in enumerate(stream)]
+
+    def record(folder, batch: int) -> dict:
+        wall = [0]
+        clock = FakeClock()
+        recorder = EpisodeRecorder(
+            RecorderParams(output_dir=str(folder), session_id='b'),
+            lambda topic, type_name: TopicDescription(type_name, (PROFILE,)), clock=clock,
+            wall_clock=lambda: wall[0])
+        for first in range(0, len(messages), batch):
+            chunk = messages[first:first + batch]
+            wall[0] = chunk[-1][0].log_time + 1_000_000
+            clock.now = wall[0] / 1e9
+            if batch == 1:
+                message, kind = chunk[0]
+                recorder.record(message, boundary_event(
+                    message.type_name, deserialize_message(message.data, kind)))
+            else:
+                recorder.record_batch([
+                    (message, boundary_event_of_cdr(
+                        message.type_name, message.data,
+                        lambda data, kind=kind: deserialize_message(data, kind)))
+                    for message, kind in chunk])
+        recorder.close()
+        return {path.name: [(message.topic, message.data, message.log_time,
+                             message.publish_time, message.sequence)
+                            for message in bag_reader.scan_file(path).messages]
+                for path in sorted((folder / 'b').glob('*.mcap'))}
+
+    one_at_a_time = record(tmp_path / 'one', 1)
+    assert list(one_at_a_time) == ['b_end.mcap', 'b_ep0000.mcap', 'b_ep0001.mcap',
+                                   'b_ep0002.mcap']
+    # each status announcing an episode opens its file; the last (done) is the end file's
+    assert [topic for topic, *_ in one_at_a_time['b_ep0001.mcap']][:2] == ['/hrc/session',
+                                                                          '/hrc/state']
+    assert [topic for topic, *_ in one_at_a_time['b_end.mcap']] == ['/hrc/session']
+    assert sum(len(file) for file in one_at_a_time.values()) == len(messages)
+    assert record(tmp_path / 'batched', 50) == one_at_a_time

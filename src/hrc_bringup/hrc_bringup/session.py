@@ -51,6 +51,7 @@ import rclpy
 from rclpy.context import Context
 import yaml
 
+from hrc_bringup.compose_nodes import session_composition
 from hrc_bringup.input_guard import InputGuard, wait_for_input
 from hrc_bringup.practice import run_practice
 from hrc_bringup.session_args import parse_args, person_input, resume_command
@@ -76,6 +77,10 @@ def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
 def run_session(settings: SessionSettings, options) -> int:
     """Run one session; return the exit code (0 = the agent finished the session)."""
     params_dir = pathlib.Path(options.params_dir) if options.params_dir else paths.params_dir()
+    composed, problems = session_composition()     # HRC_COMPOSE (issue 24)
+    if problems:
+        print('\n'.join(f'session: {problem}' for problem in problems), file=sys.stderr)
+        return 2
     try:
         parameters = compose(settings, params_dir)
     except (ValueError, OSError) as error:
@@ -151,6 +156,7 @@ def run_session(settings: SessionSettings, options) -> int:
     start = time.monotonic()
     started = time.strftime('%Y-%m-%dT%H:%M:%S')
     restarts = 0
+    process_of = {}         # node -> the name of its process (sim+human when composed)
     try:
         if options.display:
             # issue 25: served from the start (the waiting-for-the-joystick screen included)
@@ -174,12 +180,22 @@ def run_session(settings: SessionSettings, options) -> int:
                 guard.resumed()  # nothing to resume: an input lost in practice is only told
         # The recorder first, so it sees the first state; the sim before the agent resets it.
         for node in ('recorder', 'sim', 'human', 'agent'):
-            if node not in parameters or node in options.remote_nodes:
+            if node not in parameters or node in options.remote_nodes or node in process_of:
+                continue
+            together = [name for name in composed if name in parameters
+                        and name not in options.remote_nodes] if node in composed else []
+            if len(together) > 1:
+                # one process, one executor (hrc_bringup.compose_nodes), named sim+human...
+                supervisor.start('+'.join(together), [
+                    sys.executable, '-m', 'hrc_bringup.compose_nodes', *together, '--ros-args',
+                    '--params-file', str(params_path)])
+                process_of.update((name, '+'.join(together)) for name in together)
                 continue
             package, executable, _ = NODES[node]
             supervisor.start(node, [str(executable_path(package, executable)), '--ros-args',
                                     '--params-file', str(params_path)],
                              niceness=options.recorder_niceness if node == 'recorder' else 0)
+            process_of[node] = node
         while True:
             executor.spin_once(timeout_sec=0.1)
             if stop_reason:
@@ -237,7 +253,12 @@ def run_session(settings: SessionSettings, options) -> int:
                 code = 124
                 break
     finally:
-        exits = supervisor.stop_all(STOP_ORDER)
+        # a composed process stops where its last node would (the recorder still last)
+        order = []
+        for node in reversed(STOP_ORDER):
+            if process_of.get(node, node) not in order:
+                order.append(process_of.get(node, node))
+        exits = supervisor.stop_all(order[::-1])
         # Let the last episode summaries arrive before closing.
         progress.close()
         executor.shutdown()
@@ -247,7 +268,9 @@ def run_session(settings: SessionSettings, options) -> int:
     elapsed = time.monotonic() - start
     print(f'[session] stopped after {elapsed:.1f} s: ' + ', '.join(
         f'{name} {describe_exit(returncode)}' for name, returncode in exits.items()), flush=True)
-    if exits.get('recorder', 0) not in (0, None) and code in (0, EXIT_OPERATOR_ABORT):
+    recorder_exit = next((returncode for name, returncode in exits.items()
+                          if 'recorder' in name.split('+')), 0)
+    if recorder_exit not in (0, None) and code in (0, EXIT_OPERATOR_ABORT):
         print('[session] the recorder did not exit cleanly: check its log', file=sys.stderr)
         code = 1
     if code == EXIT_OPERATOR_ABORT:

@@ -240,7 +240,14 @@ EVENTS_TURN_S = 0.1
 
 
 def spin(node, executor_name: str) -> None:
-    """Serve ``node`` on the executor named until its context shuts down.
+    """Serve ``node`` on the executor named until its context shuts down (see spin_nodes)."""
+    spin_nodes([node], executor_name)
+
+
+def spin_nodes(nodes, executor_name: str) -> None:
+    """Serve ``nodes`` (one context) on one executor of the name given until it shuts down.
+
+    The executor serves the nodes in the order given (each node's callbacks in rclpy's order).
 
     rclpy's EventsExecutor (Jazzy, rclpy 7.1) is turned with a timeout: its ``spin()`` and its
     ``spin_once()`` without a timeout never run a callback and starve every other Python thread
@@ -249,15 +256,18 @@ def spin(node, executor_name: str) -> None:
     has no guard conditions ("Guard conditions not supported"): a node with one (the human
     node's stick watcher) is refused with a ParameterError (exit code 2).
     """
-    if executor_name == 'events' and any(True for _ in node.guards):
-        raise ParameterError(f"{EXECUTOR_VARIABLE}=events: rclpy's EventsExecutor has no guard "
-                             f'conditions (Jazzy) and node {node.get_name()!r} uses one; use '
-                             f'lean or rclpy')
-    executor = make_executor(executor_name, context=node.context)
-    executor.add_node(node)
+    for node in nodes:
+        if executor_name == 'events' and any(True for _ in node.guards):
+            raise ParameterError(f"{EXECUTOR_VARIABLE}=events: rclpy's EventsExecutor has no "
+                                 f'guard conditions (Jazzy) and node {node.get_name()!r} uses '
+                                 f'one; use lean or rclpy')
+    context = nodes[0].context
+    executor = make_executor(executor_name, context=context)
+    for node in nodes:
+        executor.add_node(node)
     try:
         if executor_name == 'events':
-            while node.context.ok():
+            while context.ok():
                 executor.spin_once(timeout_sec=EVENTS_TURN_S)
         else:
             executor.spin()
@@ -307,6 +317,19 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
     parameters (:func:`hrc_common.params.declare_parameters`). A node may define ``close()`` to
     release resources (files, PyBullet) before it is destroyed.
     """
+    return run_nodes([node_factory], executable, summary, params_cls, args)
+
+
+def run_nodes(node_factories, executable: str, summary: str, params_cls=None,
+              args=None) -> int:
+    """Run several nodes in this process on one executor (a component container), as run_node.
+
+    The nodes are made in the order given and served in that order; each reads its own section
+    of the --params-file (by node name). ``params_cls`` (one parameter class) checks the ``-p``
+    names of the command line before start; give None when the nodes' classes differ (each node
+    then rejects the names it does not know when it declares its parameters). On the way out
+    every node made is closed and destroyed, the last made first.
+    """
     argv = list(sys.argv if args is None else args)
     if wants_help(argv):
         try:
@@ -326,21 +349,28 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
     if executor_problem():
         return report_bad_parameters(executable, [executor_problem()])
 
-    node = None
+    nodes = []
     code = 0
     try:
         try:
             rclpy.init(args=argv)
         except Exception as error:  # rcl refuses the arguments (it says why)
             return report_bad_parameters(executable, [f'ROS refused the arguments: {error}'])
-        node = node_factory()
-        spin(node, os.environ.get(EXECUTOR_VARIABLE, 'lean'))
+        reasons = []
+        for node_factory in node_factories:
+            try:
+                nodes.append(node_factory())
+            except ParameterError as error:     # the other nodes' reasons too, at once
+                reasons += error.reasons
+        if reasons:
+            raise ParameterError('; '.join(reasons), reasons)
+        spin_nodes(nodes, os.environ.get(EXECUTOR_VARIABLE, 'lean'))
     except ParameterError as error:
         code = report_bad_parameters(executable, error.reasons)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        if node is not None:
+        for node in reversed(nodes):
             close = getattr(node, 'close', None)
             if close is not None:
                 close()
