@@ -11,7 +11,8 @@ response lag (cross-correlation) of the person and of the clone on the held-out 
 per slice at the human's own rate, ``TaskState.human_applied``); ``--targets command`` from
 the one ``HumanAction`` per step, as before (``hrc_partners.cloning``). On stderr, the
 progress with the time left, while the sessions are read (one step a session) and while the
-model trains (a line every tenth of the epochs when piped; a bar on a terminal).
+model trains (a line every tenth of the epochs; a bar under them on a terminal, plain lines
+when piped).
 Exit 2 with every reason for bad input.
 """
 
@@ -49,7 +50,7 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
-PROGRESS_LINES = 10        # lines of training progress when piped (one every tenth)
+PROGRESS_LINES = 10        # lines of training progress (one every tenth of the epochs)
 
 
 def load_with_progress(paths, log, stream=None) -> list:
@@ -69,14 +70,16 @@ def load_with_progress(paths, log, stream=None) -> list:
 def epoch_progress(epochs: int, stream=None):
     """Return ``(on_epoch, progress)``: ``on_epoch(done)`` shows the training's time left.
 
-    On a terminal the bar is redrawn every epoch; when piped a line is written every tenth of
-    the epochs (and at the last), so a log is not flooded.
+    A line every tenth of the epochs (and at the last), so that neither a terminal nor a log
+    is flooded; on a terminal the bar under them is redrawn with each.
     """
     progress = TimeLeft(epochs, 'epochs', stream=stream or sys.stderr)
-    every = 1 if progress.interactive else max(1, epochs // PROGRESS_LINES)
+    every = max(1, epochs // PROGRESS_LINES)
 
     def on_epoch(done):
-        if done % every == 0 or done == epochs:
+        if done == 0:   # the epochs start: the time spent building the data set is no epoch's
+            progress.started = progress.clock()
+        elif done % every == 0 or done == epochs:
             progress.show(done, 'clone_human: training')
     return on_epoch, progress
 
