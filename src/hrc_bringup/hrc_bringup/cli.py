@@ -37,12 +37,18 @@ USAGE_WIDTH = 99     # columns of `hrc --help`
 
 @dataclasses.dataclass(frozen=True)
 class Verb:
-    """One verb: its words after ``hrc``, what it does (one line), an example, its runner."""
+    """One verb: its words after ``hrc``, what it does (one line), an example, its runner.
+
+    ``help``, for a verb whose runner's module loads torch, PyBullet, ray, scipy or matplotlib
+    when imported: parses the arguments with the verb's own parser built in a light module, so
+    that ``--help`` prints the same text without those imports (argparse exits after it).
+    """
 
     words: tuple
     summary: str
     example: str
     run: typing.Callable[[list], int]
+    help: typing.Optional[typing.Callable[[list], None]] = None
 
     @property
     def name(self) -> str:
@@ -65,6 +71,22 @@ def _session(argv: list) -> int:
     return session.main(rest)
 
 
+def _session_help(argv: list) -> None:
+    engine, rest, problems = take_engine(argv)
+    if problems:
+        return      # the runner refuses them, every reason at once
+    if engine == 'inprocess':
+        from hrc_engine.inprocess_args import build_parser  # lazy: only for --help
+    else:
+        from hrc_bringup.session_args import build_parser  # lazy: only for --help
+    build_parser().parse_args(rest)
+
+
+def _experiment_help(argv: list) -> None:
+    from hrc_bringup.experiment_args import build_parser  # lazy: only for --help
+    build_parser().parse_args(argv)
+
+
 def _experiment(argv: list) -> int:
     from hrc_bringup import experiment  # lazy: torch, PyBullet, ray (see above)
     return experiment.main(argv)
@@ -82,6 +104,11 @@ def _bag_replay(argv: list) -> int:
 def _results(argv: list) -> int:
     from hrc_study import results_cli  # lazy: matplotlib, scipy (see above)
     return results_cli.main(argv)
+
+
+def _results_help(argv: list) -> None:
+    from hrc_study.results_args import build_parser  # lazy: only for --help
+    build_parser().parse_args(argv)
 
 
 def _study(argv: list) -> int:
@@ -119,6 +146,11 @@ def _partners_train(argv: list) -> int:
     return training.main(argv)
 
 
+def _partners_train_help(argv: list) -> None:
+    from hrc_partners.training_args import build_parser  # lazy: only for --help
+    build_parser().parse_args(argv)
+
+
 def _tree(argv: list) -> int:
     from hrc_agent_node import tree_tool  # lazy: matplotlib for --png (see above)
     return tree_tool.main(argv)
@@ -126,9 +158,9 @@ def _tree(argv: list) -> int:
 
 VERBS = (
     Verb(('session',), 'run one session (one case, one seed): the ROS graph, or in one process '
-         'with --engine inprocess', 'hrc session --case 2 --seed 0', _session),
+         'with --engine inprocess', 'hrc session --case 2 --seed 0', _session, _session_help),
     Verb(('experiment',), 'run paper cases x seeds (x simulated-human profiles) and report',
-         'hrc experiment --cases 2 --seeds 3 --episodes 10', _experiment),
+         'hrc experiment --cases 2 --seeds 3 --episodes 10', _experiment, _experiment_help),
     Verb(('bag', 'report'), "a session's bags: Table II, the figures, the episode kinds",
          'hrc bag report bags/<session> --out runs/<session>/report', _bag_report),
     Verb(('bag', 'replay'), 'play a recorded episode or session back on the ROS topics',
@@ -136,7 +168,7 @@ VERBS = (
     Verb(('bag', 'info'), 'what a bag holds: files, topics and types, message counts',
          'hrc bag info bags/<session>', bag_info.main),
     Verb(('results',), "the study's results from many sessions: tables, figures, statistics",
-         'hrc results runs/<experiment>/bags --out docs', _results),
+         'hrc results runs/<experiment>/bags --out docs', _results, _results_help),
     Verb(('study',), 'subject registry (register), case orders (assign), session commands '
          '(plan), per-subject index (index)', 'hrc study register P07 --consent yes', _study),
     Verb(('operator',), 'pause, resume or abort the running session, or show its status',
@@ -153,7 +185,8 @@ VERBS = (
          'short trials', 'hrc partners advisor --person person:paper_symmetric:0',
          _partners_advisor),
     Verb(('partners', 'train'), 'train agents with one simulated person or a population',
-         'hrc partners train --case 2 --seeds 0 --episodes 50', _partners_train),
+         'hrc partners train --case 2 --seeds 0 --episodes 50', _partners_train,
+         _partners_train_help),
     Verb(('tree',), "the task tree of a case: subtasks, rewards, each training step's roles",
          'hrc tree --case 2', _tree),
 )
@@ -247,6 +280,8 @@ def run_verb(verb: Verb, rest: list) -> int:
     # argparse names a parser without its own prog after argv[0]: make that the verb.
     program, sys.argv[0] = sys.argv[0], f'{PROG} {verb.name}'
     try:
+        if wants_help and verb.help is not None:
+            verb.help(list(rest))   # prints the help and exits; returns if '--help' was a value
         code = verb.run(list(rest))
     except SystemExit as exit_:     # argparse's --help and errors
         code = exit_.code if isinstance(exit_.code, int) else (0 if exit_.code is None else 1)

@@ -14,8 +14,8 @@ import yaml
 MAX_DOMAIN_ID = 232
 
 
-def parse_args(argv=None):
-    """Parse the command line into (SessionSettings, options)."""
+def build_parser() -> argparse.ArgumentParser:
+    """Return the parser of ``hrc session`` (the graph; its flags and help)."""
     parser = argparse.ArgumentParser(
         prog='hrc session', description='Run one hrc session (one case, one seed): sim, agent, '
         'human and recorder as supervised processes, then the report.')
@@ -102,6 +102,12 @@ def parse_args(argv=None):
                         'not slow the control loop; 0 = same priority as the nodes')
     parser.add_argument('--timeout', type=float, default=0.0,
                         help='stop the session after this many wall seconds (0 = none)')
+    return parser
+
+
+def parse_args(argv=None):
+    """Parse the command line into (SessionSettings, options)."""
+    parser = build_parser()
     options = parser.parse_args(argv)
     options.argv = list(sys.argv[1:] if argv is None else argv)
     overrides = {}

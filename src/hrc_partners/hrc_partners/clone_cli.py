@@ -9,7 +9,10 @@ there are at least two), trains on the rest and reports the held-out action erro
 response lag (cross-correlation) of the person and of the clone on the held-out episodes.
 ``--targets applied`` (default) learns from every command the sim applied in each period (one
 per slice at the human's own rate, ``TaskState.human_applied``); ``--targets command`` from
-the one ``HumanAction`` per step, as before (``hrc_partners.cloning``).
+the one ``HumanAction`` per step, as before (``hrc_partners.cloning``). On stderr, the
+progress with the time left, while the sessions are read (one step a session) and while the
+model trains (a line every tenth of the epochs; a bar under them on a terminal, plain lines
+when piped).
 Exit 2 with every reason for bad input.
 """
 
@@ -18,7 +21,9 @@ import json
 import pathlib
 import sys
 
+from hrc_bag.report import find_sessions
 from hrc_common.params import ParameterError
+from hrc_common.time_left import TimeLeft
 from hrc_joystick_node.human_model import build_network, save_human_model
 
 from hrc_partners.recordings import load_demonstrations
@@ -45,6 +50,40 @@ def parse_args(argv):
     return parser.parse_args(argv)
 
 
+PROGRESS_LINES = 10        # lines of training progress (one every tenth of the epochs)
+
+
+def load_with_progress(paths, log, stream=None) -> list:
+    """Return ``load_demonstrations(paths)``, read one session folder at a time with progress."""
+    folders = find_sessions(paths)
+    progress = TimeLeft(len(folders), 'sessions', stream=stream or sys.stderr)
+    demonstrations = []
+    for done, folder in enumerate(folders, start=1):
+        loaded = load_demonstrations([folder], log)
+        demonstrations += loaded
+        steps = sum(item.steps for item in loaded)
+        progress.show(done, f'clone_human: read {folder.name} ({steps} driven steps)')
+    progress.close()
+    return demonstrations
+
+
+def epoch_progress(epochs: int, stream=None):
+    """Return ``(on_epoch, progress)``: ``on_epoch(done)`` shows the training's time left.
+
+    A line every tenth of the epochs (and at the last), so that neither a terminal nor a log
+    is flooded; on a terminal the bar under them is redrawn with each.
+    """
+    progress = TimeLeft(epochs, 'epochs', stream=stream or sys.stderr)
+    every = max(1, epochs // PROGRESS_LINES)
+
+    def on_epoch(done):
+        if done == 0:   # the epochs start: the time spent building the data set is no epoch's
+            progress.started = progress.clock()
+        elif done % every == 0 or done == epochs:
+            progress.show(done, 'clone_human: training')
+    return on_epoch, progress
+
+
 def clone(args, log=print) -> dict:
     """Train and save the clone described by ``args``; return the report (ParameterError)."""
     from hrc_partners import cloning  # torch (seconds): --help answers without it
@@ -62,7 +101,7 @@ def clone(args, log=print) -> dict:
     problems += [f'{path}: no such session folder' for path in missing]
     if problems:
         raise ParameterError('; '.join(problems), problems)
-    demonstrations = load_demonstrations(args.paths, log)
+    demonstrations = load_with_progress(args.paths, log)
     dofs = sorted({item.dof for item in demonstrations})
     if not demonstrations:
         raise ParameterError('no session under the paths has a step driven by a person')
@@ -87,7 +126,11 @@ def clone(args, log=print) -> dict:
     settings = cloning.CloneSettings(history_steps=args.history_steps,
                                      hidden=tuple(args.hidden), epochs=args.epochs,
                                      seed=args.seed, targets=args.targets)
-    config, state_dict, train_rmse = cloning.train_clone(train, settings)
+    on_epoch, progress = epoch_progress(settings.epochs)
+    try:
+        config, state_dict, train_rmse = cloning.train_clone(train, settings, on_epoch)
+    finally:
+        progress.close()
     period = train[0].control_period
     config.update(dof=dof, control_period=period, description=(
         f'cloned on {dof} from {", ".join(item.session_id for item in train)} (sources: '

@@ -114,10 +114,12 @@ def split_by_subject(demonstrations, held_out: typing.Sequence[str]) -> tuple:
     return train, test
 
 
-def train_clone(demonstrations, settings: CloneSettings = None) -> tuple:
+def train_clone(demonstrations, settings: CloneSettings = None, on_epoch=None) -> tuple:
     """Fit the model to ``demonstrations``; return (config, state_dict, training RMSE).
 
     The config holds ``history_steps`` and ``hidden``; the caller adds the rest.
+    ``on_epoch(done)``, if given, is called with 0 when the epochs start (the data set is
+    built) and after each epoch (progress; it does not change the training).
     """
     settings = settings or CloneSettings()
     config = {'history_steps': int(settings.history_steps),
@@ -133,11 +135,15 @@ def train_clone(demonstrations, settings: CloneSettings = None) -> tuple:
     y = torch.tensor(targets, dtype=torch.float64).unsqueeze(1)
     optimizer = torch.optim.Adam(network.parameters(), lr=settings.learning_rate,
                                  weight_decay=settings.weight_decay)
-    for _ in range(settings.epochs):
+    if on_epoch is not None:
+        on_epoch(0)
+    for epoch in range(settings.epochs):
         optimizer.zero_grad()
         loss = torch.mean((network(x) - y) ** 2)
         loss.backward()
         optimizer.step()
+        if on_epoch is not None:
+            on_epoch(epoch + 1)
     with torch.no_grad():
         rmse = float(torch.sqrt(torch.mean((network(x) - y) ** 2)))
     torch.set_num_threads(threads)

@@ -10,7 +10,8 @@ Agents: ``NAME=CHECKPOINT[@TRAINING_PARTNER]`` (the training partner also comes 
 and each agent's drop is measured from it). Partners: ``profile:NAME``, ``person:NAME:K``,
 ``population:NAME``, ``model:PATH`` (hrc_partners.partners). Writes ``matrix.json`` (every
 seed's error), ``matrix.md`` (mean [95 % interval] and drops) and ``heatmap.png`` to --out and
-prints the Markdown. Exit 2 with every reason for bad input.
+prints the Markdown. On stderr, a line per cell with the time left (a bar on a terminal, plain
+lines when piped; none with --quiet). Exit 2 with every reason for bad input.
 """
 
 import argparse
@@ -18,6 +19,19 @@ import pathlib
 import sys
 
 from hrc_common.params import ParameterError
+from hrc_common.time_left import TimeLeft
+
+
+def cell_count(agents, partners) -> int:
+    """Return how many cells ``crossplay.run_matrix`` evaluates.
+
+    Each agent's training partner is added as a column when it is not among ``partners``.
+    """
+    columns = list(partners)
+    for agent in agents:
+        if agent.training_partner and agent.training_partner not in columns:
+            columns.append(agent.training_partner)
+    return len(agents) * len(columns)
 
 
 def main(argv=None) -> int:
@@ -31,7 +45,8 @@ def main(argv=None) -> int:
     parser.add_argument('--profiles-file', default=None,
                         help='simulated-human profiles (default: the installed sim_human.yaml)')
     parser.add_argument('--out', default='runs/crossplay')
-    parser.add_argument('--quiet', action='store_true', help='no line per cell on stderr')
+    parser.add_argument('--quiet', action='store_true',
+                        help='no line per cell (nor the time left) on stderr')
     args = parser.parse_args(argv)
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without
@@ -54,14 +69,23 @@ def main(argv=None) -> int:
         for problem in problems:
             print(f'crossplay: {problem}', file=sys.stderr)
         return 2
-    log = None if args.quiet else (lambda line: print(f'crossplay: {line}', file=sys.stderr,
-                                                       flush=True))
+    progress, log = None, None
+    if not args.quiet:
+        progress = TimeLeft(cell_count(agents, args.partner), 'cells', stream=sys.stderr)
+        cells_done = []
+
+        def log(line):
+            cells_done.append(line)
+            progress.show(len(cells_done), f'crossplay: {line}')
     try:
         matrix = crossplay.run_matrix(agents, args.partner, args.seeds, args.episodes,
                                       args.profiles_file, log=log)
     except (ParameterError, ValueError) as error:
         print(f'crossplay: {error}', file=sys.stderr)
         return 2
+    finally:
+        if progress is not None:
+            progress.close()
     paths = crossplay.write_outputs(matrix, args.out)
     print(crossplay.markdown(matrix))
     print('written: ' + ', '.join(paths))

@@ -11,7 +11,6 @@ saved as ``<out>/<kind>-s<seed>.pt`` (the agent node's checkpoint format) with
 (``profile:paper`` or ``population:paper``), episodes, convergence, wall seconds.
 """
 
-import argparse
 import json
 import pathlib
 import sys
@@ -27,6 +26,7 @@ from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
+from hrc_partners.training_args import build_parser
 
 
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
@@ -61,20 +61,7 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
 
 def main(argv=None) -> int:
     """Train one-person and population agents per seed; print one JSON line per agent."""
-    parser = argparse.ArgumentParser(prog='hrc partners train',
-                                     description=__doc__.split('\n\n')[0])
-    parser.add_argument('--out', default='runs/partners', help='folder for the checkpoints')
-    parser.add_argument('--case', type=int, default=2)
-    parser.add_argument('--seeds', nargs='+', type=int, default=[0])
-    parser.add_argument('--episodes', type=int, default=250, help='max training episodes')
-    parser.add_argument('--profile', default='paper')
-    parser.add_argument('--preset', default='tuned')
-    parser.add_argument('--population-every', type=int, default=1)
-    parser.add_argument('--kinds', nargs='+', default=['one', 'population'],
-                        choices=['one', 'population', 'mixture'])
-    parser.add_argument('--mixture', nargs='*', default=[], metavar='SPEC',
-                        help='kind mixture: partner specs drawn from every --population-every '
-                             'episodes (profile:, person:, population:, model:)')
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.episodes < 1 or args.population_every < 1:
         print('train_partners_agents: --episodes and --population-every must be >= 1',

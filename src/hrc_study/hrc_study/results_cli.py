@@ -4,40 +4,26 @@
     hrc results bags/<experiment> --out /tmp/r --priorities human=3,time=1
 
 Writes ``<out>/results.md`` and ``<out>/results/`` (Fig. 5-7, convergence curves,
-sessions.csv), prints the findings, the targets and the strategy ranking. Exit codes: 0 done,
-1 no session found, 2 bad arguments.
+sessions.csv), prints the findings, the targets and the strategy ranking. On stderr, the
+progress with the time left: one step per session loaded, then one for the tables, findings
+and figures (a bar on a terminal, plain lines when piped). Exit codes: 0 done, 1 no session
+found, 2 bad arguments.
 """
 
-import argparse
 import shlex
 import sys
 
+from hrc_bag.report import find_sessions
+from hrc_common.time_left import TimeLeft
+
 from hrc_study.chooser import choice_markdown, parse_priorities
 from hrc_study.loading import load_sessions
+from hrc_study.results_args import build_parser
 from hrc_study.results_doc import read_experiment, write_results
-
-DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episodes to '
-               "convergence, the paper's findings with paired, censoring-aware, "
-               'Holm-corrected tests, the strategy '
-               'chooser) and its figures from recorded sessions.')
-
 
 def parse_arguments(argv):
     """Return the parsed command line; exit 2 with every reason on bad input."""
-    parser = argparse.ArgumentParser(prog='hrc results', description=DESCRIPTION)
-    parser.add_argument('paths', nargs='+', help='experiment folders (bags/<experiment>) or '
-                        'session folders')
-    parser.add_argument('--out', default='docs', help='folder of results.md (default docs)')
-    parser.add_argument('--priorities', default='',
-                        help='strategy chooser weights, e.g. performance=3,human=1,time=1, or '
-                        'a preset: balanced, "performance first", "least human time", '
-                        '"fastest training"')
-    parser.add_argument('--seed', type=int, default=0, help='bootstrap seed (default 0)')
-    parser.add_argument('--intervals', default='bca', choices=['bca', 'student-t'],
-                        help="Table II intervals: bca (BCa bootstrap within each quantity's "
-                        'physical range, default) or student-t (the tables before issue 23)')
-    parser.add_argument('--note', default='',
-                        help='a paragraph put under the run description (e.g. the commit)')
+    parser = build_parser()
     arguments = parser.parse_args(argv)
     if arguments.priorities:
         try:
@@ -49,6 +35,27 @@ def parse_arguments(argv):
     return arguments
 
 
+def load_with_progress(folders, progress, log) -> tuple:
+    """Return (SessionRecords sorted as ``load_sessions`` sorts them, problems), one at a time.
+
+    Each folder is one step of ``progress``; a folder that cannot be read is a problem (its
+    message), and the others are still read so that every problem is named at once.
+    """
+    sessions, problems = [], []
+    for done, folder in enumerate(folders, start=1):
+        try:
+            loaded = load_sessions([folder], log=log)
+        except (FileNotFoundError, ValueError) as error:   # ValueError: BagError, a bad file
+            problems.append(str(error))
+            loaded = []
+        sessions += loaded
+        progress.show(done, f'hrc_results: read {folder.name} ({len(loaded)} session'
+                      f'{"" if len(loaded) == 1 else "s"} with episode summaries)')
+    sessions.sort(key=lambda record: (record.profile, record.case_id, record.seed,
+                                      record.session_id))   # as load_sessions sorts
+    return sessions, problems
+
+
 def main(argv=None) -> int:
     """Run the study's report."""
     argv = sys.argv[1:] if argv is None else argv
@@ -57,11 +64,21 @@ def main(argv=None) -> int:
         print(f'hrc_results: {text}', file=sys.stderr)
 
     try:
-        sessions = load_sessions(arguments.paths, log=log)
-    except (FileNotFoundError, ValueError) as error:   # ValueError: BagError, a bad file
+        folders = find_sessions(arguments.paths)
+    except FileNotFoundError as error:
         log(str(error))
         return 1
+    # One step per session folder, then one for the tables, findings and figures (a
+    # modelling choice for the estimate: that last step is counted as long as a load).
+    progress = TimeLeft(len(folders) + 1, 'steps', stream=sys.stderr)
+    sessions, problems = load_with_progress(folders, progress, log)
+    if problems:                        # every unreadable session at once
+        progress.close()
+        for problem in problems:
+            log(problem)
+        return 1
     if not sessions:
+        progress.close()
         log('no session with episode summaries in ' + ', '.join(arguments.paths))
         return 1
     command = 'hrc results ' + ' '.join(shlex.quote(arg) for arg in argv)
@@ -71,8 +88,12 @@ def main(argv=None) -> int:
                                arguments.seed, arguments.note,
                                intervals=arguments.intervals)
     except ValueError as error:
+        progress.close()
         log(str(error))
         return 1
+    progress.show(len(folders) + 1, f'hrc_results: wrote the tables, findings and figures to '
+                  f'{arguments.out}')
+    progress.close()
     print('findings:')
     for finding in result['findings']:
         print(f'  ({finding.key}) {finding.claim}: {finding.verdict.upper()} '

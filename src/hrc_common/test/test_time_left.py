@@ -1,8 +1,8 @@
-"""hrc_bringup.time_left: the time left of a long verb, as a bar on a terminal or plain lines."""
+"""hrc_common.time_left: the time left of a long verb, as a bar on a terminal or plain lines."""
 
 import io
 
-from hrc_bringup.time_left import duration, TimeLeft
+from hrc_common.time_left import duration, TimeLeft
 
 
 class Clock:
