@@ -108,13 +108,19 @@ class Matrix:
                 'seeds': self.seeds, 'episodes_per_seed': self.episodes, 'cells': cells}
 
 
-def run_matrix(agents, partners, seeds, episodes: int, profiles_file=None,
-               physics_overrides: dict = None, log=None) -> Matrix:
-    """Evaluate every agent with every partner (its training partner added) for every seed."""
+def matrix_columns(agents, partners) -> list:
+    """Return the matrix's partners: ``partners``, then the agents' training partners not in it."""
     columns = list(partners)
     for agent in agents:
         if agent.training_partner and agent.training_partner not in columns:
             columns.append(agent.training_partner)
+    return columns
+
+
+def run_matrix(agents, partners, seeds, episodes: int, profiles_file=None,
+               physics_overrides: dict = None, log=None) -> Matrix:
+    """Evaluate every agent with every partner (its training partner added) for every seed."""
+    columns = matrix_columns(agents, partners)
     specs = dict(zip(columns, parse_specs(columns)))
     matrix = Matrix(list(agents), columns, [int(seed) for seed in seeds], int(episodes))
     for agent in agents:

@@ -27,11 +27,8 @@ def cell_count(agents, partners) -> int:
 
     Each agent's training partner is added as a column when it is not among ``partners``.
     """
-    columns = list(partners)
-    for agent in agents:
-        if agent.training_partner and agent.training_partner not in columns:
-            columns.append(agent.training_partner)
-    return len(agents) * len(columns)
+    from hrc_partners.crossplay import matrix_columns  # lazy: torch and PyBullet, as in main
+    return len(agents) * len(matrix_columns(agents, partners))
 
 
 def main(argv=None) -> int:

@@ -118,6 +118,11 @@ def _final_flag(summary):
     return None
 
 
+def session_order(record) -> tuple:
+    """Return the key sessions are listed by: profile, case, seed, session id."""
+    return (record.profile, record.case_id, record.seed, record.session_id)
+
+
 def load_sessions(paths, log=print) -> list:
     """Return SessionRecords of every session folder under ``paths`` (sorted by case, seed).
 
@@ -126,6 +131,5 @@ def load_sessions(paths, log=print) -> list:
     not MCAP raise ``hrc_bag.bag_reader.BagError`` with every reason).
     """
     records = [record_from_bag_session(session) for session in load_bag_sessions(paths, log)]
-    records.sort(key=lambda record: (record.profile, record.case_id, record.seed,
-                                     record.session_id))
+    records.sort(key=session_order)
     return records

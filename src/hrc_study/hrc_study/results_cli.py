@@ -17,7 +17,7 @@ from hrc_bag.report import find_sessions
 from hrc_common.time_left import TimeLeft
 
 from hrc_study.chooser import choice_markdown, parse_priorities
-from hrc_study.loading import load_sessions
+from hrc_study.loading import load_sessions, session_order
 from hrc_study.results_args import build_parser
 from hrc_study.results_doc import read_experiment, write_results
 
@@ -51,8 +51,7 @@ def load_with_progress(folders, progress, log) -> tuple:
         sessions += loaded
         progress.show(done, f'hrc_results: read {folder.name} ({len(loaded)} session'
                       f'{"" if len(loaded) == 1 else "s"} with episode summaries)')
-    sessions.sort(key=lambda record: (record.profile, record.case_id, record.seed,
-                                      record.session_id))   # as load_sessions sorts
+    sessions.sort(key=session_order)
     return sessions, problems
 
 
