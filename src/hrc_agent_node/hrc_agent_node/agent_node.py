@@ -198,14 +198,8 @@ class AgentNode(Node):
             if self.core.phase == 'updating' or (now < self.next_episode_at and
                                                  self.next_clock_mode() == 'realtime'):
                 return
-            if not self.reset_client.service_is_ready():
-                if now - self.waiting_since > self.params.reset_timeout:
-                    self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
-                               f'{self.params.reset_timeout} s')
-                return
-            if self.missing_subscribers(now):
-                return
-            self.start_episode()
+            if self.ready_to_reset(now):
+                self.start_episode()
         if self.pending_state is not None \
                 and now - self.pending_since > self.params.human_action_timeout:
             state = self.pending_state
@@ -221,12 +215,7 @@ class AgentNode(Node):
         if self.practice.in_episode or self.reset_future is not None \
                 or now < self.next_episode_at or self.core.phase == Phase.ABORTED:
             return
-        if not self.reset_client.service_is_ready():
-            if now - self.waiting_since > self.params.reset_timeout:
-                self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
-                           f'{self.params.reset_timeout} s')
-            return
-        if self.missing_subscribers(now):
+        if not self.ready_to_reset(now):
             return
         reset = self.practice.start_episode()
         # As for a session's episode: every listener has the announcement before the state.
@@ -257,6 +246,18 @@ class AgentNode(Node):
             self.exit_at = time.monotonic() + EXIT_LINGER_S
         else:
             self.next_episode_at = time.monotonic() + self.params.episode_break
+
+    def ready_to_reset(self, now: float) -> bool:
+        """Return True once the sim's reset service and the session's listeners are there.
+
+        The session aborts when the service has not appeared after ``reset_timeout``.
+        """
+        if not self.reset_client.service_is_ready():
+            if now - self.waiting_since > self.params.reset_timeout:
+                self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
+                           f'{self.params.reset_timeout} s')
+            return False
+        return not self.missing_subscribers(now)
 
     def missing_subscribers(self, now: float) -> bool:
         """Return True while a node of ``wait_for_subscribers`` is not ready for the session.
