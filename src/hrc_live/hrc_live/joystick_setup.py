@@ -34,7 +34,6 @@ import yaml
 
 from hrc_common.contract import atomic_write
 from hrc_common.params import as_dict, from_dict, ParameterError
-from hrc_joystick_node.human_core import HumanParams
 from hrc_joystick_node.js_event import device_axis, JoystickDevice, shape_axis
 
 DEVICE_PATTERN = '/dev/input/js*'
@@ -266,6 +265,7 @@ def settings_yaml(settings: JoystickSettings, detected: str = '') -> str:
 
 def check_settings(settings: JoystickSettings) -> None:
     """Raise ParameterError if the human node would refuse these settings."""
+    from hrc_joystick_node.human_core import HumanParams  # lazy: numpy (0.1 s), not for --help
     from_dict(HumanParams, {**as_dict(HumanParams()), **settings.parameters()})
 
 
