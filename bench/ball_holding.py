@@ -40,6 +40,12 @@ import dataclasses
 
 import numpy as np
 
+from hrc_agent_node.config import share_file, TREE_FILE_NAME
+from hrc_agent_node.task_tree import TaskTree
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.sim_human import SimulatedHuman
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
 ABLATIONS = {
     'no beam-angle noise/bias': {'pendulum_noise': 0.0, 'pendulum_bias': 0.0},
     'no beam-angle noise/bias, no motor noise, no lapses': {
@@ -73,8 +79,6 @@ def ideal_rotation(state) -> float:
 
 def physics_params_at(human_period: float):
     """Return the physics with a control step of ``human_period`` and 10 ms substeps."""
-    from hrc_sim_node.physics import PhysicsParams
-
     substeps = int(round(human_period / SUBSTEP))
     if substeps < 1 or abs(substeps * SUBSTEP - human_period) > 1e-9:
         raise ValueError(f'human period {human_period} s is not a multiple of {SUBSTEP} s')
@@ -98,9 +102,6 @@ def run_role(profile, role: str, seeds: int, human_period: float, practiced: int
     ``role``: 'rotation' (subtasks pendulum and ball, ideal slider partner) or 'translation'
     (subtasks slider and ball, ideal rotation partner).
     """
-    from hrc_joystick_node.sim_human import SimulatedHuman
-    from hrc_sim_node.physics import SliderPendulumBall
-
     params = physics_params_at(human_period)
     every = partner_every(human_period)
     subtasks, partner = ((['pendulum', 'ball'], ideal_slider) if role == 'rotation'
@@ -142,16 +143,11 @@ def hold_ball(profile, seeds: int, human_period: float = ROBOT_PERIOD,
 
 def ball_tolerance() -> float:
     """Return the ball subtask's tolerance (m) from the installed task tree."""
-    from hrc_agent_node.config import share_file, TREE_FILE_NAME
-    from hrc_agent_node.task_tree import TaskTree
-
     return TaskTree.from_file(share_file(TREE_FILE_NAME), 'paper').subtasks['ball'].tolerance
 
 
 def main(argv=None) -> int:
     """Print the table of profiles x human periods (and the ablations on request)."""
-    from hrc_joystick_node.human_profile import load_profile
-
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--profiles', nargs='+', default=['paper', 'paper_symmetric', 'skilled'])
     parser.add_argument('--seeds', type=int, default=6,

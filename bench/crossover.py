@@ -41,6 +41,10 @@ import math
 
 import numpy as np
 
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.sim_human import SimulatedHuman
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
 PHYSICS_PERIOD = 0.02             # s: physics step of the bench (2 substeps of 10 ms)
 MEASUREMENT_STEPS = 4096          # 81.92 s: the sines are whole periods of this window
 RUN_IN_STEPS = 400                # 8 s before the window (transients, the person settles)
@@ -78,9 +82,6 @@ def partner(dof: str, state) -> float:
 
 def track(profile, dof: str, person_period: float, seed: int, practiced: int) -> dict:
     """Run one tracking run; return the person's and the plant's input over the window."""
-    from hrc_joystick_node.sim_human import SimulatedHuman
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
     every = int(round(person_period / PHYSICS_PERIOD))
     if every < 1 or abs(every * PHYSICS_PERIOD - person_period) > 1e-9:
         raise ValueError(f'person period {person_period} s is not a multiple of '
@@ -158,8 +159,6 @@ def in_range(name: str, value: float) -> str:
 
 def main(argv=None) -> int:
     """Print the crossover fit per profile, degree of freedom and person period."""
-    from hrc_joystick_node.human_profile import load_profile
-
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--profiles', nargs='+', default=['paper'])
     parser.add_argument('--person-period', type=float, nargs='+', default=[0.2, 0.02],

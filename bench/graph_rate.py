@@ -34,11 +34,27 @@ import tempfile
 import threading
 import time
 
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.offline import run_episode
+from hrc_common import qos, topics
+from hrc_common.contract import SimLimits
+from hrc_common.executables import executable_path
+from hrc_common.params import from_dict
+from hrc_common.session_plan import SessionSettings
+from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_engine.human import SimulatedHumanSide
+from hrc_msgs.msg import TaskState
+from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+from hrc_sim_node.sim_params import SimParams
+
 
 def session_parameters(case: int, seed: int, episodes: int) -> dict:
     """Return the session's composed node parameters (as ``session`` would run them)."""
-    from hrc_common.session_plan import SessionSettings
-    from hrc_engine.engine import compose_parameters, EngineConfig
     _, parameters = compose_parameters(EngineConfig(SessionSettings(
         case=case, seed=seed, training_episodes=episodes + 1, session_id='bench')))
     return parameters
@@ -46,15 +62,6 @@ def session_parameters(case: int, seed: int, episodes: int) -> dict:
 
 def bare_rate(case: int, episodes: int, seed: int) -> float:
     """Return median steps/s of physics + AgentCore + simulated human in a plain loop."""
-    from hrc_agent_node.agent_core import AgentCore
-    from hrc_agent_node.config import AgentParams
-    from hrc_agent_node.offline import run_episode
-    from hrc_common.contract import SimLimits
-    from hrc_common.params import from_dict
-    from hrc_engine.human import SimulatedHumanSide
-    from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
-    from hrc_sim_node.sim_params import SimParams
-
     parameters = session_parameters(case, seed, episodes)
     parameters['agent']['checkpoint_dir'] = ''
     limits = SimLimits.of(from_dict(SimParams, parameters['sim']))
@@ -82,8 +89,6 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
 def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
                 human_period: float = None) -> float:
     """Return median steps/s of the in-process engine's episodes (bags written)."""
-    from hrc_common.session_plan import SessionSettings
-    from hrc_engine.engine import EngineConfig, run_session
     result = run_session(EngineConfig(SessionSettings(
         case=case, seed=seed, training_episodes=episodes, evaluation_episodes=0,
         session_id=f'engine-{time.time_ns()}', bags_dir=str(work / 'bags'),
@@ -98,13 +103,6 @@ class StateTimer:
     """Records the receive time of every /hrc/state message on a domain (own thread)."""
 
     def __init__(self, domain_id: int):
-        import rclpy
-        from rclpy.context import Context
-        from rclpy.executors import SingleThreadedExecutor
-
-        from hrc_common import qos, topics
-        from hrc_msgs.msg import TaskState
-
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.node = rclpy.create_node('bench_state_timer', context=self.context)
@@ -119,7 +117,6 @@ class StateTimer:
         self.samples.append((state.episode, state.step, time.perf_counter()))
 
     def _spin(self):
-        from rclpy.executors import ExternalShutdownException
         try:
             while self.context.ok():
                 self.executor.spin_once(timeout_sec=0.1)
@@ -141,7 +138,6 @@ class StateTimer:
 
     def close(self):
         """Stop the listener."""
-        import rclpy
         rclpy.shutdown(context=self.context)
         self.thread.join(timeout=5)
 
@@ -153,8 +149,6 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
     ``settings``: more ``NODE.PARAM=VALUE`` overrides (``hrc session --set``). The result also
     names the session (``session_id``; its logs are in ``work/runs/<session_id>/logs``).
     """
-    from hrc_common.executables import executable_path
-
     timer = StateTimer(domain_id)
     name = f'graph-{time.time_ns()}'
     command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(case),

@@ -55,11 +55,11 @@ RECORDERS = {'batched': (), 'per-message': ('recorder.batch_period=0.0',)}
 
 def echo(domain_id: int, executor_name: str) -> int:
     """Answer every TaskState on PING with a WrenchStamped carrying its stamp (child process)."""
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos
-    from hrc_common.nodes import make_executor
-    from hrc_msgs.msg import TaskState
+    import rclpy  # lazy: rclpy only in the ping-pong processes
+    from geometry_msgs.msg import WrenchStamped  # lazy: as rclpy above
+    from hrc_common import qos  # lazy: as rclpy above
+    from hrc_common.nodes import make_executor  # lazy: as rclpy above
+    from hrc_msgs.msg import TaskState  # lazy: as rclpy above
 
     rclpy.init(domain_id=domain_id)
     node = rclpy.create_node('bench_echo')
@@ -84,12 +84,12 @@ def echo(domain_id: int, executor_name: str) -> int:
 
 def ping_pong(domain_id: int, executor_name: str, round_trips: int) -> float:
     """Return the median round trip (ms) of TaskState -> WrenchStamped with an echo process."""
-    import rclpy
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos
-    from hrc_common.nodes import make_executor
-    from hrc_msgs.msg import TaskState
-    from rclpy.context import Context
+    import rclpy  # lazy: rclpy only in the ping-pong processes
+    from geometry_msgs.msg import WrenchStamped  # lazy: as rclpy above
+    from hrc_common import qos  # lazy: as rclpy above
+    from hrc_common.nodes import make_executor  # lazy: as rclpy above
+    from hrc_msgs.msg import TaskState  # lazy: as rclpy above
+    from rclpy.context import Context  # lazy: as rclpy above
 
     environment = dict(os.environ, ROS_DOMAIN_ID=str(domain_id))
     child = subprocess.Popen([sys.executable, __file__, '--echo', str(domain_id),
@@ -150,7 +150,7 @@ def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, ex
     recorder process's CPU (``recorder_cpu``, s; nan when composed: its process is shared).
     ``compose``: HRC_COMPOSE of the session ('' = a process per node).
     """
-    from graph_rate import graph_rate
+    from graph_rate import graph_rate  # lazy: the sibling bench, found through sys.path above
     previous = os.environ.get('HRC_EXECUTOR')
     os.environ['HRC_EXECUTOR'] = executor_name
     os.environ['HRC_COMPOSE'] = compose
@@ -194,7 +194,7 @@ def main() -> int:
     args = parser.parse_args()
     if args.echo:
         return echo(int(args.echo[0]), args.echo[1])
-    from graph_rate import engine_rate
+    from graph_rate import engine_rate  # lazy: the sibling bench, found through sys.path above
     graph_executors = args.graph_executors or args.executors
 
     print(f'machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.1f}; case {args.case}, '

@@ -36,6 +36,15 @@ import tempfile
 import threading
 import time
 
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.context import Context
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from hrc_common import qos, topics
+from hrc_common.testing import executable_path
+from hrc_msgs.msg import TaskState
+
 
 def percentile(values, fraction):
     """Return the value at ``fraction`` (0..1) of the sorted values (nearest rank)."""
@@ -45,15 +54,6 @@ def percentile(values, fraction):
 
 def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
     """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_common import qos, topics
-    from hrc_common.testing import executable_path
-    from hrc_msgs.msg import TaskState
-
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
     node = rclpy.create_node('bench_realtime', context=context)

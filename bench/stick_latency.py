@@ -31,6 +31,15 @@ import tempfile
 import threading
 import time
 
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from hrc_common import qos, topics
+from hrc_common.testing import NodeProcess, ros_environment
+from hrc_joystick_node.js_event import device_axis, JS_EVENT_AXIS, pack_event
+from hrc_msgs.msg import TaskState
+
 CONFIGURATIONS = {
     'before (human_period 0.2 s, stick read per state)': {'human_period': 0.2,
                                                           'forward_stick': False},
@@ -55,15 +64,6 @@ def raw_of(index: int) -> int:
 
 def measure(name: str, settings: dict, args, domain_id: int) -> dict:
     """Run one configuration; return its latencies (ms) and the count of lost moves."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-
-    from hrc_common import qos, topics
-    from hrc_common.testing import NodeProcess, ros_environment
-    from hrc_joystick_node.js_event import device_axis, JS_EVENT_AXIS, pack_event
-    from hrc_msgs.msg import TaskState
-
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-stick-'))
     fifo = work / 'js0'
     os.mkfifo(fifo)

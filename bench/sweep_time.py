@@ -24,12 +24,13 @@ import tempfile
 import time
 
 from hrc_common.contract import paper_case_ids
+from hrc_common.executables import executable_path
+from hrc_common.session_plan import SessionSettings
+from hrc_engine.engine import EngineConfig, run_session
 
 
 def one_session(case: int, seed: int, work: str) -> tuple:
     """Run one session in this worker; return (case, seed, steps, wall s, evaluation error)."""
-    from hrc_common.session_plan import SessionSettings
-    from hrc_engine.engine import EngineConfig, run_session
     started = time.perf_counter()
     # the parameter files: hrc_common.paths.params_dir() (this checkout's params/ in a checkout)
     result = run_session(EngineConfig(SessionSettings(
@@ -41,7 +42,6 @@ def one_session(case: int, seed: int, work: str) -> tuple:
 
 def graph_session_seconds(case: int, seed: int, work: pathlib.Path, domain_id: int) -> float:
     """Return the wall time of one lockstep graph session (``session``, bags recorded)."""
-    from hrc_common.executables import executable_path
     command = [str(executable_path('hrc_bringup', 'hrc')),
                'session', '--case', str(case), '--seed',
                str(seed), '--domain-id', str(domain_id), '--no-report', '--bags-dir',

@@ -15,16 +15,19 @@ import statistics
 import sys
 import time
 
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.context import Context
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+from rclpy.executors import SingleThreadedExecutor
+from std_srvs.srv import Trigger
+
 TURNS = 3000
 EXTRA = 20
 
 
 def turns_per_second(build) -> float:
     """Return executor turns/s of a node with an always-due timer plus ``build(node)``."""
-    import rclpy
-    from rclpy.context import Context
-    from rclpy.executors import SingleThreadedExecutor
-
     context = Context()
     rclpy.init(context=context, domain_id=99)
     try:
@@ -49,10 +52,6 @@ def turns_per_second(build) -> float:
 
 def main() -> int:
     """Measure each kind of entity and print its cost per turn."""
-    from geometry_msgs.msg import WrenchStamped
-    from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-    from std_srvs.srv import Trigger
-
     quiet_pub = PublisherEventCallbacks(use_default_callbacks=False)
     quiet_sub = SubscriptionEventCallbacks(use_default_callbacks=False)
 

@@ -40,6 +40,7 @@ import sys
 import time
 
 from hrc_common.session_plan import STUDY_LEARNING
+from hrc_study.loading import load_sessions
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 # The study's learning settings: hrc_common.session_plan.STUDY_LEARNING (issue 22; why there).
@@ -131,7 +132,6 @@ def experiment(options, name: str, learner: str, extra: list) -> int:
 
 def episode_rows(folder: pathlib.Path) -> dict:
     """Return {(case, seed): [episode record as a dict]} of the paper sessions of a run."""
-    from hrc_study.loading import load_sessions
     rows = {}
     for record in load_sessions([str(folder)], log=lambda text: None):
         if record.profile == 'paper':

@@ -8,6 +8,14 @@ and every edge must be declared in the importing package's ``package.xml``: ``<d
 
 The layer order is defined once, in the "Layers" table of docs/architecture.md, which this test
 reads. ``python test/test_layers.py`` prints the graph and the function-level imports.
+
+Imports sit at the top of modules, so the dependency graph reads from there: every import
+inside a function of a module that is not a test (``src/<package>/`` except its ``test/``,
+``bench/``, ``scripts/``) must carry ``# lazy: <why>`` on its line, why it cannot be at the top
+(an optional or heavy dependency that a light entry point must not load, e.g.
+``import torch  # lazy: torch (seconds), only when a cloned model is used``). Tests
+(``src/*/test/``, ``test/``) are out of scope: a test may import what only it needs where it
+needs it.
 """
 
 import ast
@@ -26,22 +34,14 @@ ARCHITECTURE = REPOSITORY / 'docs' / 'architecture.md'
 LAYER_ROW = re.compile(r'^\|\s*(\d+)\s*\|((?:\s*`\w+`\s*,?)+)\|')
 RUNTIME_TAGS = ('depend', 'exec_depend')
 TEST_TAGS = RUNTIME_TAGS + ('test_depend',)
-# A function-level import must say why it is not at the top, in a comment on its line (or the
-# line above), e.g. ``import torch  # optional heavy dependency: ...``.
-WHY_COMMENT = re.compile(r'#\s*\S')
-# Files that other engineers change heavily under issue 20 (the one episode loop, the live
-# tools): their function-level imports are left for that work. Nothing else may be unmarked,
-# and each file here must still have an unmarked one (the list only shrinks).
-UNMARKED_ALLOWED = {
-    'src/hrc_agent_node/hrc_agent_node/offline.py',
-    'src/hrc_engine/hrc_engine/engine.py',
-    'src/hrc_gym/hrc_gym/task.py',
-    'src/hrc_joystick_node/hrc_joystick_node/human_core.py',
-    'src/hrc_live/hrc_live/joystick_setup.py',
-    'src/hrc_live/hrc_live/operator_cli.py',
-    'src/hrc_sim_node/hrc_sim_node/physics.py',
-    'src/hrc_study/hrc_study/figures.py',
-}
+# The mark a function-level import needs on its (first) line: ``# lazy: <why>``.
+LAZY_MARK = re.compile(r'#\s*lazy:\s*\S')
+# Folders of the repository whose modules the function-level rule covers, besides src/<pkg>/.
+TOP_LEVEL_FOLDERS = ('bench', 'scripts')
+# Files exempt from the function-level rule (none now: the files other helpers changed while
+# the rule was set were brought under it at the merge). A path that ends in '/' exempts the
+# whole folder.
+LAZY_EXEMPT = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,46 +84,82 @@ def imported_names(node) -> list:
     return []
 
 
-def scan_file(path: pathlib.Path, root: pathlib.Path, packages: set) -> tuple:
-    """Return ([Import of another package], [(line, text) of every function-level import])."""
-    relative = path.relative_to(root.parent)
-    importer = relative.parts[1]
-    kind = module_kind(relative)
-    tree = ast.parse(path.read_text(), filename=str(path))
-    lines = path.read_text().splitlines()
-    found, function_level = [], []
+def import_statements(tree) -> list:
+    """Return (statement, inside a function) of every import statement of a module's tree."""
+    statements = []
 
     def visit(node, in_function):
         for child in ast.iter_child_nodes(node):
-            nested = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef,
-                                                       ast.Lambda))
             if isinstance(child, (ast.Import, ast.ImportFrom)):
-                if in_function:
-                    function_level.append((child.lineno, lines[child.lineno - 1].strip(),
-                                           lines[child.lineno - 2].strip()))
-                for name in imported_names(child):
-                    package = name.split('.')[0]
-                    if package in packages and package != importer:
-                        found.append(Import(str(relative), child.lineno, importer, package,
-                                            in_function, kind))
-            visit(child, nested)
+                statements.append((child, in_function))
+            visit(child, in_function or isinstance(child, (ast.FunctionDef,
+                                                           ast.AsyncFunctionDef, ast.Lambda)))
 
     visit(tree, False)
-    return found, function_level
+    return statements
+
+
+def scan_file(path: pathlib.Path, root: pathlib.Path, packages: set) -> list:
+    """Return [Import of another package] of one module of src/<package>/."""
+    relative = path.relative_to(root.parent)
+    importer = relative.parts[1]
+    kind = module_kind(relative)
+    found = []
+    for statement, in_function in import_statements(ast.parse(path.read_text(),
+                                                              filename=str(path))):
+        for name in imported_names(statement):
+            package = name.split('.')[0]
+            if package in packages and package != importer:
+                found.append(Import(str(relative), statement.lineno, importer, package,
+                                    in_function, kind))
+    return found
 
 
 def scan(root: pathlib.Path) -> tuple:
-    """Return ([Import], {path: [(line, text, line above)]}, packages) of the tree."""
+    """Return ([Import], packages) of the tree ``root`` (a src/ folder)."""
     packages = {path.parent.name for path in root.glob('*/package.xml')}
-    imports, function_level = [], {}
+    imports = []
     for path in sorted(root.glob('*/**/*.py')):
         if any(part in ('build', 'install') for part in path.relative_to(root).parts):
             continue
-        found, inner = scan_file(path, root, packages)
-        imports += found
+        imports += scan_file(path, root, packages)
+    return imports, packages
+
+
+def modules_not_tests(repository: pathlib.Path) -> list:
+    """Return the .py files the function-level rule covers (relative paths), tests left out.
+
+    src/<package>/ except its test/ folder (the package's modules, its benches, setup.py),
+    and every file under the folders of TOP_LEVEL_FOLDERS.
+    """
+    paths = []
+    for path in sorted((repository / 'src').glob('*/**/*.py')):
+        parts = path.relative_to(repository).parts
+        if parts[2] != 'test' and not {'build', 'install'} & set(parts):
+            paths.append(path)
+    for folder in TOP_LEVEL_FOLDERS:
+        paths += sorted((repository / folder).glob('**/*.py'))
+    return [path.relative_to(repository) for path in paths]
+
+
+def function_level_imports(repository: pathlib.Path) -> dict:
+    """Return {relative path: [(line, text of its first line)]} of every function-level import."""
+    result = {}
+    for relative in modules_not_tests(repository):
+        text = (repository / relative).read_text()
+        lines = text.splitlines()
+        inner = [(statement.lineno, lines[statement.lineno - 1].strip())
+                 for statement, in_function in import_statements(ast.parse(text, str(relative)))
+                 if in_function]
         if inner:
-            function_level[str(path.relative_to(root.parent))] = inner
-    return imports, function_level, packages
+            result[relative.as_posix()] = inner
+    return result
+
+
+def exempt(path: str, exemptions=LAZY_EXEMPT) -> bool:
+    """Tell whether ``path`` is (in) an entry of the exemption list."""
+    return any(path.startswith(entry) if entry.endswith('/') else path == entry
+               for entry in exemptions)
 
 
 def declared(root: pathlib.Path, package: str) -> dict:
@@ -193,52 +229,43 @@ def declaration_problems(imports: list, root: pathlib.Path) -> list:
     return problems
 
 
-def unmarked_function_imports(function_level: dict) -> list:
-    """Return the function-level imports of package modules that carry no comment saying why."""
-    problems = []
-    for path, found in function_level.items():
-        if module_kind(pathlib.Path(path)) != 'module' or path in UNMARKED_ALLOWED:
-            continue
-        for line, text, above in found:
-            if not WHY_COMMENT.search(text) and not above.startswith('#'):
-                problems.append(f'{path}:{line}: {text}')
-    return problems
+def unmarked_function_imports(function_level: dict, exemptions=LAZY_EXEMPT) -> list:
+    """Return 'path:line: text' of every function-level import without ``# lazy: <why>``."""
+    return [f'{path}:{line}: {text}' for path, found in sorted(function_level.items())
+            if not exempt(path, exemptions)
+            for line, text in found if not LAZY_MARK.search(text)]
 
 
 # ------------------------------------------------------------------------------------ tests
 
 @pytest.fixture(scope='module')
 def workspace():
-    imports, function_level, packages = scan(REPOSITORY / 'src')
-    return imports, function_level, packages, read_layers(ARCHITECTURE.read_text())
+    imports, packages = scan(REPOSITORY / 'src')
+    return imports, packages, read_layers(ARCHITECTURE.read_text())
 
 
 def test_the_layers_table_names_every_package(workspace):
-    _, _, packages, layers = workspace
+    _, packages, layers = workspace
     assert set(layers) == packages
 
 
 def test_no_cycle_and_no_import_of_a_higher_layer(workspace):
-    imports, _, packages, layers = workspace
+    imports, packages, layers = workspace
     assert layer_problems(imports, layers, packages) == []
 
 
 def test_every_import_of_another_package_is_declared(workspace):
-    imports, _, _, _ = workspace
+    imports, _, _ = workspace
     assert declaration_problems(imports, REPOSITORY / 'src') == []
 
 
-def test_function_level_imports_say_why(workspace):
-    _, function_level, _, _ = workspace
-    assert unmarked_function_imports(function_level) == []
+def test_imports_are_at_the_top_or_say_why_they_are_lazy():
+    # every module that is not a test: packages, their benches, bench/, scripts/
+    assert unmarked_function_imports(function_level_imports(REPOSITORY)) == []
 
 
-def test_the_files_left_unmarked_still_need_it(workspace):
-    _, function_level, _, _ = workspace
-    still = {path for path, found in function_level.items()
-             if any(not WHY_COMMENT.search(text) and not above.startswith('#')
-                    for _, text, above in found)}
-    assert sorted(UNMARKED_ALLOWED - still) == []
+def test_each_exemption_names_an_existing_file_or_folder():
+    assert [entry for entry in LAZY_EXEMPT if not (REPOSITORY / entry).exists()] == []
 
 
 def write_package(root: pathlib.Path, name: str, depends=(), files=None) -> None:
@@ -261,7 +288,7 @@ def test_the_scan_finds_a_hidden_cycle_an_upward_import_and_a_missing_declaratio
     write_package(root, 'high', depends=[('test_depend', 'low')],
                   files={'high/tool.py': 'from low import core\n',
                          'test/test_tool.py': 'from low.core import f\n'})
-    imports, function_level, packages = scan(root)
+    imports, packages = scan(root)
     layers = read_layers('| 1 | `low` | x |\n| 2 | `high` | y |\n')
     assert layers == {'low': 1, 'high': 2}
     problems = layer_problems(imports, layers, packages)
@@ -272,39 +299,71 @@ def test_the_scan_finds_a_hidden_cycle_an_upward_import_and_a_missing_declaratio
         '<depend> or <exec_depend>',
         'src/low/low/core.py:2: imports high, which low/package.xml does not declare as '
         '<depend> or <exec_depend>']
-    assert unmarked_function_imports(function_level) == [
-        'src/low/low/core.py:2: import high.tool']
     assert layer_problems(imports, {'low': 1}, packages)[0] == \
         'high: not in the layers table of docs/architecture.md'
 
 
-def test_a_marked_function_level_import_passes(tmp_path):
-    root = tmp_path / 'src'
-    write_package(root, 'solo', files={
-        'solo/plot.py': 'def f():\n    import matplotlib  # optional heavy dependency\n',
-        'solo/other.py': 'def g():\n    # optional: only with a display\n    import tkinter\n'})
-    _, function_level, _ = scan(root)
-    assert len(function_level) == 2
-    assert unmarked_function_imports(function_level) == []
+def test_a_function_level_import_needs_a_lazy_reason_on_its_line(tmp_path):
+    write_package(tmp_path / 'src', 'solo', files={
+        'solo/plot.py': ('import json\n'                              # top: fine
+                         'def f():\n'
+                         '    import matplotlib  # lazy: 1 s, only for a figure\n'
+                         '    from matplotlib import (  # lazy: as above\n'
+                         '        pyplot)\n'
+                         '    import yaml  # a comment that is not a reason\n'
+                         '    # lazy: the line above does not count\n'
+                         '    import numpy\n'
+                         '    import torch  # lazy:\n'                # no reason given
+                         'class C:\n'
+                         '    import os\n'                            # class body: top level
+                         '    def g(self):\n'
+                         '        class D:\n'
+                         '            from os import path\n'),       # nested in a method
+        'test/test_plot.py': 'def test_f():\n    import matplotlib\n',  # tests: out of scope
+        'setup.py': 'def f():\n    import setuptools\n'})
+    for folder, name in (('bench', 'rate.py'), ('scripts', 'tool.py'), ('test', 'test_x.py')):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / name).write_text('def main():\n    import rclpy\n')
+    (tmp_path / 'bench' / 'other.py').write_text('def main():\n    import rclpy\n')
+    function_level = function_level_imports(tmp_path)
+    assert sorted(function_level) == ['bench/other.py', 'bench/rate.py', 'scripts/tool.py',
+                                      'src/solo/setup.py', 'src/solo/solo/plot.py']
+    assert unmarked_function_imports(function_level, exemptions=('bench/other.py',)) == [
+        'bench/rate.py:2: import rclpy',
+        'scripts/tool.py:2: import rclpy',
+        'src/solo/setup.py:2: import setuptools',
+        'src/solo/solo/plot.py:6: import yaml  # a comment that is not a reason',
+        'src/solo/solo/plot.py:8: import numpy',
+        'src/solo/solo/plot.py:9: import torch  # lazy:',
+        'src/solo/solo/plot.py:14: from os import path']
+    assert unmarked_function_imports(function_level, exemptions=(
+        'bench/', 'scripts/tool.py', 'src/solo/')) == []
 
 
 def main() -> int:
-    """Print the package graph and the function-level imports of package modules."""
-    imports, function_level, packages = scan(REPOSITORY / 'src')
+    """Print the package graph and the function-level imports of the modules (not tests)."""
+    imports, packages = scan(REPOSITORY / 'src')
     layers = read_layers(ARCHITECTURE.read_text())
     edges = collections.Counter((item.importer, item.imported) for item in imports)
     for (importer, imported), count in sorted(edges.items()):
         print(f'{importer} ({layers.get(importer, "?")}) -> {imported} '
               f'({layers.get(imported, "?")}): {count}')
-    counts = collections.Counter()
+    function_level = function_level_imports(REPOSITORY)
+    counts = collections.defaultdict(collections.Counter)   # place -> {kind: imports}
     for path, found in function_level.items():
-        counts[module_kind(pathlib.Path(path))] += len(found)
-    print('function-level imports: ' + ', '.join(f'{kind} {count}'
-                                                for kind, count in sorted(counts.items())))
-    unmarked = unmarked_function_imports(function_level)
-    print(f'unmarked (outside the files left for the episode-loop work): {len(unmarked)}')
-    for line in unmarked:
-        print('  ' + line)
+        parts = path.split('/')
+        place = parts[1] if parts[0] == 'src' else parts[0]
+        for _, text in found:
+            kind = ('exempt' if exempt(path) else 'lazy' if LAZY_MARK.search(text)
+                    else 'unmarked')
+            counts[place][kind] += 1
+    print('function-level imports (modules that are not tests): '
+          f'{sum(len(found) for found in function_level.values())}')
+    for place, kinds in sorted(counts.items()):
+        print(f'  {place}: {sum(kinds.values())} ('
+              + ', '.join(f'{kind} {count}' for kind, count in sorted(kinds.items())) + ')')
+    for line in unmarked_function_imports(function_level):
+        print('  unmarked: ' + line)
     return 0
 
 

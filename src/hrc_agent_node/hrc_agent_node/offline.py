@@ -23,13 +23,17 @@ import json
 import sys
 import time
 
+import yaml
+
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.partners import ScriptedPartner, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
+from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.commands import wrench_on
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
 from hrc_sim_node.stepper import SimStepper
 
@@ -130,16 +134,12 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
     a new person from the profile's population every N episodes).
     """
     if limits is None:
-        from hrc_sim_node.physics import PhysicsParams
-
         limits = SimLimits.of(PhysicsParams())
     if kind == 'scripted':
         return ScriptedPartner(core.human_dof, max_torque=limits.max_torque, noise=noise,
                                seed=seed)
     if not kind.startswith('human:'):
         raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
-    from hrc_joystick_node.human_profile import load_profile
-
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
                                  limits.human_step, population_every)
 
@@ -167,9 +167,6 @@ def main(argv=None) -> int:
     parser.add_argument('--set', nargs='*', default=[], metavar='NAME=VALUE',
                         help='other AgentParams overrides (YAML values)')
     args = parser.parse_args(argv)
-
-    import yaml
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
     overrides = {name: yaml.safe_load(value) for name, value in
                  (item.split('=', 1) for item in args.set)}

@@ -49,7 +49,7 @@ def main(argv=None) -> int:
                   f'{list(item.robot_subtasks)}, human {human}, advance when {item.advance} '
                   f'on {list(item.watch)}')
     if args.png:
-        from hrc_agent_node.tree_figure import draw_tree  # matplotlib (about 1 s): --png only
+        from hrc_agent_node.tree_figure import draw_tree  # lazy: matplotlib (1 s), --png only
         draw_tree(tree, args.png, case, args.step - 1 if case is not None else None)
         print(f'\nwrote {args.png}')
     return 0

@@ -112,7 +112,7 @@ def _results_help(argv: list) -> None:
 
 
 def _study(argv: list) -> int:
-    from hrc_live import study_cli  # lazy (see above)
+    from hrc_live import study_cli  # lazy: the verb's packages (see above)
     return study_cli.main(study_dir_first(argv))
 
 
@@ -122,7 +122,7 @@ def _operator(argv: list) -> int:
 
 
 def _joystick_setup(argv: list) -> int:
-    from hrc_live import joystick_setup  # lazy (see above)
+    from hrc_live import joystick_setup  # lazy: the verb's packages (see above)
     return joystick_setup.main(argv)
 
 

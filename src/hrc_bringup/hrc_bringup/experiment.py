@@ -85,7 +85,7 @@ class RayExecutor:
     """Ray: an existing cluster (``address``) or a local instance started here (None)."""
 
     def __init__(self, address, cpus_per_session: float):
-        import ray  # optional heavy dependency: only the --ray executor needs it
+        import ray  # lazy: optional heavy dependency, only the --ray executor needs it
         self.ray = ray
         ray.init(address=address, include_dashboard=False, log_to_driver=False,
                  logging_level='ERROR', configure_logging=True)
@@ -270,7 +270,7 @@ def main(argv=None) -> int:
     if not options.report:
         return 1 if failed else 0
     out = options.report_out or str(runs_dir / 'report')
-    from hrc_study import results_cli  # scipy and matplotlib (seconds): only for --report
+    from hrc_study import results_cli  # lazy: scipy and matplotlib (seconds), only for --report
     code = results_cli.main([str(bags_dir), '--out', out])
     return 1 if failed or code else 0
 

@@ -105,7 +105,7 @@ def _cpu_seconds() -> float:
 def _ray_node_id() -> str:
     if 'ray' not in sys.modules:
         return ''
-    import ray  # optional heavy dependency (the --ray executor); loaded by then
+    import ray  # lazy: optional heavy dependency (the --ray executor), loaded by then
     try:
         return ray.get_runtime_context().get_node_id() if ray.is_initialized() else ''
     except Exception:   # not inside a Ray worker

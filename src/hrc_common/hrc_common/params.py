@@ -434,7 +434,7 @@ def _integer_override_as_float(node, name: str, default) -> None:
     rcl types a number without a decimal point as an integer, which rclpy refuses for a float
     parameter; the override is converted before the parameter is declared.
     """
-    from rclpy.parameter import Parameter  # rclpy: only nodes call this (pure cores use params)
+    from rclpy.parameter import Parameter  # lazy: rclpy, only nodes call this
 
     overrides = getattr(node, '_parameter_overrides', None)
     given = overrides.get(name) if isinstance(overrides, dict) else None
@@ -451,9 +451,9 @@ def declare_parameters(node, params_cls):
     Read-only fields cannot change after start; the others are re-validated on every change.
     """
     # rclpy: only nodes declare parameters; the pure cores import this module without it
-    from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
-                                    SetParametersResult)
-    from rclpy.exceptions import InvalidParameterValueException  # rclpy: as above
+    from rcl_interfaces.msg import (  # lazy: rclpy's messages, only nodes declare parameters
+        FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult)
+    from rclpy.exceptions import InvalidParameterValueException  # lazy: rclpy, as above
 
     values = {}
     # Sources that do not fit the node (a misspelt section, unknown names) come first.

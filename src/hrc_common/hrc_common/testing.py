@@ -104,7 +104,7 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
     ``limits``: an ``hrc_common.contract.SimLimits``. The caller spins the node (add it to the
     test's executor) and destroys it.
     """
-    import rclpy  # optional: the other helpers (domains, executables) serve pure tests too
+    import rclpy  # lazy: rclpy (0.3 s), the other helpers serve pure tests too
 
     node = rclpy.create_node(name, context=context)
     for field in limits.NAMES:
@@ -116,8 +116,7 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
 
 def read_bag_with_rosbags(typestore, folder) -> dict:
     """Read a rosbag2 folder with rosbags: {topic: [decoded messages]}."""
-    # lazy: rosbags (the independent reader) only for the tests that read bags back
-    from rosbags.rosbag2 import Reader
+    from rosbags.rosbag2 import Reader  # lazy: rosbags (0.25 s), a test-only dependency
 
     messages = collections.defaultdict(list)
     with Reader(folder) as reader:

@@ -35,13 +35,23 @@ import typing
 
 import yaml
 
+from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
+from hrc_agent_node.checkpoint import load_into, save_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_bag.format import contract_description
+from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
 from hrc_common import qos_table
 from hrc_common.contract import Phase, SimLimits
+from hrc_common.params import from_dict
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
+from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
+from hrc_sim_node.sim_params import LOCKSTEP, SimParams
+from hrc_sim_node.stepper import SimStepper
 
 # The QoS each publisher of the graph offers, as (reliable, transient_local, deadline ns).
 OFFERED_QOS = {topic: (qos.reliable, qos.transient_local, qos.deadline_ns)
@@ -104,8 +114,6 @@ def compose_parameters(config: EngineConfig) -> tuple:
 
 def topic_descriptions() -> dict:
     """Return {topic: TopicDescription} as the graph's publishers offer them (no rclpy)."""
-    from hrc_bag.format import contract_description
-    from hrc_bag.session_writer import TOPIC_TYPES
     return {topic: contract_description(TOPIC_TYPES[topic], *OFFERED_QOS[topic])
             for topic in OFFERED_QOS}
 
@@ -125,14 +133,6 @@ class InProcessSession:
     """One session: the cores wired as the lockstep graph wires the nodes."""
 
     def __init__(self, config: EngineConfig):
-        from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
-        from hrc_agent_node.config import AgentParams
-        from hrc_common.params import from_dict
-        from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
-        from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
-        from hrc_sim_node.sim_params import LOCKSTEP, SimParams
-        from hrc_sim_node.stepper import SimStepper
-
         self.config = config
         self.settings, self.parameters = compose_parameters(config)
         self.session_id = self.settings.session_id
@@ -147,7 +147,6 @@ class InProcessSession:
         self.limits = SimLimits.of(self.physics.params)
         self.core = AgentCore(self.agent_params, limits=self.limits)
         if self.agent_params.resume_from:
-            from hrc_agent_node.checkpoint import load_into
             load_into(self.core, self.agent_params.resume_from,
                       resume=not self.agent_params.evaluation_only)
         case = self.core.case
@@ -176,7 +175,6 @@ class InProcessSession:
 
     # -- recording --------------------------------------------------------------------------
     def _open_bags(self) -> None:
-        from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
         _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
         text = config_path.read_text()
         self._types = dict(TOPIC_TYPES)
@@ -316,7 +314,6 @@ class InProcessSession:
     def _save_checkpoint(self, name: str) -> None:
         if self.checkpoint_dir is None:
             return
-        from hrc_agent_node.checkpoint import save_checkpoint
         save_checkpoint(self.core, os.path.join(self.checkpoint_dir, name))
 
 

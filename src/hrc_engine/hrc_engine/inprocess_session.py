@@ -12,12 +12,11 @@ import sys
 from hrc_common.params import ParameterError
 from hrc_common.session_plan import parse_overrides, SessionSettings
 
-from hrc_engine.engine import EngineConfig, run_session
 from hrc_engine.inprocess_args import build_parser
 
 
-def parse_args(argv=None) -> EngineConfig:
-    """Parse the command line into an EngineConfig (exit code 2 with every reason if bad)."""
+def parse_args(argv=None) -> tuple:
+    """Return (EngineConfig, print as JSON) of the command line (exit 2 with every reason)."""
     parser = build_parser()
     options = parser.parse_args(argv)
 
@@ -44,6 +43,9 @@ def parse_args(argv=None) -> EngineConfig:
         training_episodes=options.episodes, evaluation_episodes=options.eval_episodes,
         session_id=options.session_id, bags_dir=options.bags_dir, runs_dir=options.runs_dir,
         record=not options.no_record, resume_from=options.resume_from, overrides=overrides)
+    # the engine loads the cores, torch among them (seconds): --help and usage errors answer
+    # without it
+    from hrc_engine.engine import EngineConfig  # lazy: torch (seconds), see above
     return EngineConfig(settings, checkpoints=not options.no_checkpoints,
                         params_dir=options.params_dir, quiet=options.json), options.json
 
@@ -51,6 +53,7 @@ def parse_args(argv=None) -> EngineConfig:
 def main(argv=None) -> int:
     """Run the session; print its result; exit 0, or 2 for bad parameters."""
     config, as_json = parse_args(argv)
+    from hrc_engine.engine import run_session  # lazy: torch, as in parse_args (loaded by now)
     try:
         result = run_session(config)
     except (ParameterError, ValueError, OSError) as error:

@@ -15,6 +15,6 @@ if ENV_ID not in gymnasium.registry:
 
 def parallel_env(**kwargs):
     """Return the PettingZoo parallel environment of both actors (hrc_gym.parallel)."""
-    from hrc_gym.parallel import SliderPendulumBallParallelEnv  # pettingzoo: only for this API
+    from hrc_gym.parallel import SliderPendulumBallParallelEnv  # lazy: pettingzoo, only this API
 
     return SliderPendulumBallParallelEnv(**kwargs)

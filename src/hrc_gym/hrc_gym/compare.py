@@ -116,9 +116,9 @@ def train_ours(setting: str, seed: int, episodes: int, **changes) -> list:
 def train_sb3(setting: str, seed: int, episodes: int, env=None) -> tuple:
     """Train SB3's PPO for ``episodes`` episodes; return (records, model)."""
     # stable_baselines3: an optional dependency (the cross-check only), about 2 s to import
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback  # stable_baselines3: as above
-    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize  # as above
+    from stable_baselines3 import PPO  # lazy: stable_baselines3 (optional, 2 s)
+    from stable_baselines3.common.callbacks import BaseCallback  # lazy: as above
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize  # lazy: as above
 
     torch.set_num_threads(1)
     env = env if env is not None else make_env(setting)

@@ -27,6 +27,8 @@ from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import case_problem, SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
+from hrc_joystick_node.human_core import HumanCore, HumanParams
+from hrc_joystick_node.human_profile import load_profiles
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.commands import wrench_on
 from hrc_sim_node.protocol import HUMAN, ProtocolSettings, roles, ROBOT, StepProtocol
@@ -103,9 +105,6 @@ def make_human(spec: str, dof: str, seed: int, limits: SimLimits, involved: bool
     """
     if spec == NO_HUMAN:
         return None
-    from hrc_joystick_node.human_core import HumanCore, HumanParams
-    from hrc_joystick_node.human_profile import load_profiles
-
     common = dict(dof=dof, involved=involved, seed=int(seed))
     if spec.startswith(MODEL_PREFIX):
         params = HumanParams(input='model', model_file=spec[len(MODEL_PREFIX):], **common)

@@ -36,8 +36,9 @@ import typing
 
 from hrc_common.contract import InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
-from hrc_common.params import param, ParameterError
-from hrc_joystick_node.human_profile import HumanProfile
+from hrc_common.params import from_dict, param, ParameterError
+from hrc_joystick_node.human_model import ClonedHuman, load_human_model
+from hrc_joystick_node.human_profile import default_profiles_path, HumanProfile, load_profiles
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
                                       MODEL, PAUSE, SCRIPT, SIM, stick_command, StickReading,
                                       ZERO)
@@ -175,9 +176,6 @@ def core_from_parameters(parameters: dict, limits: SimLimits) -> 'HumanCore':
     (ParameterError with every reason). No device or /joy in this process: input ``sim``.
     ``limits``: the sim's (as the node reads them from the sim's parameters).
     """
-    from hrc_common.params import from_dict
-    from hrc_joystick_node.human_profile import default_profiles_path, load_profiles
-
     params = from_dict(HumanParams, dict(parameters))
     path = params.profiles_file or default_profiles_path()
     core = HumanCore(params, load_profiles(path), str(path))
@@ -200,8 +198,6 @@ class HumanCore:
         self.aborted = False
         self.selector = InputSelector(params.input, params.on_input_lost)
         if params.input == MODEL:  # a bad model file is refused now, not at the first state
-            from hrc_joystick_node.human_model import load_human_model
-
             load_human_model(params.model_file)
         self.script = None
         if params.input == SCRIPT:   # a bad script is refused now, with every reason
@@ -248,8 +244,6 @@ class HumanCore:
 
     def _new_sim_human(self, dof: str, control_period: float):
         if self.params.input == MODEL:
-            from hrc_joystick_node.human_model import ClonedHuman
-
             return ClonedHuman(self.params.model_file, dof, seed=self.params.seed,
                                control_period=control_period)
         return SimulatedHuman(self.profile, dof, seed=self.params.seed,

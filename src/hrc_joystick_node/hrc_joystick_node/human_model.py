@@ -74,7 +74,7 @@ def config_problems(config) -> typing.List[str]:
 
 def build_network(config: dict):
     """Return the torch MLP a checkpoint of ``config`` holds the parameters of."""
-    import torch  # optional heavy dependency: loaded only when a cloned model is used
+    import torch  # lazy: torch (seconds), only when a cloned model is used
 
     layers, width = [], input_size(config['history_steps'])
     for hidden in config['hidden']:
@@ -86,7 +86,7 @@ def build_network(config: dict):
 
 def save_human_model(path, config: dict, state_dict: dict) -> None:
     """Write a checkpoint of the format above (checked before writing)."""
-    import torch  # optional heavy dependency: loaded only when a cloned model is used
+    import torch  # lazy: torch (seconds), only when a cloned model is used
 
     problems = config_problems(config)
     if problems:
@@ -98,7 +98,7 @@ def save_human_model(path, config: dict, state_dict: dict) -> None:
 
 def load_human_model(path) -> tuple:
     """Return (config, network in eval mode) from a checkpoint; ParameterError if refused."""
-    import torch  # optional heavy dependency: loaded only when a cloned model is used
+    import torch  # lazy: torch (seconds), only when a cloned model is used
 
     path = pathlib.Path(path)
     where = f'model_file {path}'
@@ -177,7 +177,7 @@ class ClonedHuman:
 
     def act(self, state, subtasks, now=None) -> float:
         """Return the stick command in [-1, 1] for ``state`` given the assigned subtasks."""
-        import torch  # optional heavy dependency (see build_network)
+        import torch  # lazy: torch (see build_network)
 
         known, _ = normalize_subtasks(subtasks)
         values = [float(getattr(state, name)) for name in STATE_FIELDS]

@@ -33,7 +33,8 @@ import typing
 import yaml
 
 from hrc_common.contract import atomic_write
-from hrc_joystick_node.js_event import device_axis, JoystickDevice
+from hrc_common.params import as_dict, from_dict, ParameterError
+from hrc_joystick_node.js_event import device_axis, JoystickDevice, shape_axis
 
 DEVICE_PATTERN = '/dev/input/js*'
 # Linux joystick ioctls (linux/joystick.h): _IOR('j', 0x11, __u8), _IOR('j', 0x12, __u8),
@@ -264,9 +265,7 @@ def settings_yaml(settings: JoystickSettings, detected: str = '') -> str:
 
 def check_settings(settings: JoystickSettings) -> None:
     """Raise ParameterError if the human node would refuse these settings."""
-    from hrc_common.params import as_dict, from_dict
-    from hrc_joystick_node.human_core import HumanParams
-
+    from hrc_joystick_node.human_core import HumanParams  # lazy: numpy (0.1 s), not for --help
     from_dict(HumanParams, {**as_dict(HumanParams()), **settings.parameters()})
 
 
@@ -345,8 +344,6 @@ def read_answer() -> str:
 
 def command_line(watcher: JoystickWatcher, chosen: dict) -> str:
     """Return the live check line: the raw axis and the command the human node would send."""
-    from hrc_joystick_node.js_event import shape_axis
-
     axis = chosen['axis']
     raw = watcher.device.axis(axis)
     command = shape_axis(raw, chosen['deadzone'], chosen['invert'])
@@ -571,7 +568,6 @@ def main(argv=None) -> int:
     # The human node may run in another directory: write the absolute path.
     settings = JoystickSettings(os.path.abspath(path), int(axis), bool(invert), float(deadzone),
                                 int(enable_button))
-    from hrc_common.params import ParameterError
     try:
         write_settings(options.output, settings, notes)
     except (ParameterError, OSError) as error:

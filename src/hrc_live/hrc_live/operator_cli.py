@@ -16,6 +16,7 @@ import sys
 import time
 
 from hrc_common.contract import dof_name, phase_label
+from hrc_common import topics
 from hrc_common.session_control import OPERATOR_SERVICES
 
 EXIT_REFUSED = 1
@@ -56,7 +57,7 @@ def describe_status(status) -> str:
 
 def call_service(node, executor, name: str, timeout: float):
     """Call a Trigger service; return the response, or None if nobody answered in time."""
-    from std_srvs.srv import Trigger
+    from std_srvs.srv import Trigger  # lazy: rclpy (via the message), --help stays light
 
     client = node.create_client(Trigger, name)
     deadline = time.monotonic() + timeout
@@ -71,8 +72,8 @@ def call_service(node, executor, name: str, timeout: float):
 
 def wait_for_status(node, executor, timeout: float):
     """Return the newest SessionStatus (transient local), or None."""
-    from hrc_common import qos, topics
-    from hrc_msgs.msg import SessionStatus
+    from hrc_common import qos  # lazy: rclpy, --help stays light
+    from hrc_msgs.msg import SessionStatus  # lazy: rclpy (via the message), as above
 
     received = []
     node.create_subscription(SessionStatus, topics.SESSION, received.append, qos.SESSION_QOS)
@@ -85,8 +86,8 @@ def wait_for_status(node, executor, timeout: float):
 def main(argv=None) -> int:
     """Entry point of ``hrc operator``."""
     options = parse_args(sys.argv[1:] if argv is None else argv)
-    import rclpy
-    from rclpy.context import Context
+    import rclpy  # lazy: rclpy (0.3 s), --help and a bad argument answer without it
+    from rclpy.context import Context  # lazy: rclpy, as above
 
     context = Context()
     rclpy.init(context=context, domain_id=options.domain_id,

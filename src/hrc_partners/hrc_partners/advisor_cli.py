@@ -40,8 +40,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without
-    from hrc_partners import advisor
-    from hrc_partners.partners import spec_problem  # torch, as above
+    from hrc_partners import advisor  # lazy: torch (seconds), see above
+    from hrc_partners.partners import spec_problem  # lazy: torch, as above
 
     problems = []
     if args.episodes < 2:
@@ -93,8 +93,8 @@ def _positive(text: str) -> bool:
 
 
 def _person(spec: str, weak_dof: str, factor: str):
-    from hrc_partners.advisor import weaken  # torch (via hrc_partners.partners), as in main()
-    from hrc_partners.partners import parse_spec  # torch, as above
+    from hrc_partners.advisor import weaken  # lazy: torch (via partners), as in main()
+    from hrc_partners.partners import parse_spec  # lazy: torch, as above
 
     parsed = parse_spec(spec)
     person = load_profile(parsed.name)

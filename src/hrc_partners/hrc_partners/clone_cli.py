@@ -86,7 +86,7 @@ def epoch_progress(epochs: int, stream=None):
 
 def clone(args, log=print) -> dict:
     """Train and save the clone described by ``args``; return the report (ParameterError)."""
-    from hrc_partners import cloning  # torch (seconds): --help answers without it
+    from hrc_partners import cloning  # lazy: torch (seconds): --help answers without it
 
     problems = []
     if not 1 <= args.history_steps <= 256:

@@ -162,10 +162,10 @@ def markdown(matrix: Matrix) -> str:
 
 def heatmap(matrix: Matrix, path) -> None:
     """Draw the matrix (log colour scale, mean and drop in each cell) to a PNG."""
-    import matplotlib  # optional heavy dependency (about 1 s): only when a figure is drawn
+    import matplotlib  # lazy: matplotlib (about 1 s), only when a figure is drawn
     matplotlib.use('Agg')
-    import matplotlib.colors  # matplotlib, as above
-    import matplotlib.pyplot as plt  # after use('Agg'): no display needed
+    import matplotlib.colors  # lazy: matplotlib, as above
+    import matplotlib.pyplot as plt  # lazy: matplotlib, after use('Agg') (no display)
 
     values = numpy.array([[matrix.cell(agent.name, partner).estimate
                            for partner in matrix.partners] for agent in matrix.agents])

@@ -47,8 +47,8 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without
-    from hrc_partners import crossplay
-    from hrc_partners.partners import spec_problem  # torch, as above
+    from hrc_partners import crossplay  # lazy: torch, PyBullet (seconds): not for --help
+    from hrc_partners.partners import spec_problem  # lazy: torch, as above
 
     problems = []
     if args.episodes < 1:

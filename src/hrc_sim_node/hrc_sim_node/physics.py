@@ -334,7 +334,7 @@ class SliderPendulumBall:
     """
 
     def __init__(self, params: PhysicsParams = None, gui: bool = False):
-        import pybullet
+        import pybullet  # lazy: PyBullet, PhysicsParams serves modules that never simulate
 
         self._client = None
 

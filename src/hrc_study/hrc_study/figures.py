@@ -5,8 +5,11 @@ from dataclasses import dataclass
 import math
 import warnings
 
+from hrc_bag.report import action_trace, factor_score
+from hrc_bag.report.figures import draw_three_factor
 from hrc_common.contract import other_dof, paper_case_ids
 import numpy
+from scipy import stats
 
 from hrc_study.sessions import (final_block_start, kind_of, kinds_known, measures,
                                 STRATEGY_SHORT)
@@ -17,9 +20,9 @@ PANELS = [('translation', '(a) robot: translation, human: rotation (cases 1, 3, 
 
 
 def _pyplot():
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (about 1 s), only when a figure is drawn
     matplotlib.use('Agg')
-    import matplotlib.pyplot as pyplot
+    import matplotlib.pyplot as pyplot  # lazy: matplotlib, after use('Agg') (no display)
     return pyplot
 
 
@@ -158,8 +161,6 @@ def median_session(members):
 
 def final_trace(session, seconds: float = 4.0) -> dict:
     """Return the robot and human actions of the first final-evaluation episode (Fig. 6)."""
-    from hrc_bag.report import action_trace
-
     bag_session = session.extra.get('bag_session')
     if bag_session is None:
         return {}
@@ -215,9 +216,6 @@ def figure_three_factor(choice, path) -> None:
     Radius 1 - 0.8 * value / largest value of the factor (hrc_bag's scale): the whisker on each
     axis spans the bootstrap interval of the factor. Drawn by hrc_bag's Fig. 7.
     """
-    from hrc_bag.report import factor_score
-    from hrc_bag.report.figures import draw_three_factor
-
     axes_keys = [('human', 'less human-involved\ntraining'), ('time', 'less total training'),
                  ('performance', 'higher team\nperformance')]
     largest = {key: max(max(entry.factors[key].estimate, entry.factors[key].high)
@@ -242,8 +240,6 @@ def figure_three_factor(choice, path) -> None:
 
 def figure_convergence(sessions, profile: str, path) -> None:
     """Write the Kaplan-Meier curves: fraction of seeds not yet converged per episode."""
-    from scipy import stats
-
     pyplot = _pyplot()
     groups = by_case(sessions, profile)
     figure, axis = pyplot.subplots(figsize=(7.5, 4.6))

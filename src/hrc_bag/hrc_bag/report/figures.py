@@ -10,16 +10,16 @@ from hrc_bag.report.tables import STRATEGY_TITLES
 
 
 def _pyplot():
-    import matplotlib  # optional heavy dependency (about 1 s): only when a figure is drawn
+    import matplotlib  # lazy: optional heavy dependency (about 1 s): only when a figure is drawn
     matplotlib.use('Agg')
-    import matplotlib.pyplot as pyplot  # after use('Agg'): no display needed
+    import matplotlib.pyplot as pyplot  # lazy: after use('Agg'): no display needed
     return pyplot
 
 
 def figure_training_curves(rows, path) -> None:
     """Write Fig. 5: training curves per case, marks where the human joins / reward changes."""
     pyplot = _pyplot()
-    from matplotlib.ticker import MaxNLocator  # matplotlib: loaded by _pyplot() just before
+    from matplotlib.ticker import MaxNLocator  # lazy: matplotlib: loaded by _pyplot() just before
     panels = [('translation', '(a) robot: translation, human: rotation'),
               ('rotation', '(b) robot: rotation, human: translation')]
     figure, axes = pyplot.subplots(1, 2, figsize=(13, 4.8), sharey=True)

@@ -108,9 +108,9 @@ def compare_learners(results: dict, setting: str, env) -> str:
 
 def plot(results: dict, path: str) -> None:
     """Draw the learning curves with min-max bands over the seeds, one panel per setting."""
-    import matplotlib  # optional heavy dependency (about 1 s): only when a figure is drawn
+    import matplotlib  # lazy: matplotlib (about 1 s), only when a figure is drawn
     matplotlib.use('Agg')
-    from matplotlib import pyplot  # after use('Agg'): no display needed
+    from matplotlib import pyplot  # lazy: matplotlib, after use('Agg') (no display)
 
     settings = list(results['runs'])
     figure, axes = pyplot.subplots(1, len(settings), figsize=(6.2 * len(settings), 4.2),
