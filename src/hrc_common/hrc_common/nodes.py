@@ -369,6 +369,12 @@ def run_nodes(node_factories, executable: str, summary: str, params_cls=None,
         code = report_bad_parameters(executable, error.reasons)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RCLError:
+        # Ctrl-C/SIGTERM while a node was still being made: rclpy's handler shut the context
+        # down under it and rcl refuses the next entity ("context is invalid"). That is a
+        # stop, not a failure; any other rcl error (context still valid) is one.
+        if rclpy.ok():
+            raise
     finally:
         for node in reversed(nodes):
             close = getattr(node, 'close', None)

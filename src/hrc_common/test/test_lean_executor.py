@@ -203,3 +203,23 @@ def test_events_refuses_a_node_with_a_guard_condition(ros_domain_id, monkeypatch
     assert code == 2, error
     assert 'EventsExecutor has no guard conditions' in error and "'guarded'" in error
     assert 'Traceback' not in error
+
+
+def test_a_stop_while_a_node_is_being_made_is_a_stop_not_a_traceback(ros_domain_id, capsys):
+    """Ctrl-C while the node's constructor still creates entities (seen in CI: the recorder).
+
+    rclpy's signal handler shuts the context down; the constructor's next ``create_*`` raises
+    RCLError ("context is invalid"). The node process must end as after any Ctrl-C (exit 0),
+    not with a traceback and exit 1. A shutdown inside the constructor stands in for the
+    signal, deterministically.
+    """
+    import rclpy
+
+    def node_stopped_while_made():
+        node = rclpy.create_node('starting')
+        rclpy.shutdown()                       # what the SIGINT handler does
+        node.create_subscription(Int32, 'late', lambda message: None, 10)
+        return node
+
+    code = run_node(node_stopped_while_made, 'starting_node', 'summary', args=['starting_node'])
+    assert code == 0, capsys.readouterr().err
