@@ -123,10 +123,10 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
 OTHER_CASES = (1, 2, 3, 4, 6)
 # Sessions of OTHER_CASES run at once (each graph on a domain of its own, then its engine run):
 # a short graph session spends most of its wall time starting processes and discovering, not
-# computing, so three at a time take about half the wall time of one after another on 2 cores
-# (CI time); lockstep sessions do not depend on timing, so running them together changes
-# nothing they record.
-CONCURRENT_SESSIONS = 3
+# computing, so running them together takes about half the wall time of one after another on
+# 2 cores (CI time); lockstep sessions do not depend on timing, so running them together
+# changes nothing they record.
+CONCURRENT_SESSIONS = len(OTHER_CASES)
 
 
 @pytest.fixture(scope='module')
