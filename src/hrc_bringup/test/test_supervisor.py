@@ -18,9 +18,9 @@ def python(code):
 def test_exit_is_noticed_and_described(tmp_path):
     supervisor = Supervisor(tmp_path)
     supervisor.start('crasher', python('import sys; print("boom"); sys.exit(3)'))
-    # The sleeper sets Python's own Ctrl-C handler, as a node does (rclpy installs its own): in
-    # the full suite this pytest process has been seen to hand its children SIGINT ignored
-    # (cause not found), and a child that ignores SIGINT is escalation's case (next test).
+    # The sleeper sets Python's own Ctrl-C handler, as a node does (rclpy installs its own): a
+    # suite started as a background job (`make test &`, nohup) runs with SIGINT ignored, which
+    # its children inherit at exec; a child that ignores SIGINT is escalation's case (next test).
     supervisor.start('sleeper', python('import signal, time; signal.signal(signal.SIGINT, '
                                        'signal.default_int_handler); print("ready", flush=True); '
                                        'time.sleep(60)'))
