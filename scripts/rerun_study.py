@@ -9,7 +9,8 @@ Steps, each printed as it starts:
 1. refuse a work tree with uncommitted source changes (the results must come from a commit;
    ``--allow-dirty`` runs anyway and says so in the results' note);
 2. for each learner (PPO, the paper's; SAC, the off-policy one of issue 22): ``experiment``
-   with the ``paper`` profile (``--seeds`` seeds, person N of its population for seed N) and the
+   of every case of params/cases.yaml (the paper's six and the two partners-first cases) with
+   the ``paper`` profile (``--seeds`` seeds, person N of its population for seed N) and the
    ``paper_symmetric`` control (``--control-seeds``), in-process, ``--parallel`` at once;
 3. the spot check: the sessions of ``--spot-check`` (case:seed) rerun through the ROS graph
    (the nodes over DDS), and every episode of each compared with the engine's: the same
@@ -20,9 +21,14 @@ The learning settings of the study (``hrc_common.session_plan.STUDY_LEARNING``) 
 issue 22 measured to need the fewest episodes with PPO; the paper's own Table I settings stay
 the agent's defaults.
 
-Example (the whole study; ~1-2 h on 2 cores)::
+Example (the whole study: 8 cases x (10 + 5) seeds x 2 learners, ~3 h on 2 cores)::
 
     python scripts/rerun_study.py --parallel 2
+
+A run cut short (Ctrl-C, a machine that went down) continues where it stopped with the same
+command plus ``--resume``: every session that finished is journalled at once and kept (its
+bags, its row), only the others run (``hrc experiment --resume``; a session is kept only if the
+same commit ran it). The results then list the runs and sum their wall time.
 
 A small run to try it (two cases, two seeds, no control, PPO only, no spot check)::
 
@@ -39,6 +45,7 @@ import subprocess
 import sys
 import time
 
+from hrc_common.contract import case_ids
 from hrc_common.session_plan import STUDY_LEARNING
 from hrc_study.loading import load_sessions
 
@@ -53,8 +60,9 @@ def parse_arguments(argv):
     parser = argparse.ArgumentParser(
         description=__doc__.split('\n\n')[0], epilog='Example: python scripts/rerun_study.py '
         '--parallel 2', formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument('--cases', type=int, nargs='+', default=None,
-                        help='cases (default: every case of params/cases.yaml)')
+    parser.add_argument('--cases', type=int, nargs='+', default=list(case_ids()),
+                        help='cases (default: every case of params/cases.yaml, '
+                        f'{" ".join(map(str, case_ids()))})')
     parser.add_argument('--seeds', type=int, default=10, help='seeds of the paper profile')
     parser.add_argument('--control-seeds', type=int, default=5,
                         help='seeds of the paper_symmetric control (0: none)')
@@ -72,6 +80,9 @@ def parse_arguments(argv):
     parser.add_argument('--bags-dir', default=str(REPO / 'bags'))
     parser.add_argument('--runs-dir', default=str(REPO / 'runs'))
     parser.add_argument('--out', default=str(REPO / 'docs'), help='folder of results.md')
+    parser.add_argument('--resume', action='store_true',
+                        help='keep the sessions an earlier run of the same --name finished; '
+                        'run only the others (hrc experiment --resume)')
     parser.add_argument('--allow-dirty', action='store_true',
                         help='run from a work tree with uncommitted changes (said in the note)')
     options = parser.parse_args(argv)
@@ -125,6 +136,8 @@ def experiment(options, name: str, learner: str, extra: list) -> int:
         command += ['--set', setting]
     if options.cases and '--cases' not in extra:
         command += ['--cases'] + [str(case) for case in options.cases]
+    if options.resume:
+        command += ['--resume']
     command += extra
     print('[rerun] ' + ' '.join(command[2:]), flush=True)
     return subprocess.run(command, check=False).returncode
@@ -193,9 +206,10 @@ def main(argv=None) -> int:
                      for problem in spot_check(options, learner, folder)]
         minutes = (time.monotonic() - started) / 60.0
         out = pathlib.Path(options.out) / ('' if learner == 'ppo' else learner)
-        note = (f'Rerun by scripts/rerun_study.py at git {version}, learner {learner}, '
-                f'settings {", ".join(STUDY_SETTINGS + LEARNER_SETTINGS[learner])}; '
-                f'{minutes:.1f} min wall so far on this machine; graph spot check '
+        note = (f'Rerun by scripts/rerun_study.py at git {version}'
+                f'{" (resumed: see the runs above)" if options.resume else ""}, learner '
+                f'{learner}, settings {", ".join(STUDY_SETTINGS + LEARNER_SETTINGS[learner])}; '
+                f'{minutes:.1f} min wall in this run so far on this machine; graph spot check '
                 f'{" ".join(options.spot_check) or "none"}.')
         command = [sys.executable, '-m', 'hrc_study.results_cli', str(folder), '--out',
                    str(out), '--note', note]

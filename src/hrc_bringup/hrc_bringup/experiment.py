@@ -48,6 +48,8 @@ from hrc_common.session_plan import package_version, parse_overrides, SessionSet
 from hrc_common.time_left import TimeLeft
 
 from hrc_bringup.experiment_args import build_parser
+from hrc_bringup.experiment_resume import (finished_sessions, JOURNAL_NAME, journal_line,
+                                           MANIFEST_NAME, split_resumed)
 from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
 
 def _ignore_interrupt():
@@ -178,6 +180,49 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
         for case in options.cases]
 
 
+def resume_plan(options, bags_dir: pathlib.Path, planned: list, version: str) -> tuple:
+    """Return ``(earlier runs, reused, tasks to run)`` (``--resume``; else nothing reused).
+
+    ``reused`` pairs each planned task an earlier run of the folder finished with that run's
+    record (hrc_bringup.experiment_resume); the earlier runs are the folder's manifest's
+    ``runs`` (or the manifest itself, of a run before runs were listed), plus one per
+    interrupted run found only in the journal (its wall time: its last session's end).
+    """
+    if not options.resume:
+        return [], [], planned
+    finished = finished_sessions(bags_dir)
+    reused, tasks, other_version = split_resumed(
+        [(task, asdict(task.settings), task.engine) for task in planned], finished, version)
+    if other_version:
+        versions = sorted({record['version'] for _, record in other_version})
+        print(f'[experiment] resume: {len(other_version)} finished sessions of another version '
+              f'({", ".join(versions)}) run again at {version}', flush=True)
+    if reused and version.endswith('-dirty'):
+        print(f'[experiment] resume: the code has uncommitted changes ({version}); the sessions '
+              'kept may come from other uncommitted code', flush=True)
+    runs = []
+    manifest = bags_dir / MANIFEST_NAME
+    if manifest.is_file():
+        try:
+            data = json.loads(manifest.read_text())
+            runs = data.get('runs') or [{key: data.get(key) for key in (
+                'command', 'started', 'wall_seconds', 'version')}]
+        except (OSError, ValueError):
+            runs = []
+    known = {run.get('started') for run in runs}
+    interrupted = {}
+    for _, record in reused:
+        started = record['outcome'].get('run_started')
+        if started and started not in known:
+            run = interrupted.setdefault(started, {
+                'command': '(interrupted; from the journal)', 'started': started,
+                'wall_seconds': 0.0, 'version': record['version'], 'sessions_run': 0})
+            run['wall_seconds'] = max(run['wall_seconds'],
+                                      record['outcome'].get('finished_after', 0.0))
+            run['sessions_run'] += 1
+    return runs + sorted(interrupted.values(), key=lambda run: run['started']), reused, tasks
+
+
 def person_override(options, seed: int) -> tuple:
     """Return the override that makes the session's simulated human person number ``seed``.
 
@@ -202,7 +247,12 @@ def main(argv=None) -> int:
     runs_dir = pathlib.Path(options.runs_dir) / name
     bags_dir.mkdir(parents=True, exist_ok=True)
     runs_dir.mkdir(parents=True, exist_ok=True)
-    tasks = plan_tasks(options, bags_dir, runs_dir)
+    planned = plan_tasks(options, bags_dir, runs_dir)
+    version = _version()
+    prior_runs, reused, tasks = resume_plan(options, bags_dir, planned, version)
+    journal = bags_dir / JOURNAL_NAME
+    if not options.resume:
+        journal.write_text('')     # a new sweep of the folder: its sessions are journalled anew
     uncommitted = _uncommitted_sources()
     started_at = time.strftime('%Y-%m-%d %H:%M:%S %Z')
     start = time.monotonic()
@@ -213,9 +263,15 @@ def main(argv=None) -> int:
         return 1
     profiles = ', '.join(f'{profile or "default"}: {seeds} seeds'
                          for profile, seeds in options.profile_seeds.items())
-    print(f'[experiment] {name}: {len(tasks)} sessions ({len(options.cases)} cases; '
+    print(f'[experiment] {name}: {len(planned)} sessions ({len(options.cases)} cases; '
           f'{profiles}), engine '
           f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
+    if options.resume:
+        versions = sorted({record['version'] for _, record in reused})
+        print(f'[experiment] resuming: {len(reused)} of {len(planned)} sessions finished by '
+              f'earlier runs of the folder ({", ".join(versions) or "none"}), {len(tasks)} '
+              'to run', flush=True)
+    tasks_by_id = {task.session_id: task for task in tasks}
     outcomes = []
     progress = TimeLeft(len(tasks), 'sessions')
 
@@ -224,9 +280,14 @@ def main(argv=None) -> int:
         if archive is not None:
             unpack_folder(archive, bags_dir, outcome['session_id'])
         outcome['finished_after'] = time.monotonic() - start   # s since the sweep started
+        outcome['version'] = version
+        outcome['run_started'] = started_at
         outcomes.append(outcome)
         if outcome['exit_code'] is None:
             return   # skipped (--stop-after): listed at the end
+        with journal.open('a') as lines:     # at once: an interrupted sweep resumes from here
+            lines.write(journal_line(asdict(tasks_by_id[outcome['session_id']]), outcome,
+                                     version) + '\n')
         status = 'done' if outcome['exit_code'] == 0 else f'FAILED: {outcome["error"]}'
         progress.show(len(outcomes), f'[experiment] {outcome["session_id"]} on '
                       f'{outcome["host"]} in {outcome["seconds"]:.0f} s ({len(outcomes)}/'
@@ -252,17 +313,28 @@ def main(argv=None) -> int:
                     if outcome['exit_code'] not in (0, None))
     skipped = sorted(outcome['session_id'] for outcome in outcomes
                      if outcome['exit_code'] is None)
-    record = {'command': 'hrc experiment '
-                         + ' '.join(shlex.quote(arg) for arg in options.argv),
-              'engine': options.engine, 'executor': description, 'sessions': len(tasks),
-              'failed': failed, 'skipped': skipped, 'wall_seconds': wall, 'started': started_at,
-              'host_cpus': os.cpu_count(), 'version': _version(),
-              'uncommitted': uncommitted,
-              'tasks': [asdict(task) for task in tasks],
-              'outcomes': sorted(outcomes, key=lambda outcome: outcome['session_id'])}
+    this_run = {'command': 'hrc experiment ' + ' '.join(shlex.quote(arg) for arg in options.argv),
+                'started': started_at, 'wall_seconds': wall, 'version': version,
+                'sessions_run': len(outcomes) - len(skipped)}
+    runs = prior_runs + [this_run]
+    record = {'command': this_run['command'],
+              'engine': options.engine, 'executor': description, 'sessions': len(planned),
+              'failed': failed, 'skipped': skipped,
+              # the sum over the runs of the folder when resumed (each run's own in 'runs')
+              'wall_seconds': sum(run.get('wall_seconds', 0.0) for run in runs),
+              'started': runs[0].get('started', started_at),
+              'host_cpus': os.cpu_count(), 'version': version,
+              'uncommitted': uncommitted, 'runs': runs,
+              'tasks': [asdict(task) for task in tasks] + [record['task']
+                                                           for _, record in reused],
+              'outcomes': sorted(outcomes + [dict(record['outcome'], reused=True,
+                                                  version=record['version'])
+                                             for _, record in reused],
+                                 key=lambda outcome: outcome['session_id'])}
     cpu = sum(outcome.get('cpu_seconds', 0.0) for outcome in outcomes)
-    record['cpu_seconds'] = cpu
-    (bags_dir / 'experiment.json').write_text(json.dumps(record, indent=1))
+    record['cpu_seconds'] = cpu + sum(record['outcome'].get('cpu_seconds', 0.0)
+                                      for _, record in reused)
+    (bags_dir / MANIFEST_NAME).write_text(json.dumps(record, indent=1))
     print(f'[experiment] {len(outcomes) - len(skipped)} sessions in {wall:.0f} s wall '
           f'({wall / 60:.1f} min; {cpu:.0f} CPU s in the sessions)'
           + (f'; failed: {failed}' if failed else '')

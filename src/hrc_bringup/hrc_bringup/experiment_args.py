@@ -54,6 +54,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--stop-after', type=float, default=0.0, metavar='MINUTES',
                         help='start no session after this many minutes (the sessions running '
                         'then finish; the others are listed as skipped); 0 = none')
+    parser.add_argument('--resume', action='store_true',
+                        help='run only the sessions no earlier run of this --name finished '
+                        '(same settings and engine; its bag folder kept); default: run all')
     parser.add_argument('--pull-bags', action='store_true',
                         help='workers send their session folders back to this machine (no '
                         'shared filesystem); default: they write to --bags-dir directly')

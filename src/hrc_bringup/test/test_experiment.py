@@ -142,3 +142,22 @@ def test_bad_arguments_exit_2_with_every_reason(tmp_path, capsys):
                    'x'):
         assert reason in stderr
     assert 'Traceback' not in stderr
+
+
+def test_resume_runs_only_the_sessions_no_earlier_run_finished(tmp_path):
+    first = _run_experiment(tmp_path, 'study', '--parallel', '1', '--cases', '1')
+    bag = tmp_path / 'bags' / 'study' / 'case1-seed0'
+    stamps = {path.name: path.stat().st_mtime_ns for path in bag.iterdir()}
+    # the journal holds the finished session at once (what an interrupted sweep resumes from)
+    journal = (tmp_path / 'bags' / 'study' / 'sessions.jsonl').read_text().splitlines()
+    assert [json.loads(line)['outcome']['session_id'] for line in journal] == ['case1-seed0']
+    second = _run_experiment(tmp_path, 'study', '--parallel', '1', '--cases', '1', '2',
+                             '--resume')
+    outcomes = {outcome['session_id']: outcome for outcome in second['outcomes']}
+    assert sorted(outcomes) == ['case1-seed0', 'case2-seed0']
+    assert outcomes['case1-seed0']['reused'] and not outcomes['case2-seed0'].get('reused')
+    assert {path.name: path.stat().st_mtime_ns for path in bag.iterdir()} == stamps
+    assert [run['sessions_run'] for run in second['runs']] == [1, 1]
+    assert second['wall_seconds'] == pytest.approx(first['wall_seconds']
+                                                   + second['runs'][1]['wall_seconds'])
+    assert sorted(_episodes(tmp_path / 'bags' / 'study')) == ['case1-seed0', 'case2-seed0']

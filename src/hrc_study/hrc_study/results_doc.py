@@ -5,6 +5,7 @@ own ``experiment.json`` when present: command, engine, wall time), nothing is ty
 paper's Table II (a fact quoted from the paper, labelled as such).
 """
 
+import collections
 import csv
 import io
 import json
@@ -255,6 +256,9 @@ def wall_target(experiment: dict) -> tuple:
     cpu_text = (f'; the finished sessions used {sum(cpu):.0f} CPU s, {sum(cpu) / len(cpu):.0f} '
                 f'per session: 60 sessions need {60 * sum(cpu) / len(cpu) / cores / 60:.1f} '
                 f'min on {cores} free cores' if cpu else '')
+    if len(experiment.get('runs') or []) > 1:
+        return (target, f'not measured: the sessions came from {len(experiment["runs"])} runs '
+                '(resumed), so no one wall time covers them', None)
     if not full:
         done = len(completed(experiment))
         return (target, f'not measured: no profile has 60 finished sessions ({done} of '
@@ -363,6 +367,43 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
             'targets': targets(rows, experiment)}
 
 
+def run_record_lines(experiment: dict) -> list:
+    """Return the Markdown lines that say how the sessions were run (from experiment.json).
+
+    A folder resumed over several runs (``hrc experiment --resume``) lists each run and how
+    many finished sessions each git version contributed; its wall time is the runs' sum.
+    """
+    lines = []
+    runs = experiment.get('runs') or []
+    if len(runs) > 1:
+        lines += [f'The sessions were run in {len(runs)} runs of the same folder, each later one '
+                  'with `--resume` (it keeps every session an earlier run finished):', '']
+        lines += [f'{number}. {run.get("started", "?")}, {run.get("version", "?")}: '
+                  f'{run.get("sessions_run", "?")} sessions in '
+                  f'{(run.get("wall_seconds") or math.nan) / 60:.1f} min wall: '
+                  f'`{run.get("command", "?")}`' for number, run in enumerate(runs, 1)]
+        versions = collections.Counter(outcome.get('version') or experiment.get('version', '?')
+                                       for outcome in completed(experiment))
+        lines += ['', 'Finished sessions by the version that ran them: '
+                  + ', '.join(f'{version} {count}' for version, count in sorted(versions.items()))
+                  + '; the wall time below is the sum over the runs.', '']
+    if experiment:
+        lines += [f'The sessions were run by{" (the last run)" if len(runs) > 1 else ""}', '',
+                  '```bash', experiment.get('command', '?'),
+                  '```', '',
+                  f'Engine `{experiment.get("engine", "?")}`, executor '
+                  f'`{experiment.get("executor", "?")}`: {len(completed(experiment))} of '
+                  f'{experiment.get("sessions", "?")} planned sessions finished in '
+                  f'{experiment.get("wall_seconds", math.nan) / 60:.1f} min wall on '
+                  f'{experiment.get("host_cpus", "?")} CPUs ({experiment.get("started", "?")}'
+                  f', {experiment.get("version", "?")})'
+                  + (f'; {len(experiment["skipped"])} not started (--stop-after)'
+                     if experiment.get('skipped') else '')
+                  + (f'; failed: {", ".join(experiment["failed"])}'
+                     if experiment.get('failed') else '') + '.', '']
+    return lines
+
+
 def _persons(sessions) -> str:
     persons = sorted({session.extra.get('person', -1) for session in sessions})
     if persons == [-1]:
@@ -380,19 +421,7 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
     limits = sorted({session.episode_limit for session in sessions if session.episode_limit})
     parts = ['# Results: the six cases over seeds, with statistics', '',
              'Generated from the bags by', '', '```bash', command, '```', '']
-    if experiment:
-        parts += ['The sessions were run by', '', '```bash', experiment.get('command', '?'),
-                  '```', '',
-                  f'Engine `{experiment.get("engine", "?")}`, executor '
-                  f'`{experiment.get("executor", "?")}`: {len(completed(experiment))} of '
-                  f'{experiment.get("sessions", "?")} planned sessions finished in '
-                  f'{experiment.get("wall_seconds", math.nan) / 60:.1f} min wall on '
-                  f'{experiment.get("host_cpus", "?")} CPUs ({experiment.get("started", "?")}'
-                  f', {experiment.get("version", "?")})'
-                  + (f'; {len(experiment["skipped"])} not started (--stop-after)'
-                     if experiment.get('skipped') else '')
-                  + (f'; failed: {", ".join(experiment["failed"])}'
-                     if experiment.get('failed') else '') + '.', '']
+    parts += run_record_lines(experiment)
     if note:
         parts += [note, '']
     parts += [f'{len(sessions)} sessions: simulated-human profiles '

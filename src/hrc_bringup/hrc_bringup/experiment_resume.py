@@ -1,0 +1,104 @@
+"""Resuming a sweep: which planned sessions an earlier run of the same folder already finished.
+
+A sweep of the whole study takes hours on a small machine (scripts/rerun_study.py: ~3 h on 2
+cores), longer than a machine may stay up. Every finished session is therefore journalled at
+once in ``<bags-dir>/<name>/sessions.jsonl`` (one JSON object per line: the task as planned,
+its outcome, the git version that ran it), and ``hrc experiment --resume`` runs only the planned
+sessions that no earlier run of the folder finished.
+
+A planned session counts as finished when an earlier record has the same *session key* (every
+field of the session's configuration that can change its result: case, seed, profile, episode
+limits, mode, input, overrides...; not its id or folders, see :data:`NOT_IN_KEY`) and the same
+engine, ended with exit code 0, its bag folder is still there, and it was run by the same
+version of the code (``git describe --dirty``): a session of another commit is run again, so a
+resumed folder holds one version's sessions (a ``-dirty`` version cannot tell two uncommitted
+states apart: the runner warns). Plain Python, no ROS.
+"""
+
+import json
+import pathlib
+
+JOURNAL_NAME = 'sessions.jsonl'
+MANIFEST_NAME = 'experiment.json'
+# SessionSettings fields that name or place a session, or annotate it: they never change what
+# the session does, so two sessions that differ only there are the same session.
+NOT_IN_KEY = ('session_id', 'bags_dir', 'runs_dir', 'notes', 'subject_id')
+
+
+def session_key(settings: dict, engine: str) -> str:
+    """Return a canonical text of what decides a session's result (settings as plain data)."""
+    kept = {name: value for name, value in settings.items() if name not in NOT_IN_KEY}
+    # a JSON round trip makes tuples lists and keys strings, as they come back from the files
+    return json.dumps({'settings': json.loads(json.dumps(kept)), 'engine': engine},
+                      sort_keys=True)
+
+
+def journal_line(task: dict, outcome: dict, version: str) -> str:
+    """Return one journal line (no newline) for a finished session."""
+    return json.dumps({'task': task, 'outcome': outcome, 'version': version}, sort_keys=True)
+
+
+def read_records(folder: pathlib.Path) -> list:
+    """Return every session record of earlier runs of ``folder``: dicts task, outcome, version.
+
+    From the manifest of a run that ended (``experiment.json``: its tasks joined with their
+    outcomes by session id) and the journal (every session as it finished, also of a run that
+    was interrupted); a later record of the same session id replaces an earlier one. Lines or
+    files that cannot be read are skipped (a journal cut by a crash ends in a partial line).
+    """
+    records = {}
+    manifest = folder / MANIFEST_NAME
+    if manifest.is_file():
+        try:
+            data = json.loads(manifest.read_text())
+        except (OSError, ValueError):
+            data = {}
+        tasks = {task.get('settings', {}).get('session_id'): task
+                 for task in data.get('tasks', [])}
+        for outcome in data.get('outcomes', []):
+            task = tasks.get(outcome.get('session_id'))
+            if task is not None:
+                records[outcome['session_id']] = {
+                    'task': task, 'outcome': outcome,
+                    'version': outcome.get('version') or data.get('version', '')}
+    journal = folder / JOURNAL_NAME
+    if journal.is_file():
+        for line in journal.read_text().splitlines():
+            try:
+                record = json.loads(line)
+                records[record['outcome']['session_id']] = record
+            except (ValueError, KeyError, TypeError):
+                continue
+    return list(records.values())
+
+
+def finished_sessions(folder: pathlib.Path) -> dict:
+    """Return {session key: record} of the sessions earlier runs of ``folder`` finished."""
+    finished = {}
+    for record in read_records(folder):
+        outcome, task = record['outcome'], record['task']
+        bag = folder / outcome['session_id']
+        if outcome.get('exit_code') != 0 or not any(bag.glob('*.mcap')):
+            continue
+        finished[session_key(task.get('settings', {}), task.get('engine', ''))] = record
+    return finished
+
+
+def split_resumed(planned: list, finished: dict, version: str) -> tuple:
+    """Split planned tasks (``(task, settings dict, engine)`` triples) into reused and to run.
+
+    Returns ``(reused, to_run, other_version)``: ``reused`` a list of ``(task, record)`` for
+    the tasks an earlier run of this ``version`` finished, ``to_run`` the tasks still to run
+    (in the planned order), ``other_version`` the ``(task, record)`` of those among them that
+    an earlier run of another version had finished (run again).
+    """
+    reused, to_run, other_version = [], [], []
+    for task, settings, engine in planned:
+        record = finished.get(session_key(settings, engine))
+        if record is not None and record.get('version') == version:
+            reused.append((task, record))
+            continue
+        to_run.append(task)
+        if record is not None:
+            other_version.append((task, record))
+    return reused, to_run, other_version
