@@ -337,6 +337,7 @@ def main(argv=None) -> int:
     (bags_dir / MANIFEST_NAME).write_text(json.dumps(record, indent=1))
     print(f'[experiment] {len(outcomes) - len(skipped)} sessions in {wall:.0f} s wall '
           f'({wall / 60:.1f} min; {cpu:.0f} CPU s in the sessions)'
+          + (f'; {len(reused)} kept from earlier runs' if reused else '')
           + (f'; failed: {failed}' if failed else '')
           + (f'; skipped after --stop-after: {len(skipped)}' if skipped else ''), flush=True)
     if not options.report:
