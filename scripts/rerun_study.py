@@ -12,9 +12,10 @@ Steps, each printed as it starts:
    of every case of params/cases.yaml (the paper's six and the two partners-first cases) with
    the ``paper`` profile (``--seeds`` seeds, person N of its population for seed N) and the
    ``paper_symmetric`` control (``--control-seeds``), in-process, ``--parallel`` at once;
-3. the spot check: the sessions of ``--spot-check`` (case:seed) rerun through the ROS graph
-   (the nodes over DDS), and every episode of each compared with the engine's: the same
-   returns, errors, efforts and kinds, or the rerun fails (exit 1);
+3. the spot check: the sessions of ``--spot-check`` (case:seed; default case 2 seed 0, case 4
+   seed 1 and the partners-first case 8 seed 0) rerun through the ROS graph (the nodes over
+   DDS), and every episode of each compared with the engine's: the same returns, errors,
+   efforts and kinds, or the rerun fails (exit 1);
 4. ``hrc_results`` on the PPO run into ``--out`` (docs/results.md), SAC into ``--out``/sac.
 
 The learning settings of the study (``hrc_common.session_plan.STUDY_LEARNING``) are the ones
@@ -69,7 +70,8 @@ def parse_arguments(argv):
     parser.add_argument('--learners', nargs='+', default=['ppo', 'sac'],
                         choices=sorted(LEARNER_SETTINGS))
     parser.add_argument('--episodes', type=int, default=300, help='episode limit per session')
-    parser.add_argument('--spot-check', nargs='*', default=['2:0', '4:1'], metavar='CASE:SEED',
+    parser.add_argument('--spot-check', nargs='*', default=['2:0', '4:1', '8:0'],
+                        metavar='CASE:SEED',
                         help='sessions rerun through the graph and compared (none: no check)')
     parser.add_argument('--parallel', type=int, default=2, help='sessions at once')
     parser.add_argument('--stop-after', type=float, default=0.0, metavar='MINUTES',
