@@ -209,6 +209,13 @@ def resume_plan(options, bags_dir: pathlib.Path, planned: list, version: str) ->
                 'command', 'started', 'wall_seconds', 'version')}]
         except (OSError, ValueError):
             runs = []
+    # the runs whose sessions are kept: by the run's start (journalled sessions), else, for a
+    # manifest from before the journal, by the version
+    starts = {record['outcome'].get('run_started') for _, record in reused}
+    versions = {record['version'] for _, record in reused
+                if not record['outcome'].get('run_started')}
+    kept = [run for run in runs if run.get('started') in starts
+            or (run.get('version') in versions and not run.get('sessions_run'))]
     known = {run.get('started') for run in runs}
     interrupted = {}
     for _, record in reused:
@@ -220,7 +227,7 @@ def resume_plan(options, bags_dir: pathlib.Path, planned: list, version: str) ->
             run['wall_seconds'] = max(run['wall_seconds'],
                                       record['outcome'].get('finished_after', 0.0))
             run['sessions_run'] += 1
-    return runs + sorted(interrupted.values(), key=lambda run: run['started']), reused, tasks
+    return kept + sorted(interrupted.values(), key=lambda run: run['started']), reused, tasks
 
 
 def person_override(options, seed: int) -> tuple:

@@ -1,9 +1,14 @@
 """Resuming a sweep (hrc_bringup.experiment_resume): which sessions count as finished."""
 
+import dataclasses
 import json
+from types import SimpleNamespace
 
+from hrc_bringup.experiment import resume_plan
 from hrc_bringup.experiment_resume import (finished_sessions, journal_line, read_records,
                                            session_key, split_resumed)
+from hrc_bringup.experiment_task import SessionTask
+from hrc_common.session_plan import SessionSettings
 
 
 def _settings(**changes) -> dict:
@@ -69,3 +74,36 @@ def test_the_manifest_of_a_run_that_ended_is_read_with_its_version(tmp_path):
     (tmp_path / 'case2-seed0').mkdir()
     (tmp_path / 'case2-seed0' / 'case2-seed0_end.mcap').write_bytes(b'')
     assert len(finished_sessions(tmp_path)) == 1
+
+
+def test_a_resumed_plan_keeps_the_runs_its_sessions_came_from(tmp_path):
+    def task(case):
+        return SessionTask(SessionSettings(case=case, seed=0, session_id=f'case{case}-seed0'),
+                           engine='inprocess', params_dir='params', pull_bags=False)
+
+    planned = [task(1), task(2), task(3)]
+    # a finished run of another version (nothing of it is kept) ...
+    (tmp_path / 'experiment.json').write_text(json.dumps({'runs': [
+        {'started': 'run A', 'version': 'git 0ld0ld0', 'wall_seconds': 100.0,
+         'sessions_run': 3}]}))
+    # ... then an interrupted run of this version that finished cases 1 and 2
+    for case in (1, 2):
+        settings = dataclasses.asdict(planned[case - 1].settings)
+        _finish(tmp_path, settings, engine='inprocess')
+    lines = (tmp_path / 'sessions.jsonl').read_text().splitlines()
+    records = [json.loads(line) for line in lines]
+    for record, after in zip(records, (40.0, 70.0)):
+        record['version'] = 'git new1234'
+        record['outcome'].update(run_started='run B', finished_after=after)
+    (tmp_path / 'sessions.jsonl').write_text(
+        ''.join(json.dumps(record) + '\n' for record in records))
+    runs, reused, to_run = resume_plan(SimpleNamespace(resume=True), tmp_path, planned,
+                                       'git new1234')
+    assert [task.session_id for task in to_run] == ['case3-seed0']
+    assert [task.session_id for task, _ in reused] == ['case1-seed0', 'case2-seed0']
+    # run A's sessions are not kept, so neither is run A; run B's wall: its last session's end
+    assert runs == [{'command': '(interrupted; from the journal)', 'started': 'run B',
+                     'wall_seconds': 70.0, 'version': 'git new1234', 'sessions_run': 2}]
+    # without --resume nothing is kept
+    assert resume_plan(SimpleNamespace(resume=False), tmp_path, planned, 'git new1234') == (
+        [], [], planned)
