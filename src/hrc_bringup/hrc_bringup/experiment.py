@@ -52,6 +52,10 @@ from hrc_bringup.experiment_resume import (finished_sessions, JOURNAL_NAME, jour
                                            MANIFEST_NAME, split_resumed)
 from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
 
+# s: how often the sweep's main thread wakes while it waits for sessions (signal handling)
+WAKE_PERIOD_S = 0.5
+
+
 def _ignore_interrupt():
     """Pool worker initializer: Ctrl-C is the driver's to handle (it terminates the pool)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -69,9 +73,22 @@ class LocalPool:
         """Return what runs the tasks."""
         return f'local process pool ({self.workers} workers)'
 
-    def run(self, tasks, on_done):
-        """Run every task; call ``on_done(outcome)`` as each finishes."""
-        for outcome in self.pool.imap_unordered(run_task, tasks, chunksize=1):
+    def run(self, tasks, on_done, function=run_task):
+        """Run every task (``function(task)``); call ``on_done(outcome)`` as each finishes.
+
+        The wait for the next outcome wakes every :data:`WAKE_PERIOD_S`: Python runs signal
+        handlers in the main thread only, and a SIGTERM or Ctrl-C the kernel hands to one of
+        the pool's threads does not end the main thread's wait for a result, so without the
+        wake the sweep would go on until the next session ended (minutes).
+        """
+        outcomes = self.pool.imap_unordered(function, tasks, chunksize=1)
+        for _ in range(len(tasks)):
+            while True:
+                try:
+                    outcome = outcomes.next(timeout=WAKE_PERIOD_S)
+                    break
+                except multiprocessing.TimeoutError:
+                    continue   # a signal that arrived meanwhile has been handled by now
             on_done(outcome)
 
     def close(self, abort: bool = False):
@@ -105,8 +122,10 @@ class RayExecutor:
         """Run every task; call ``on_done(outcome)`` as each finishes."""
         pending = [self.remote.remote(task) for task in tasks]
         while pending:
-            done, pending = self.ray.wait(pending, num_returns=1)
-            on_done(self.ray.get(done[0]))
+            # woken every WAKE_PERIOD_S, so that Ctrl-C or SIGTERM is handled (LocalPool.run)
+            done, pending = self.ray.wait(pending, num_returns=1, timeout=WAKE_PERIOD_S)
+            if done:
+                on_done(self.ray.get(done[0]))
 
     def close(self, abort: bool = False):
         """Disconnect (a local instance started here stops with it, and its tasks)."""

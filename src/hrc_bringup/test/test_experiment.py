@@ -12,9 +12,10 @@ import signal
 import socket
 import subprocess
 import tempfile
+import threading
 import time
 
-from hrc_bringup import cli
+from hrc_bringup import cli, experiment
 from hrc_common.testing import executable_path
 import pytest
 
@@ -161,3 +162,33 @@ def test_resume_runs_only_the_sessions_no_earlier_run_finished(tmp_path):
     assert second['wall_seconds'] == pytest.approx(first['wall_seconds']
                                                    + second['runs'][1]['wall_seconds'])
     assert sorted(_episodes(tmp_path / 'bags' / 'study')) == ['case1-seed0', 'case2-seed0']
+
+
+class _Stop(Exception):
+    pass
+
+
+def test_a_signal_handed_to_another_thread_stops_the_sweep_at_once():
+    """Ctrl-C or SIGTERM may reach any thread of the sweep: the main thread must still react.
+
+    Python runs handlers in the main thread only; here the signal goes to a helper thread
+    while the main thread waits for a 20 s task: the sweep must stop within seconds, not when
+    the task ends (before the fix it waited for the task).
+    """
+    def stop(signum, frame):
+        raise _Stop
+
+    previous = signal.signal(signal.SIGUSR1, stop)
+    pool = experiment.LocalPool(1)
+    try:
+        def send():
+            time.sleep(1.0)
+            signal.pthread_kill(threading.get_ident(), signal.SIGUSR1)
+        threading.Thread(target=send, daemon=True).start()
+        started = time.monotonic()
+        with pytest.raises(_Stop):
+            pool.run([20.0], lambda outcome: None, function=time.sleep)
+        assert time.monotonic() - started < 1.0 + 3 * experiment.WAKE_PERIOD_S + 2.0
+    finally:
+        pool.close(abort=True)
+        signal.signal(signal.SIGUSR1, previous)
