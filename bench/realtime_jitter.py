@@ -63,6 +63,11 @@ def percentile(values, fraction):
     return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
 
 
+# Steal (% of CPU time) above which a run's p99 says more about the host than about the graph:
+# on the 2-core development VM, runs at 1-4% steal gave period p99 3.3-7.8 ms, at 13-26% 24-60 ms.
+STEAL_WARNING_PERCENT = 5.0
+
+
 def cpu_ticks() -> tuple:
     """Return (steal, total) CPU ticks of the machine so far (/proc/stat; (0, 0) elsewhere)."""
     try:
@@ -82,7 +87,11 @@ def machine_line(before: tuple, after: tuple) -> str:
         load = '?'
     total = after[1] - before[1]
     steal = 100.0 * (after[0] - before[0]) / total if total > 0 else 0.0
-    return f'load {load}, steal {steal:.1f}% of CPU time during the run'
+    line = f'load {load}, steal {steal:.1f}% of CPU time during the run'
+    if steal > STEAL_WARNING_PERCENT:
+        line += (f' (over {STEAL_WARNING_PERCENT:g}%: the hypervisor, not this graph, sets '
+                 f'the p99 of this run)')
+    return line
 
 
 def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0) -> dict:
