@@ -25,9 +25,18 @@ with PPO updates inside them (``agent.update_rule=horizon_or_episode_end``,
 thread), and prints both and their ratio::
 
     python bench/realtime_jitter.py --compare-learning --rounds 2
+
+``--realtime-priority N`` (issue 24) runs the session's nodes on SCHED_FIFO at priority N
+(``HRC_REALTIME_PRIORITY``, hrc_common.nodes) and this listener's threads at the same priority,
+so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
+
+Each run prints the settings it ran with (case, executor, human period, realtime priority, the
+sets) and the machine's load and the CPU time the hypervisor took from this VM meanwhile
+("steal", /proc/stat): on a shared virtual machine the largest delays come from there.
 """
 
 import argparse
+import os
 import pathlib
 import statistics
 import subprocess
@@ -42,6 +51,8 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_common import qos, topics
+from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
+                              REALTIME_PRIORITY_VARIABLE)
 from hrc_common.testing import executable_path
 from hrc_msgs.msg import TaskState
 
@@ -52,8 +63,42 @@ def percentile(values, fraction):
     return ordered[min(len(ordered) - 1, int(round(fraction * (len(ordered) - 1))))]
 
 
-def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
-    """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}."""
+# Steal (% of CPU time) above which a run's p99 says more about the host than about the graph:
+# on the 2-core development VM, runs at 1-4% steal gave period p99 3.3-7.8 ms, at 13-26% 24-60 ms.
+STEAL_WARNING_PERCENT = 5.0
+
+
+def cpu_ticks() -> tuple:
+    """Return (steal, total) CPU ticks of the machine so far (/proc/stat; (0, 0) elsewhere)."""
+    try:
+        with open('/proc/stat') as stat:
+            fields = [int(value) for value in stat.readline().split()[1:]]
+    except (OSError, ValueError):
+        return 0, 0
+    return (fields[7] if len(fields) > 7 else 0), sum(fields[:8])
+
+
+def machine_line(before: tuple, after: tuple) -> str:
+    """Return the load and the hypervisor's steal share between two cpu_ticks() readings."""
+    try:
+        with open('/proc/loadavg') as loadavg:
+            load = ' '.join(loadavg.read().split()[:3])
+    except OSError:
+        load = '?'
+    total = after[1] - before[1]
+    steal = 100.0 * (after[0] - before[0]) / total if total > 0 else 0.0
+    line = f'load {load}, steal {steal:.1f}% of CPU time during the run'
+    if steal > STEAL_WARNING_PERCENT:
+        line += (f' (over {STEAL_WARNING_PERCENT:g}%: the hypervisor, not this graph, sets '
+                 f'the p99 of this run)')
+    return line
+
+
+def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0) -> dict:
+    """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}.
+
+    ``priority`` > 0: the session's nodes and this listener on SCHED_FIFO at that priority.
+    """
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
     node = rclpy.create_node('bench_realtime', context=context)
@@ -82,6 +127,14 @@ def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
 
     thread = threading.Thread(target=spin, daemon=True)
     thread.start()
+    environment = dict(os.environ)
+    if priority > 0:
+        environment[REALTIME_PRIORITY_VARIABLE] = str(priority)
+        note = apply_realtime_priority(priority)
+        if 'SCHED_FIFO priority' not in note:
+            print(f'listener: {note}', file=sys.stderr)
+    else:
+        environment.pop(REALTIME_PRIORITY_VARIABLE, None)
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-bench-rt-'))
     command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(case),
                '--mode', 'realtime', '--episodes', str(episodes), '--eval-episodes', '0',
@@ -89,7 +142,9 @@ def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
                '--runs-dir', str(work / 'runs'), '--session-id', 'bench-realtime']
     for setting in settings:
         command += ['--set', setting]
-    result = subprocess.run(command, capture_output=True, text=True)
+    ticks_before = cpu_ticks()
+    result = subprocess.run(command, capture_output=True, text=True, env=environment)
+    ticks_after = cpu_ticks()
     time.sleep(0.5)
     rclpy.shutdown(context=context)
     thread.join(timeout=5)
@@ -103,7 +158,8 @@ def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
             by_episode.setdefault(episode, []).append(next_t - t)
     realtime = {episode: values for episode, values in by_episode.items()
                 if statistics.mean(values) > 0.1}
-    figures = {'lockstep_episodes': sorted(set(by_episode) - set(realtime))}
+    figures = {'lockstep_episodes': sorted(set(by_episode) - set(realtime)),
+               'machine': machine_line(ticks_before, ticks_after)}
     if not realtime:
         figures['error'] = ("no realtime episode to measure: in this case the first episodes "
                             "are the robot's alone, in lockstep; use --case 3..6 or more "
@@ -129,6 +185,7 @@ def measure(case: int, episodes: int, domain_id: int, settings=()) -> dict:
 def report(figures: dict, label: str = '') -> None:
     """Print one session's figures as the bench always has."""
     prefix = f'[{label}] ' if label else ''
+    print(f'{prefix}{figures["machine"]}')
     if figures['lockstep_episodes']:
         print(f'{prefix}left out {len(figures["lockstep_episodes"])} episode(s) that ran in '
               f'lockstep (states faster than half the control period): '
@@ -148,6 +205,18 @@ def report(figures: dict, label: str = '') -> None:
 NO_UPDATE_INSIDE = ('agent.update_rule=horizon_or_episode_end', 'agent.horizon=1000000')
 
 
+def settings_line(args) -> str:
+    """Return the settings a run measures with, as one line."""
+    human_period = next((setting.split('=', 1)[1] for setting in args.settings
+                         if setting.startswith('sim.human_period=')), '0.02 (default)')
+    priority = (f'SCHED_FIFO {args.realtime_priority}' if args.realtime_priority
+                else 'off (ordinary scheduler)')
+    return (f'settings: case {args.case}, {args.episodes} episode(s), '
+            f'{EXECUTOR_VARIABLE}={os.environ.get(EXECUTOR_VARIABLE, "lean")}, human_period '
+            f'{human_period} s, realtime priority {priority}, sets: '
+            f'{" ".join(args.settings) or "none"}')
+
+
 def main() -> int:
     """Run the realtime session(s) and print the jitter and latency figures."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
@@ -158,6 +227,9 @@ def main() -> int:
     parser.add_argument('--domain-id', type=int, default=92)
     parser.add_argument('--set', dest='settings', action='append', default=[],
                         metavar='KEY=VALUE', help='a session setting (hrc session --set)')
+    parser.add_argument('--realtime-priority', type=int, default=0, metavar='N',
+                        help='run the nodes and this listener on SCHED_FIFO at priority N '
+                             '(1..99; HRC_REALTIME_PRIORITY); default 0: off')
     parser.add_argument('--compare-learning', action='store_true',
                         help='run without and with PPO updates inside episodes, alternately')
     parser.add_argument('--rounds', type=int, default=1,
@@ -168,11 +240,15 @@ def main() -> int:
     args = parser.parse_args()
     if args.episodes < 1 or args.rounds < 1 or args.inside_horizon < 2:
         parser.error('--episodes and --rounds must be >= 1, --inside-horizon >= 2')
+    if not 0 <= args.realtime_priority <= 99:
+        parser.error('--realtime-priority must be 0 (off) or 1..99')
+    print(settings_line(args), flush=True)
 
     if not args.compare_learning:
         print(f'running a realtime session of {args.episodes} episode(s) of 40 s ...',
               flush=True)
-        figures = measure(args.case, args.episodes, args.domain_id, args.settings)
+        figures = measure(args.case, args.episodes, args.domain_id, args.settings,
+                          args.realtime_priority)
         if 'error' in figures:
             print(figures['error'], file=sys.stderr)
             return 1
@@ -188,7 +264,8 @@ def main() -> int:
         for label, settings in arms.items():
             print(f'round {round_index + 1}/{args.rounds}: {label} '
                   f'({args.episodes} episode(s) of 40 s) ...', flush=True)
-            figures = measure(args.case, args.episodes, args.domain_id, settings)
+            figures = measure(args.case, args.episodes, args.domain_id, settings,
+                              args.realtime_priority)
             if 'error' in figures:
                 print(figures['error'], file=sys.stderr)
                 return 1
@@ -198,10 +275,12 @@ def main() -> int:
     p99 = {}
     for label, runs in results.items():
         p99[label] = statistics.median(run['jitter_p99'] for run in runs)
-        robot = statistics.median(run['robot'][1] for run in runs if 'robot' in run)
+        latency = {actor: statistics.median(run[actor][1] for run in runs if actor in run)
+                   for actor in ('robot', 'human') if any(actor in run for run in runs)}
         each = ', '.join(f'{run["jitter_p99"]:.2f}' for run in runs)
-        print(f'  {label}: period jitter p99 {p99[label]:.2f} ms (rounds: {each}), robot '
-              f'command latency p99 {robot:.2f} ms')
+        print(f'  {label}: period jitter p99 {p99[label]:.2f} ms (rounds: {each}), command '
+              f'latency p99 ' + ', '.join(f'{actor} {value:.2f} ms'
+                                          for actor, value in latency.items()))
     without, with_updates = p99.values()
     print(f'jitter p99 with / without updates inside episodes: {with_updates / without:.2f}x')
     return 0
