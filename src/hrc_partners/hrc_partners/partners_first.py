@@ -48,7 +48,7 @@ from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file
 from hrc_agent_node.offline import run_session
 from hrc_common.contract import Phase, SimLimits
-from hrc_common.params import from_dict, param, ParameterError, validate
+from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_plan import compose, new_session_id, parse_overrides, SessionSettings
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
@@ -96,6 +96,11 @@ class PopulationSettings:
                                "control period (before issue 22's fix: the person's delays, "
                                'lags and integrator ran 10x fast at human_period 0.02 s)',
                                choices=PERSON_PERIODS)
+    sac_updates_per_step: int = param(0, "SAC: critic gradient steps per transition in the "
+                                      "pre-training (no person's time there: the sim's data "
+                                      "is cheap, the gradient steps are ~95 % of its wall "
+                                      "time); 0 = the session's agent.sac_updates_per_step",
+                                      low=0, high=1000)
 
     def check(self) -> list:
         """Return the reasons across fields (the profiles: a non-empty list of names)."""
@@ -176,6 +181,7 @@ class PretrainResult:
     partners_met: list = field(default_factory=list)  # the population episodes' partners
     wall_seconds: float = 0.0
     person_period: str = 'human'    # how often the training people acted (PERSON_PERIODS)
+    sac_updates_per_step: int = 0   # the pre-training's SAC gradient steps (0: the session's)
 
     def to_plain(self) -> dict:
         """Return the result as JSON-able values."""
@@ -185,7 +191,7 @@ class PretrainResult:
 def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
              population=None, profiles_file=None,
              population_budget: int = POPULATION_BUDGET,
-             person_period: str = 'human') -> PretrainResult:
+             person_period: str = 'human', sac_updates_per_step: int = 0) -> PretrainResult:
     """Run a partners-first case up to the person's step; save and return its checkpoint.
 
     ``agent_params``: the session's AgentParams (case, seed, preset, learner, rules: the
@@ -196,7 +202,9 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     ``population_budget``: episodes of a population step after which it ends unmet
     (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``). ``person_period``:
     how often the training people act (``hrc_partners.partners.PERSON_PERIODS``; ``control``
-    reproduces the pre-training before issue 22's fix).
+    reproduces the pre-training before issue 22's fix). ``sac_updates_per_step`` > 0: the SAC
+    learner's gradient steps per transition in the pre-training (the checkpoint's config keeps
+    them, the session that resumes it uses its own); 0: the session's.
     """
     population = list(population or default_population())
     specs = parse_specs(population)
@@ -205,6 +213,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                          'person must be new to the robot')
     started = time.perf_counter()
     limits = SimLimits.of(physics)
+    if sac_updates_per_step and agent_params.algorithm == 'sac':
+        agent_params = with_overrides(agent_params, sac_updates_per_step=sac_updates_per_step)
     core = AgentCore(agent_params, limits=limits)
     if not core.case.has_population_steps:
         raise ValueError(f'case {core.case_id} ({core.strategy}) has no population step')
@@ -237,7 +247,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                           core.progress.step_index >= person_step
                           and core.activity_phase in (Phase.TRAINING, Phase.UPDATING),
                           population_met, person, population, met,
-                          time.perf_counter() - started, person_period)
+                          time.perf_counter() - started, person_period,
+                          sac_updates_per_step if agent_params.algorithm == 'sac' else 0)
 
 
 PRETRAINED_CHECKPOINT = 'pretrained.pt'    # in the session's run folder
@@ -266,7 +277,7 @@ def prepare_person_session(parameters: dict, run_dir, population=None):
     result = pretrain(agent, physics, run_dir / PRETRAINED_CHECKPOINT,
                       person_spec_of(parameters['human']), population or settings.population(),
                       parameters['human'].get('profiles_file') or None, settings.budget,
-                      settings.person_period)
+                      settings.person_period, settings.sac_updates_per_step)
     (run_dir / PRETRAIN_RECORD).write_text(json.dumps(result.to_plain(), indent=2) + '\n')
     return {'resume_from': result.checkpoint,
             'max_training_episodes': result.episodes + agent.max_training_episodes}

@@ -231,3 +231,25 @@ def test_the_population_block_of_the_cases_file_mirrors_the_defaults(tmp_path):
         assert reason in str(error.value)
     # the command line: exit 2, every reason, no traceback
     assert main(['--case', '7', '--set', f'agent.cases_file={bad}']) == 2
+
+
+@pytest.mark.slow
+def test_the_pretraining_can_take_fewer_sac_gradient_steps_than_the_session(tmp_path,
+                                                                             easy_tree):
+    physics = with_overrides(PhysicsParams(), episode_duration=2.0)
+    params = with_overrides(AgentParams(), case=8, seed=1, algorithm='sac',
+                            sac_learning_starts=5, sac_batch_size=4, sac_hidden_size=8,
+                            sac_updates_per_step=3, convergence_window=1,
+                            judging_rule='in_a_row', task_tree_file=easy_tree,
+                            checkpoint_dir='', torch_threads=1)
+    steps = {}
+    for setting in (0, 1):
+        result = pretrain(params, physics, tmp_path / f'pre{setting}.pt', 'person:paper:1',
+                          ['person:paper:1001'], sac_updates_per_step=setting)
+        checkpoint = read_checkpoint(tmp_path / f'pre{setting}.pt')
+        assert checkpoint['config']['params']['sac_updates_per_step'] == (setting or 3)
+        assert result.sac_updates_per_step == setting and result.reached_person_step
+        steps[setting] = (checkpoint['core']['sac']['gradient_steps'], result.episodes)
+    # the same transitions (episodes), a third of the critic steps (plus no actor change)
+    assert steps[0][1] == steps[1][1]
+    assert steps[0][0] == 3 * steps[1][0] > 0
