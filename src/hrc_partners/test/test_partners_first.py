@@ -12,6 +12,7 @@ from types import SimpleNamespace
 import pytest
 import yaml
 
+from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
@@ -27,6 +28,7 @@ from hrc_partners.partners_first import (default_population, main, person_spec_o
                                          population_settings, PopulationSettings,
                                          POPULATION_FIRST_PERSON, prepare_person_session,
                                          pretrain, unlike_people)
+from hrc_partners.training import training_partner
 from hrc_sim_node.physics import PhysicsParams
 
 SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10,
@@ -253,3 +255,16 @@ def test_the_pretraining_can_take_fewer_sac_gradient_steps_than_the_session(tmp_
     # the same transitions (episodes), a third of the critic steps (plus no actor change)
     assert steps[0][1] == steps[1][1]
     assert steps[0][0] == 3 * steps[1][0] > 0
+
+
+def test_hrc_partners_train_meets_its_person_at_the_humans_rate():
+    limits = SimLimits.of(PhysicsParams())
+    core = AgentCore(with_overrides(AgentParams(), case=2, checkpoint_dir='', torch_threads=1),
+                     limits=limits)
+    for period, seconds in (('human', limits.human_step), ('control', limits.control_period)):
+        partner, text = training_partner(core, 0, limits, 'paper', 0, period=period)
+        partner.start_episode(0)
+        assert partner.human.control_period == pytest.approx(seconds) and text == 'profile:paper'
+    mixture, text = training_partner(core, 0, limits, 'paper', 1, mixture=['population:novice'])
+    mixture.start_episode(0)
+    assert mixture.partner.human.control_period == pytest.approx(limits.human_step)
