@@ -112,24 +112,42 @@ class ClonedPartner:
         return float(self.human.act(state, list(subtasks)))
 
 
-def make_partner(spec: PartnerSpec, dof: str, seed: int, limits: SimLimits, profiles_file=None):
+# How often an offline simulated person is told it acts (the SimulatedHuman's control_period):
+# `human` = the sim's human_period (SimLimits.human_step), as the engine's and the graph's
+# person act (hrc_joystick_node.human_core); `control` = the control period, which every tool
+# of this package used before (issue 22): with the sim's human_period 0.02 s the offline loop
+# calls the person every 0.02 s, so a person built for 0.2 s calls ran its delays, lags,
+# slew limits, integrator and lapses 10x fast. Same numbers when human_period = control_period.
+PERSON_PERIODS = ('human', 'control')
+
+
+def person_period(limits: SimLimits, period: str = 'human') -> float:
+    """Return the s between a simulated person's calls for ``period`` (PERSON_PERIODS)."""
+    if period not in PERSON_PERIODS:
+        raise ValueError(f'person period {period!r} is not one of {PERSON_PERIODS}')
+    return limits.human_step if period == 'human' else limits.control_period
+
+
+def make_partner(spec: PartnerSpec, dof: str, seed: int, limits: SimLimits, profiles_file=None,
+                 period: str = 'human'):
     """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed).
 
-    ``limits``: the sim's (its control period is the partner's).
+    ``limits``: the sim's. ``period``: a simulated person's (:data:`PERSON_PERIODS`; a cloned
+    model acts at the control period, the rate its recordings were cut at).
     """
     if spec.kind == 'model':
         return ClonedPartner(spec.path, dof, limits)
     if spec.kind == 'mixture':
         return MixturePartner(spec.parts, dof, seed + EVALUATION_SEED_OFFSET, limits, 1,
-                              profiles_file)
+                              profiles_file, period)
     profile = load_profile(spec.name, profiles_file)
-    period = limits.control_period
+    seconds = person_period(limits, period)
     if spec.kind == 'person':
-        return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed, period)
+        return SimulatedHumanPartner(sample_person(profile, spec.person), dof, seed, seconds)
     if spec.kind == 'population':
-        return SimulatedHumanPartner(profile, dof, seed + EVALUATION_SEED_OFFSET, period,
+        return SimulatedHumanPartner(profile, dof, seed + EVALUATION_SEED_OFFSET, seconds,
                                      population_every=1)
-    return SimulatedHumanPartner(profile, dof, seed, period)
+    return SimulatedHumanPartner(profile, dof, seed, seconds)
 
 
 def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None):
@@ -164,13 +182,16 @@ class MixturePartner:
     Every ``every`` episodes a new partner is drawn uniformly from ``specs`` (numpy, seeded by
     ``seed`` and the draw index): ``population:NAME`` gives a new person of that population
     at each draw, ``person:``/``profile:`` that person, ``model:`` the cloned model. The
-    offline loop tells it each episode (``start_episode``).
+    offline loop tells it each episode (``start_episode``). ``period``: how often a simulated
+    person acts (:data:`PERSON_PERIODS`).
     """
 
     def __init__(self, specs, dof: str, seed: int, limits: SimLimits, every: int = 1,
-                 profiles_file=None):
+                 profiles_file=None, period: str = 'human'):
         if every < 1:
             raise ValueError(f'every must be >= 1, got {every}')
+        person_period(limits, period)          # refuses an unknown period now
+        self.period = period
         self.specs = list(specs)
         self.dof = dof
         self.seed = int(seed)
@@ -193,10 +214,10 @@ class MixturePartner:
             if self.spec.kind == 'population':
                 person = sample_person(load_profile(self.spec.name, self.profiles_file), seed)
                 self.partner = SimulatedHumanPartner(person, self.dof, seed,
-                                                     self.limits.control_period)
+                                                     person_period(self.limits, self.period))
             else:
                 self.partner = make_partner(self.spec, self.dof, seed, self.limits,
-                                            self.profiles_file)
+                                            self.profiles_file, self.period)
             self.drawn.append((draw, self.spec.text))
         self.partner.start_episode(int(episode))
 

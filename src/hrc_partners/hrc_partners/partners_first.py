@@ -13,7 +13,9 @@ A population step that has not met its condition after ``POPULATION_BUDGET`` epi
 anyway (``AgentCore.skip_step``; ``PretrainResult.population_met`` says so): the population,
 with its slow and noisy people, may be a harder partner than the person.
 
-**The population (modelling choice).** By default :func:`default_population`: persons
+**The population (modelling choice).** Set in the ``population`` block of the
+``partners_first`` strategy (``params/cases.yaml``, :class:`PopulationSettings`); by default
+:func:`default_population`: persons
 ``POPULATION_FIRST_PERSON`` .. + ``persons_per_profile`` - 1 of the populations around the
 ``paper``, ``novice`` and ``skilled`` profiles (``hrc_joystick_node.population.sample_person``),
 one drawn at random for every episode (``hrc_partners.partners.MixturePartner``). Three
@@ -22,6 +24,10 @@ profiles so that the robot meets slow and fast, noisy and precise people; person
 seed: person 0, 1, ... of the profile) nor the profile's own mean person (``person: -1``).
 The session's person is checked against the population: :func:`pretrain` refuses a
 population that holds it (:func:`person_spec_of` names it as a partner specification).
+The training people act at the sim's ``human_period``, as the session's person does
+(``person_period: human``); before issue 22's fix they were built for the control period
+while called at the human's rate, which ran their delays, lags and integrator 10x fast (case 7's
+population step then never met its condition; ``person_period: control`` reproduces that).
 
 By hand (then start the session with the person as the last line says)::
 
@@ -35,18 +41,20 @@ import pathlib
 import sys
 import time
 
+import yaml
+
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
-from hrc_agent_node.config import AgentParams
+from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file
 from hrc_agent_node.offline import run_session
 from hrc_common.contract import Phase, SimLimits
-from hrc_common.params import from_dict, validate
+from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_plan import compose, new_session_id, parse_overrides, SessionSettings
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
-from hrc_partners.partners import MixturePartner, parse_specs
+from hrc_partners.partners import MixturePartner, parse_specs, PERSON_PERIODS
 
 POPULATION_PROFILES = ('paper', 'novice', 'skilled')
 # People unlike the population, each one trait of a person pushed outside the population's
@@ -65,6 +73,62 @@ PERSONS_PER_PROFILE = 8
 # a population with slow and noisy people may be harder than the person; measured, case 8's
 # population step met its condition after 14-29 episodes, case 7's not in 266).
 POPULATION_BUDGET = 60
+
+
+@dataclass
+class PopulationSettings:
+    """The pre-training's population (the people, the budget, how often they act).
+
+    The ``population`` block of the ``partners_first`` strategy in ``params/cases.yaml``, read
+    by :func:`population_settings`.
+    """
+
+    profiles: list = param(list(POPULATION_PROFILES), 'Simulated-human profiles whose '
+                           'populations the training people come from (params/sim_human.yaml)')
+    persons_per_profile: int = param(PERSONS_PER_PROFILE, 'Training people per profile',
+                                     low=1, high=10000)
+    first_person: int = param(POPULATION_FIRST_PERSON, "Person number of each profile's first "
+                              "training person (the sessions' people are 0, 1, ...)", low=0)
+    budget: int = param(POPULATION_BUDGET, 'Population episodes after which the population '
+                        'step ends unmet (0: no limit but max_training_episodes)', low=0)
+    person_period: str = param('human', "How often a training person acts: human = the sim's "
+                               "human_period, as the session's person does; control = the "
+                               "control period (before issue 22's fix: the person's delays, "
+                               'lags and integrator ran 10x fast at human_period 0.02 s)',
+                               choices=PERSON_PERIODS)
+    sac_updates_per_step: int = param(0, "SAC: critic gradient steps per transition in the "
+                                      "pre-training (no person's time there: the sim's data "
+                                      "is cheap, the gradient steps are ~95 % of its wall "
+                                      "time); 0 = the session's agent.sac_updates_per_step",
+                                      low=0, high=1000)
+
+    def check(self) -> list:
+        """Return the reasons across fields (the profiles: a non-empty list of names)."""
+        if not isinstance(self.profiles, list) or not self.profiles \
+                or not all(isinstance(name, str) and name for name in self.profiles):
+            return [f'profiles: a non-empty list of profile names, got {self.profiles!r}']
+        return []
+
+    def population(self) -> list:
+        """Return the population as partner specifications (:func:`default_population`)."""
+        return default_population(tuple(self.profiles), self.persons_per_profile,
+                                  self.first_person)
+
+
+def population_settings(cases_file='') -> PopulationSettings:
+    """Return the ``population`` block of ``partners_first`` in ``cases_file``.
+
+    ``cases_file``: default the installed params/cases.yaml. Defaults where the block or a key
+    is missing; ParameterError (a ValueError) with every reason on bad values.
+    """
+    document = yaml.safe_load(pathlib.Path(cases_file or share_file(CASES_FILE_NAME))
+                              .read_text()) or {}
+    block = ((document.get('strategies') or {}).get('partners_first') or {}) \
+        .get('population') or {}
+    if not isinstance(block, dict):
+        raise ParameterError(f'partners_first population: a mapping, got {block!r}',
+                             [f'population: a mapping, got {block!r}'])
+    return from_dict(PopulationSettings, block)
 
 
 def default_population(profiles=POPULATION_PROFILES, persons_per_profile=PERSONS_PER_PROFILE,
@@ -116,6 +180,8 @@ class PretrainResult:
     population: list = field(default_factory=list)   # the specifications drawn from
     partners_met: list = field(default_factory=list)  # the population episodes' partners
     wall_seconds: float = 0.0
+    person_period: str = 'human'    # how often the training people acted (PERSON_PERIODS)
+    sac_updates_per_step: int = 0   # the pre-training's SAC gradient steps (0: the session's)
 
     def to_plain(self) -> dict:
         """Return the result as JSON-able values."""
@@ -124,7 +190,8 @@ class PretrainResult:
 
 def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
              population=None, profiles_file=None,
-             population_budget: int = POPULATION_BUDGET) -> PretrainResult:
+             population_budget: int = POPULATION_BUDGET,
+             person_period: str = 'human', sac_updates_per_step: int = 0) -> PretrainResult:
     """Run a partners-first case up to the person's step; save and return its checkpoint.
 
     ``agent_params``: the session's AgentParams (case, seed, preset, learner, rules: the
@@ -133,7 +200,11 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     population holds it. ``population``: partner specifications (default
     :func:`default_population`), one drawn for every episode, seeded by the session seed.
     ``population_budget``: episodes of a population step after which it ends unmet
-    (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``).
+    (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``). ``person_period``:
+    how often the training people act (``hrc_partners.partners.PERSON_PERIODS``; ``control``
+    reproduces the pre-training before issue 22's fix). ``sac_updates_per_step`` > 0: the SAC
+    learner's gradient steps per transition in the pre-training (the checkpoint's config keeps
+    them, the session that resumes it uses its own); 0: the session's.
     """
     population = list(population or default_population())
     specs = parse_specs(population)
@@ -142,11 +213,14 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                          'person must be new to the robot')
     started = time.perf_counter()
     limits = SimLimits.of(physics)
+    if sac_updates_per_step and agent_params.algorithm == 'sac':
+        agent_params = with_overrides(agent_params, sac_updates_per_step=sac_updates_per_step)
     core = AgentCore(agent_params, limits=limits)
     if not core.case.has_population_steps:
         raise ValueError(f'case {core.case_id} ({core.strategy}) has no population step')
     core.population_partner = True
-    partner = MixturePartner(specs, core.human_dof, core.seed, limits, 1, profiles_file)
+    partner = MixturePartner(specs, core.human_dof, core.seed, limits, 1, profiles_file,
+                             person_period)
     met = []
     person_step = core.case.first_person_step
     population_met = True
@@ -173,7 +247,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                           core.progress.step_index >= person_step
                           and core.activity_phase in (Phase.TRAINING, Phase.UPDATING),
                           population_met, person, population, met,
-                          time.perf_counter() - started)
+                          time.perf_counter() - started, person_period,
+                          sac_updates_per_step if agent_params.algorithm == 'sac' else 0)
 
 
 PRETRAINED_CHECKPOINT = 'pretrained.pt'    # in the session's run folder
@@ -197,10 +272,12 @@ def prepare_person_session(parameters: dict, run_dir, population=None):
     if not probe.case.has_population_steps:
         return None
     physics = physics_params_of(from_dict(SimParams, parameters['sim']))
+    settings = population_settings(agent.cases_file)
     run_dir = pathlib.Path(run_dir)
     result = pretrain(agent, physics, run_dir / PRETRAINED_CHECKPOINT,
-                      person_spec_of(parameters['human']), population,
-                      parameters['human'].get('profiles_file') or None)
+                      person_spec_of(parameters['human']), population or settings.population(),
+                      parameters['human'].get('profiles_file') or None, settings.budget,
+                      settings.person_period, settings.sac_updates_per_step)
     (run_dir / PRETRAIN_RECORD).write_text(json.dumps(result.to_plain(), indent=2) + '\n')
     return {'resume_from': result.checkpoint,
             'max_training_episodes': result.episodes + agent.max_training_episodes}
@@ -234,7 +311,11 @@ def main(argv=None) -> int:
         print(f'partners_first: {error}', file=sys.stderr)
         return 2
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
-    start = prepare_person_session(parameters, run_dir)
+    try:
+        start = prepare_person_session(parameters, run_dir)
+    except ParameterError as error:       # the cases file's population block
+        print(f'partners_first: {error}', file=sys.stderr)
+        return 2
     if start is None:
         print(f'partners_first: case {args.case} has no population step (cases 7 and 8 do)',
               file=sys.stderr)

@@ -25,30 +25,43 @@ from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
-from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
+from hrc_partners.partners import MixturePartner, parse_spec, person_period, spec_problem
 from hrc_partners.training_args import build_parser
 
 
+def training_partner(core, seed: int, limits: SimLimits, profile: str, population_every: int,
+                     profiles_file=None, mixture=None, period: str = 'human') -> tuple:
+    """Return (the partner :func:`train_agent` trains ``core`` with, its specification text).
+
+    ``period``: how often a simulated person acts (``hrc_partners.partners.PERSON_PERIODS``:
+    ``human`` the sim's human_period, as the offline loop calls it; ``control`` as before
+    issue 22's fix).
+    """
+    if mixture:
+        trained_with = 'mixture:' + '+'.join(mixture)
+        return (MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed, limits,
+                               max(1, population_every), profiles_file, period), trained_with)
+    partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
+                                    seed, person_period(limits, period), population_every)
+    return partner, f'population:{profile}' if population_every else f'profile:{profile}'
+
+
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
-                preset: str, checkpoint, profiles_file=None, mixture=None) -> dict:
+                preset: str, checkpoint, profiles_file=None, mixture=None,
+                period: str = 'human') -> dict:
     """Train one agent offline, save its checkpoint; return its summary (JSON-able).
 
     ``mixture``: partner specifications to draw from every ``population_every`` episodes
     (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
+    ``period``: how often a simulated person acts (:func:`training_partner`).
     """
     physics = PhysicsParams()
     limits = SimLimits.of(physics)
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
         evaluation_episodes=0, checkpoint_dir='', torch_threads=1), limits=limits)
-    if mixture:
-        trained_with = 'mixture:' + '+'.join(mixture)
-        partner = MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed, limits,
-                                 max(1, population_every), profiles_file)
-    else:
-        partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
-                                        seed, limits.control_period, population_every)
-        trained_with = f'population:{profile}' if population_every else f'profile:{profile}'
+    partner, trained_with = training_partner(core, seed, limits, profile, population_every,
+                                             profiles_file, mixture, period)
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     save_checkpoint(core, checkpoint)

@@ -4,22 +4,31 @@ Tiny and deterministic: 10-step episodes, a task tree whose tolerances every sta
 each step converges as soon as its rule allows), one-episode convergence windows.
 """
 
+from dataclasses import asdict
 import json
+import math
+from types import SimpleNamespace
 
 import pytest
 import yaml
 
+from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_common.contract import EpisodeKind
+from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
+from hrc_common.contract import EpisodeKind, SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.population import sample_person
+from hrc_partners.partners import make_partner, MixturePartner, parse_specs
 from hrc_partners.partners_first import (default_population, main, person_spec_of,
+                                         population_settings, PopulationSettings,
                                          POPULATION_FIRST_PERSON, prepare_person_session,
                                          pretrain, unlike_people)
+from hrc_partners.training import training_partner
 from hrc_sim_node.physics import PhysicsParams
 
 SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10,
@@ -154,3 +163,108 @@ def test_the_command_line_refuses_bad_input_with_every_reason(capsys):
     assert 'case 2 has no population step' in capsys.readouterr().err
     assert main(['--case', '9']) == 2
     assert 'case must be one of 1..8, got 9' in capsys.readouterr().err
+
+
+def _commands(partner, dof, steps=60, episode=0):
+    """Return ``partner``'s commands over a fixed swinging state (deterministic, no sim)."""
+    partner.start_episode(episode)
+    commands = []
+    for index in range(steps):
+        state = SimpleNamespace(slider_position=0.02 * math.sin(0.3 * index),
+                                slider_velocity=0.006 * math.cos(0.3 * index),
+                                pendulum_angle=0.15 * math.cos(0.2 * index),
+                                pendulum_angular_velocity=-0.03 * math.sin(0.2 * index),
+                                ball_position=0.1 * math.sin(0.1 * index),
+                                ball_velocity=0.01 * math.cos(0.1 * index))
+        commands.append(partner(state, ['pendulum' if dof == 'rotation' else 'slider', 'ball']))
+    return commands
+
+
+@pytest.mark.parametrize('spec', ['person:paper:1000', 'profile:skilled', 'population:novice'])
+def test_the_training_people_act_at_the_humans_rate_as_the_sessions_person(spec):
+    # The offline loop calls a simulated person every human_period (0.02 s by default), and
+    # the engine's person is a SimulatedHuman built for that period (human_core); a training
+    # person built for the control period ran its delays and integrator 10x fast.
+    limits = SimLimits.of(PhysicsParams())
+    assert limits.human_step == pytest.approx(0.02) and limits.control_period == pytest.approx(0.2)
+    mixture = MixturePartner(parse_specs([spec]), 'rotation', 3, limits)
+    mixture.start_episode(0)
+    assert mixture.partner.human.control_period == pytest.approx(limits.human_step)
+    direct = make_partner(parse_specs([spec])[0], 'rotation', 3, limits)
+    direct.start_episode(0)
+    assert direct.human.control_period == pytest.approx(limits.human_step)
+    old = MixturePartner(parse_specs([spec]), 'rotation', 3, limits, period='control')
+    old.start_episode(0)
+    assert old.partner.human.control_period == pytest.approx(limits.control_period)
+    with pytest.raises(ValueError, match="person period 'often'"):
+        MixturePartner(parse_specs([spec]), 'rotation', 3, limits, period='often')
+
+
+def test_a_training_person_acts_as_the_engines_person_and_control_as_before():
+    limits = SimLimits.of(PhysicsParams())
+    person = sample_person(load_profile('paper'), 1000)
+    seed = person_seed(5, 0)      # the MixturePartner's first draw's person seed
+    for period, seconds in (('human', limits.human_step), ('control', limits.control_period)):
+        mixture = MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5, limits,
+                                 period=period)
+        # the engine's person (human_core) for 'human'; the old pre-training's for 'control'
+        reference = SimulatedHumanPartner(person, 'rotation', seed, seconds)
+        assert _commands(mixture, 'rotation') == _commands(reference, 'rotation')
+    human = _commands(MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5, limits),
+                      'rotation')
+    control = _commands(MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5,
+                                       limits, period='control'), 'rotation')
+    assert human != control
+
+
+def test_the_population_block_of_the_cases_file_mirrors_the_defaults(tmp_path):
+    cases = yaml.safe_load((params_dir() / 'cases.yaml').read_text())
+    block = cases['strategies']['partners_first']['population']
+    assert block == asdict(PopulationSettings())
+    assert population_settings(params_dir() / 'cases.yaml').population() == default_population()
+    cases['strategies']['partners_first']['population'] = dict(
+        block, profiles=[], budget=-1, person_period='sometimes')
+    bad = tmp_path / 'cases.yaml'
+    bad.write_text(yaml.safe_dump(cases))
+    with pytest.raises(ValueError) as error:
+        population_settings(bad)
+    for reason in ('budget: -1 is below the minimum 0', "person_period: 'sometimes'",
+                   'profiles: a non-empty list'):
+        assert reason in str(error.value)
+    # the command line: exit 2, every reason, no traceback
+    assert main(['--case', '7', '--set', f'agent.cases_file={bad}']) == 2
+
+
+@pytest.mark.slow
+def test_the_pretraining_can_take_fewer_sac_gradient_steps_than_the_session(tmp_path,
+                                                                             easy_tree):
+    physics = with_overrides(PhysicsParams(), episode_duration=2.0)
+    params = with_overrides(AgentParams(), case=8, seed=1, algorithm='sac',
+                            sac_learning_starts=5, sac_batch_size=4, sac_hidden_size=8,
+                            sac_updates_per_step=3, convergence_window=1,
+                            judging_rule='in_a_row', task_tree_file=easy_tree,
+                            checkpoint_dir='', torch_threads=1)
+    steps = {}
+    for setting in (0, 1):
+        result = pretrain(params, physics, tmp_path / f'pre{setting}.pt', 'person:paper:1',
+                          ['person:paper:1001'], sac_updates_per_step=setting)
+        checkpoint = read_checkpoint(tmp_path / f'pre{setting}.pt')
+        assert checkpoint['config']['params']['sac_updates_per_step'] == (setting or 3)
+        assert result.sac_updates_per_step == setting and result.reached_person_step
+        steps[setting] = (checkpoint['core']['sac']['gradient_steps'], result.episodes)
+    # the same transitions (episodes), a third of the critic steps (plus no actor change)
+    assert steps[0][1] == steps[1][1]
+    assert steps[0][0] == 3 * steps[1][0] > 0
+
+
+def test_hrc_partners_train_meets_its_person_at_the_humans_rate():
+    limits = SimLimits.of(PhysicsParams())
+    core = AgentCore(with_overrides(AgentParams(), case=2, checkpoint_dir='', torch_threads=1),
+                     limits=limits)
+    for period, seconds in (('human', limits.human_step), ('control', limits.control_period)):
+        partner, text = training_partner(core, 0, limits, 'paper', 0, period=period)
+        partner.start_episode(0)
+        assert partner.human.control_period == pytest.approx(seconds) and text == 'profile:paper'
+    mixture, text = training_partner(core, 0, limits, 'paper', 1, mixture=['population:novice'])
+    mixture.start_episode(0)
+    assert mixture.partner.human.control_period == pytest.approx(limits.human_step)
