@@ -31,6 +31,7 @@ class Progress:
         self.episodes = []
         self.started = time.monotonic()
         self.alone_since = None     # (monotonic s, training episodes done) the robot went alone
+        self._verdict_due = None    # the status that ended training, until its episodes are in
         self.person_joined = None   # monotonic s the person's first training step was announced
         self.node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                       qos.SESSION_QOS)
@@ -53,8 +54,9 @@ class Progress:
                 and phase_label(status.phase, '') in ('evaluation', 'done')
                 and (self.status is None or phase_label(self.status.phase, '') in (
                     'training', 'updating', 'paused'))):
-            self._say_if_not_converged(status)    # issue 25
+            self._verdict_due = status    # issue 25: said once the episodes are in
         self.status = status
+        self._settle_verdict()
         self._track_person_time(status)
         if changed:
             self._print(f'[session] case {status.case_id} {status.strategy}: training step '
@@ -63,6 +65,24 @@ class Progress:
                         f'{"involved" if status.human_involved else "not involved"}, robot '
                         f'subtasks {list(status.robot_subtasks)}, human subtasks '
                         f'{list(status.human_subtasks)}', permanent=True)
+
+    def _settle_verdict(self, final: bool = False) -> None:
+        """Say whether training ended unconverged once its episode summaries are all here.
+
+        The status that ends training and the last summaries travel on two topics: under load
+        (or a runner that joined late and gets them as history) the executor may hand over the
+        status first, and a verdict drawn then would read the wrong last episode and step. So
+        it waits for ``total_episodes`` summaries of training; ``final`` (the session is
+        closing) says it with what came.
+        """
+        status = self._verdict_due
+        if status is None:
+            return
+        training = sum(1 for summary in self.episodes if not summary.evaluation)
+        if training < status.total_episodes and not final:
+            return
+        self._verdict_due = None
+        self._say_if_not_converged(status)
 
     def _say_if_not_converged(self, status):
         """Say when training ended without the robot converging (issue 25), with the numbers."""
@@ -93,7 +113,7 @@ class Progress:
 
     def restart(self) -> None:
         """Forget the practice: the condition's clock and person time start now."""
-        self.status, self.episodes = None, []
+        self.status, self.episodes, self._verdict_due = None, [], None
         self.started = time.monotonic()
         self.alone_since = self.person_joined = None
 
@@ -144,6 +164,7 @@ class Progress:
                     f'{"yes" if summary.human_involved else "no "} ({human_episodes} so far)'
                     + ('  converged' if summary.converged else ''),
                     permanent=not self.interactive or summary.evaluation or summary.converged)
+        self._settle_verdict()
 
     def _print(self, line, permanent=True):
         """Print a line; on a terminal, a non-permanent line is overwritten by the next one."""
@@ -153,5 +174,6 @@ class Progress:
             print(line, flush=True)
 
     def close(self):
-        """Destroy the node."""
+        """Say what is still due, then destroy the node."""
+        self._settle_verdict(final=True)
         self.node.destroy_node()
