@@ -1,5 +1,8 @@
 """The experiment runner: a sweep on a real two-node Ray cluster equals the local pool's.
 
+The local sweep runs in two parts, the second with ``--resume`` (it keeps the first's session
+and runs only the other), which also tests resuming with real sessions.
+
 The cluster is a head and a second node, each a ``ray start --block`` process of its own on
 this machine with one CPU, in a private temporary directory; both are stopped (their process
 groups, nothing else) in the teardown. Sessions: the in-process engine, 1 training and 1
@@ -117,9 +120,31 @@ def _episodes(folder) -> dict:
                                                                                log=print)}
 
 
+def _check_the_resumed_local_sweep(tmp_path, first, local, stamps) -> None:
+    """Check the local sweep: case 1, then cases 1 and 2 with --resume; only case 2 ran again."""
+    outcomes = {outcome['session_id']: outcome for outcome in local['outcomes']}
+    assert sorted(outcomes) == ['case1-seed0', 'case2-seed0']
+    assert outcomes['case1-seed0']['reused'] and not outcomes['case2-seed0'].get('reused')
+    bag = tmp_path / 'bags' / 'local' / 'case1-seed0'
+    assert {path.name: path.stat().st_mtime_ns for path in bag.iterdir()} == stamps
+    assert [run['sessions_run'] for run in local['runs']] == [1, 1]
+    assert local['wall_seconds'] == pytest.approx(first['wall_seconds']
+                                                  + local['runs'][1]['wall_seconds'])
+    # every finished session was journalled the moment it ended (an interrupted sweep resumes
+    # from there)
+    journal = (tmp_path / 'bags' / 'local' / 'sessions.jsonl').read_text().splitlines()
+    assert [json.loads(line)['outcome']['session_id'] for line in journal] == [
+        'case1-seed0', 'case2-seed0']
+
+
 @pytest.mark.slow
 def test_sweep_on_a_two_node_ray_cluster_equals_the_local_pool(tmp_path, ray_cluster):
-    local = _run_experiment(tmp_path, 'local', '--parallel', '2')   # while Ray starts
+    # while Ray starts: the local sweep in two runs, the second resuming the first (--resume)
+    first = _run_experiment(tmp_path, 'local', '--parallel', '1', '--cases', '1')
+    bag = tmp_path / 'bags' / 'local' / 'case1-seed0'
+    stamps = {path.name: path.stat().st_mtime_ns for path in bag.iterdir()}
+    local = _run_experiment(tmp_path, 'local', '--parallel', '2', '--resume')
+    _check_the_resumed_local_sweep(tmp_path, first, local, stamps)
     on_ray = _run_experiment(tmp_path, 'ray', '--ray-address', ray_cluster.wait_ready())
     assert 'Ray cluster (2 nodes, 2 CPUs' in on_ray['executor']
     assert 'local process pool' in local['executor']
@@ -143,25 +168,6 @@ def test_bad_arguments_exit_2_with_every_reason(tmp_path, capsys):
                    'x'):
         assert reason in stderr
     assert 'Traceback' not in stderr
-
-
-def test_resume_runs_only_the_sessions_no_earlier_run_finished(tmp_path):
-    first = _run_experiment(tmp_path, 'study', '--parallel', '1', '--cases', '1')
-    bag = tmp_path / 'bags' / 'study' / 'case1-seed0'
-    stamps = {path.name: path.stat().st_mtime_ns for path in bag.iterdir()}
-    # the journal holds the finished session at once (what an interrupted sweep resumes from)
-    journal = (tmp_path / 'bags' / 'study' / 'sessions.jsonl').read_text().splitlines()
-    assert [json.loads(line)['outcome']['session_id'] for line in journal] == ['case1-seed0']
-    second = _run_experiment(tmp_path, 'study', '--parallel', '1', '--cases', '1', '2',
-                             '--resume')
-    outcomes = {outcome['session_id']: outcome for outcome in second['outcomes']}
-    assert sorted(outcomes) == ['case1-seed0', 'case2-seed0']
-    assert outcomes['case1-seed0']['reused'] and not outcomes['case2-seed0'].get('reused')
-    assert {path.name: path.stat().st_mtime_ns for path in bag.iterdir()} == stamps
-    assert [run['sessions_run'] for run in second['runs']] == [1, 1]
-    assert second['wall_seconds'] == pytest.approx(first['wall_seconds']
-                                                   + second['runs'][1]['wall_seconds'])
-    assert sorted(_episodes(tmp_path / 'bags' / 'study')) == ['case1-seed0', 'case2-seed0']
 
 
 class _Stop(Exception):
