@@ -49,7 +49,7 @@ from hrc_common.time_left import TimeLeft
 
 from hrc_bringup.experiment_args import build_parser
 from hrc_bringup.experiment_resume import (finished_sessions, JOURNAL_NAME, journal_line,
-                                           MANIFEST_NAME, split_resumed)
+                                           kept_runs, MANIFEST_NAME, split_resumed)
 from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
 
 # s: how often the sweep's main thread wakes while it waits for sessions (signal handling)
@@ -203,9 +203,8 @@ def resume_plan(options, bags_dir: pathlib.Path, planned: list, version: str) ->
     """Return ``(earlier runs, reused, tasks to run)`` (``--resume``; else nothing reused).
 
     ``reused`` pairs each planned task an earlier run of the folder finished with that run's
-    record (hrc_bringup.experiment_resume); the earlier runs are the folder's manifest's
-    ``runs`` (or the manifest itself, of a run before runs were listed), plus one per
-    interrupted run found only in the journal (its wall time: its last session's end).
+    record; the earlier runs are those whose sessions are kept (both:
+    hrc_bringup.experiment_resume).
     """
     if not options.resume:
         return [], [], planned
@@ -219,34 +218,7 @@ def resume_plan(options, bags_dir: pathlib.Path, planned: list, version: str) ->
     if reused and version.endswith('-dirty'):
         print(f'[experiment] resume: the code has uncommitted changes ({version}); the sessions '
               'kept may come from other uncommitted code', flush=True)
-    runs = []
-    manifest = bags_dir / MANIFEST_NAME
-    if manifest.is_file():
-        try:
-            data = json.loads(manifest.read_text())
-            runs = data.get('runs') or [{key: data.get(key) for key in (
-                'command', 'started', 'wall_seconds', 'version')}]
-        except (OSError, ValueError):
-            runs = []
-    # the runs whose sessions are kept: by the run's start (journalled sessions), else, for a
-    # manifest from before the journal, by the version
-    starts = {record['outcome'].get('run_started') for _, record in reused}
-    versions = {record['version'] for _, record in reused
-                if not record['outcome'].get('run_started')}
-    kept = [run for run in runs if run.get('started') in starts
-            or (run.get('version') in versions and not run.get('sessions_run'))]
-    known = {run.get('started') for run in runs}
-    interrupted = {}
-    for _, record in reused:
-        started = record['outcome'].get('run_started')
-        if started and started not in known:
-            run = interrupted.setdefault(started, {
-                'command': '(interrupted; from the journal)', 'started': started,
-                'wall_seconds': 0.0, 'version': record['version'], 'sessions_run': 0})
-            run['wall_seconds'] = max(run['wall_seconds'],
-                                      record['outcome'].get('finished_after', 0.0))
-            run['sessions_run'] += 1
-    return kept + sorted(interrupted.values(), key=lambda run: run['started']), reused, tasks
+    return kept_runs(bags_dir, reused), reused, tasks
 
 
 def person_override(options, seed: int) -> tuple:

@@ -38,6 +38,15 @@ def journal_line(task: dict, outcome: dict, version: str) -> str:
     return json.dumps({'task': task, 'outcome': outcome, 'version': version}, sort_keys=True)
 
 
+def read_manifest(folder: pathlib.Path) -> dict:
+    """Return the folder's ``experiment.json`` ({} when missing or unreadable)."""
+    manifest = folder / MANIFEST_NAME
+    try:
+        return json.loads(manifest.read_text()) if manifest.is_file() else {}
+    except (OSError, ValueError):
+        return {}
+
+
 def read_records(folder: pathlib.Path) -> list:
     """Return every session record of earlier runs of ``folder``: dicts task, outcome, version.
 
@@ -47,12 +56,8 @@ def read_records(folder: pathlib.Path) -> list:
     files that cannot be read are skipped (a journal cut by a crash ends in a partial line).
     """
     records = {}
-    manifest = folder / MANIFEST_NAME
-    if manifest.is_file():
-        try:
-            data = json.loads(manifest.read_text())
-        except (OSError, ValueError):
-            data = {}
+    data = read_manifest(folder)
+    if data:
         tasks = {task.get('settings', {}).get('session_id'): task
                  for task in data.get('tasks', [])}
         for outcome in data.get('outcomes', []):
@@ -102,3 +107,34 @@ def split_resumed(planned: list, finished: dict, version: str) -> tuple:
         if record is not None:
             other_version.append((task, record))
     return reused, to_run, other_version
+
+
+def kept_runs(folder: pathlib.Path, reused: list) -> list:
+    """Return the earlier runs whose sessions a resumed run keeps (``reused``: (task, record)).
+
+    The folder's manifest lists its runs (``runs``; a manifest from before runs were listed is
+    one run); a run is kept when a kept session came from it: by the run's start (journalled
+    sessions carry ``run_started``), else, for sessions of such an older manifest, by version.
+    A run interrupted before it wrote a manifest is known only from the journal: it is rebuilt
+    from its kept sessions (its wall time: the last one's end).
+    """
+    data = read_manifest(folder)
+    runs = data.get('runs') or ([{key: data.get(key) for key in (
+        'command', 'started', 'wall_seconds', 'version')}] if data else [])
+    starts = {record['outcome'].get('run_started') for _, record in reused}
+    versions = {record['version'] for _, record in reused
+                if not record['outcome'].get('run_started')}
+    kept = [run for run in runs if run.get('started') in starts
+            or (run.get('version') in versions and not run.get('sessions_run'))]
+    known = {run.get('started') for run in runs}
+    interrupted = {}
+    for _, record in reused:
+        started = record['outcome'].get('run_started')
+        if started and started not in known:
+            run = interrupted.setdefault(started, {
+                'command': '(interrupted; from the journal)', 'started': started,
+                'wall_seconds': 0.0, 'version': record['version'], 'sessions_run': 0})
+            run['wall_seconds'] = max(run['wall_seconds'],
+                                      record['outcome'].get('finished_after', 0.0))
+            run['sessions_run'] += 1
+    return kept + sorted(interrupted.values(), key=lambda run: run['started'])
