@@ -42,6 +42,7 @@ import signal
 import sys
 import time
 
+from hrc_agent_node.config import AgentParams
 from hrc_common import paths
 from hrc_common.executables import executable_path
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
@@ -147,6 +148,8 @@ def run_session(settings: SessionSettings, options) -> int:
                signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     progress = Progress(context, sys.stdout.isatty())
     progress.max_training_episodes = parameters['agent'].get('max_training_episodes')  # issue 25
+    progress.evaluation_episodes = parameters['agent'].get(
+        'evaluation_episodes', AgentParams.evaluation_episodes)
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(progress.node)
     guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''),

@@ -94,10 +94,14 @@ class Progress:
         step = f'training step {current + 1} of {max(status.training_step_count, 1)}'
         never = ('; the person never trained with the robot' if status.human_subtasks
                  and self.person_joined is None else '')
+        # A runner that joined late may first see the session already done (the agent keeps only
+        # the newest status): the test episodes follow training all the same when there are any.
+        phase = phase_label(status.phase, '')
+        tests_follow = phase == 'evaluation' or (
+            phase == 'done' and getattr(self, 'evaluation_episodes', 0) > 0)
         self._print(f'[session] the robot did not converge in {status.total_episodes} '
                     f'episodes ({step}' + (f', at most {cap}' if cap else '') + ')' + never
-                    + ('; the test episodes start' if phase_label(status.phase, '')
-                       == 'evaluation' else ''), permanent=True)
+                    + ('; the test episodes start' if tests_follow else ''), permanent=True)
 
     def _on_action(self, action):
         """Say which input drives the person's side whenever it changes (never silently)."""

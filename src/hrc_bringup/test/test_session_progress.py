@@ -45,3 +45,31 @@ def test_the_verdict_waits_for_the_episodes_when_the_status_comes_first(capsys):
         progress.close()
     finally:
         rclpy.shutdown(context=context)
+
+
+def test_a_runner_that_first_sees_the_session_done_still_says_the_test_episodes_follow(capsys):
+    """A runner that joined late gets the 'done' status as the first one (the agent keeps only
+    the newest); the session still ran its test episodes after training, so the verdict says so
+    (test_live_session failed so in CI at c7c4283: the suffix was missing)."""
+    context = Context()
+    rclpy.init(context=context)
+    try:
+        for evaluation_episodes, suffix in ((1, True), (0, False)):
+            progress = Progress(context, interactive=False)
+            progress.max_training_episodes = 2
+            progress.evaluation_episodes = evaluation_episodes
+            done = SessionStatus(case_id=2, strategy='responsibility_guided', training_step=1,
+                                 training_step_count=2, total_episodes=2, human_involved=True,
+                                 phase=SessionStatus.PHASE_DONE, human_subtasks=['ball'])
+            progress._on_status(done)
+            for episode in (0, 1):
+                progress._on_episode(EpisodeSummary(case_id=2, episode=episode, training_step=0,
+                                                    kind=EpisodeSummary.KIND_TRAINING))
+            out = capsys.readouterr().out
+            verdict = ('[session] the robot did not converge in 2 episodes (training step 1 of '
+                       '2, at most 2); the person never trained with the robot')
+            assert verdict in out, out
+            assert ('; the test episodes start' in out) == suffix, out
+            progress.close()
+    finally:
+        rclpy.shutdown(context=context)
