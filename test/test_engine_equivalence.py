@@ -28,6 +28,9 @@ from hrc_common.testing import executable_path
 
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
         '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
+# Every test here reads a session of the shared `sessions` fixture, which talks DDS (the domains
+# are reserved inside it, so conftest.py cannot tell from the tests' fixtures).
+pytestmark = pytest.mark.dds
 STEPS = 40
 PERIOD_NS = 200_000_000
 SLICES = 10          # the sim's default human_period 0.02 s: the human answers 10 times a step
@@ -106,9 +109,8 @@ def assert_same(graph_bag, engine_bag, episodes) -> dict:
     return graph_messages
 
 
-def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_domain_id,
-                                                                  read_rosbag):
-    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, ARGS, read_rosbag)
+def test_the_engine_and_the_lockstep_graph_give_the_same_session(sessions):
+    graph_bag, engine_bag, _ = outcome_of(sessions, 'main')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     assert len(graph_messages['/hrc/state'][2]) == STEPS + 1
     # The human acted at its own rate: a wrench for each slice of every step, the applied
@@ -121,83 +123,111 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(tmp_path, ros_d
 
 
 OTHER_CASES = (1, 2, 3, 4, 6)
-# Sessions of OTHER_CASES run at once (each graph on a domain of its own, then its engine run):
-# a short graph session spends most of its wall time starting processes and discovering, not
-# computing, so running them together takes about half the wall time of one after another on
-# 2 cores (CI time); lockstep sessions do not depend on timing, so running them together
-# changes nothing they record.
-CONCURRENT_SESSIONS = len(OTHER_CASES)
+SHORT = ['--episodes', '2', '--eval-episodes', '1', '--session-id', 'same', '--set',
+         'sim.episode_duration=2.0', '--set', 'agent.horizon=16', '--set',
+         'agent.minibatch_size=8']   # 10 steps an episode
+UPDATE_INSIDE_ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id',
+                      'same', '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=30',
+                      '--set', 'agent.minibatch_size=16',
+                      '--set', 'agent.update_rule=horizon_or_episode_end']
+# The scripted stick: its position changes every 0.06 s (inside control periods), the enable
+# button let go on every ninth change.
+STICK_SCRIPT = '\n'.join(['time,axis,enable'] + [
+    f'{index * 0.06:.2f},{((index * 7) % 21 - 10) / 10.0:.1f},{int(index % 9 != 4)}'
+    for index in range(40)]) + '\n'
+# Every session of this file: name -> (its arguments, the environment it adds). They all run at
+# once (each graph on a domain of its own, then its engine run): a short graph session spends
+# most of its wall time starting processes and discovering, not computing, so running them
+# together takes far less wall time than one after another on 2 cores (CI time); lockstep
+# sessions do not depend on timing, so running them together changes nothing they record.
+SESSIONS = {
+    'main': (ARGS, {}),
+    **{f'case{case}': (['--case', str(case), *SHORT], {}) for case in OTHER_CASES},
+    'update_inside': (UPDATE_INSIDE_ARGS, {}),
+    # the graph's nodes on rclpy's own SingleThreadedExecutor (as before issue 24)
+    'scripted_stick': (['--case', '5', *SHORT, '--human', 'script', '--set',
+                        'human.script_file={script}', '--set', 'human.enable_button=0'],
+                       {'HRC_EXECUTOR': 'rclpy'}),
+    'composed': (['--case', '5', *SHORT], {'HRC_COMPOSE': 'sim,human,recorder'}),
+}
+CONCURRENT_SESSIONS = 5     # at most this many at once (each graph is 4-5 processes)
 
 
 @pytest.fixture(scope='module')
-def other_cases(tmp_path_factory, rosbags_typestore):
-    """Run the short session of every case of OTHER_CASES both ways; {case: result or error}."""
+def sessions(tmp_path_factory, rosbags_typestore):
+    """Run every session of SESSIONS both ways: {name: (graph bag, engine bag, folder) or error}.
+
+    An error is kept, not raised: the session's own test reports it.
+    """
     from concurrent.futures import ThreadPoolExecutor
 
     from hrc_common.testing import DomainReservation, read_bag_with_rosbags, ros_environment
 
-    def run(case):
-        args = ['--case', str(case), '--episodes', '2', '--eval-episodes', '1', '--session-id',
-                'same', '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
-                '--set', 'agent.minibatch_size=8']
+    def run(name):
+        args, extra_env = SESSIONS[name]
+        folder = tmp_path_factory.mktemp(name)
+        script = folder / 'stick.csv'
+        script.write_text(STICK_SCRIPT)
+        args = [arg.replace('{script}', str(script)) for arg in args]
         reservation = DomainReservation()
         try:
-            return run_both(tmp_path_factory.mktemp(f'case{case}'), reservation.domain_id, args,
-                            lambda folder: read_bag_with_rosbags(rosbags_typestore, folder),
-                            env=ros_environment(reservation.domain_id))
-        except AssertionError as error:     # reported by the case's own test
+            env = ros_environment(reservation.domain_id)
+            env.update(extra_env)
+            graph_bag, engine_bag = run_both(
+                folder, reservation.domain_id, args,
+                lambda bag: read_bag_with_rosbags(rosbags_typestore, bag), env=env)
+            return graph_bag, engine_bag, folder
+        except AssertionError as error:     # reported by the session's own test
             return error
         finally:
             reservation.release()
 
     with ThreadPoolExecutor(max_workers=CONCURRENT_SESSIONS) as pool:
-        return dict(zip(OTHER_CASES, pool.map(run, OTHER_CASES)))
+        return dict(zip(SESSIONS, pool.map(run, SESSIONS)))
+
+
+def outcome_of(sessions, name):
+    """Return (graph bag, engine bag, folder) of session ``name``, or raise its failure."""
+    outcome = sessions[name]
+    if isinstance(outcome, AssertionError):
+        raise outcome
+    return outcome
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize('case', OTHER_CASES)
-def test_every_case_is_the_same_in_the_graph_and_the_engine(other_cases, case):
+def test_every_case_is_the_same_in_the_graph_and_the_engine(sessions, case):
     """Short sessions of the other cases (10 steps an episode).
 
     Roles that change at an episode boundary included (cases 3 and 4 give the human the ball
     in the evaluation episode); a PPO update after the second episode.
     """
-    outcome = other_cases[case]
-    if isinstance(outcome, AssertionError):
-        raise outcome
-    graph_bag, engine_bag = outcome
+    graph_bag, engine_bag, _ = outcome_of(sessions, f'case{case}')
     assert_same(graph_bag, engine_bag, (0, 1, 2))
 
 
-UPDATE_INSIDE_ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id',
-                      'same', '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=30',
-                      '--set', 'agent.minibatch_size=16',
-                      '--set', 'agent.update_rule=horizon_or_episode_end']
-
 
 @pytest.mark.slow
-def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(
-        tmp_path, ros_domain_id, read_rosbag):
+def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(sessions):
     """Under ``update_rule: horizon_or_episode_end`` with horizon 30 (issue 22).
 
     The first episode's rollout is cut at step 30, the update runs before the action for that
     state (in the agent node and in the engine alike), the rest of the episode acts with the
     new weights and updates again at its end.
     """
-    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, UPDATE_INSIDE_ARGS, read_rosbag)
+    graph_bag, engine_bag, folder = outcome_of(sessions, 'update_inside')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     steps = graph_messages['/hrc/agent/step'][0]
     assert len(steps) == 40 and not steps[0]['deterministic']
     # Two updates each: inside episode 0 (step 30) and at its end (10 samples); the earlier
     # rule would have made one, at the end.
-    for run_dir in (tmp_path / 'graph', tmp_path / 'engine'):
+    for run_dir in (folder / 'graph', folder / 'engine'):
         final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
         assert final['core']['ppo']['updates'] == 2, run_dir
 
 
 @pytest.mark.slow
-def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(
-        tmp_path, ros_domain_id, read_rosbag, monkeypatch):
+def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(sessions):
     """The joystick path (deadzone, enable button, scaling) driven by a scripted stick.
 
     ``human.input: script``: the stick's position comes from a file in simulation time, so the
@@ -209,17 +239,7 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(
     (hrc_common.nodes.LeanExecutor), is every other test of this file. ``events`` cannot run
     the graph: the human node has a guard condition, which rclpy's EventsExecutor refuses.
     """
-    monkeypatch.setenv('HRC_EXECUTOR', 'rclpy')
-    script = tmp_path / 'stick.csv'
-    rows = ['time,axis,enable'] + [
-        f'{index * 0.06:.2f},{((index * 7) % 21 - 10) / 10.0:.1f},{int(index % 9 != 4)}'
-        for index in range(40)]
-    script.write_text('\n'.join(rows) + '\n')
-    args = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
-            '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
-            '--set', 'agent.minibatch_size=8', '--human', 'script',
-            '--set', f'human.script_file={script}', '--set', 'human.enable_button=0']
-    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    graph_bag, engine_bag, _ = outcome_of(sessions, 'scripted_stick')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     actions = [action for episode in (0, 1, 2)
                for action in graph_messages['/hrc/human/action'][episode]]
@@ -231,20 +251,15 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(
     assert len(mixed) >= 5, graph_messages['/hrc/state'][0][1]
 
 
-def test_sim_human_and_recorder_in_one_process_give_the_same_session(tmp_path, ros_domain_id,
-                                                                     read_rosbag, monkeypatch):
+def test_sim_human_and_recorder_in_one_process_give_the_same_session(sessions):
     """``HRC_COMPOSE=sim,human,recorder`` (hrc_bringup.compose_nodes): one process, one executor.
 
     The sim, the human node and the recorder run as three nodes of one process on one
     LeanExecutor (the agent in its own): the session is bit for bit the engine's, and the
     recorder composed with them writes it whole. A short session (10 steps an episode).
     """
-    monkeypatch.setenv('HRC_COMPOSE', 'sim,human,recorder')
-    args = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
-            '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16',
-            '--set', 'agent.minibatch_size=8']
-    graph_bag, engine_bag = run_both(tmp_path, ros_domain_id, args, read_rosbag)
+    graph_bag, engine_bag, folder = outcome_of(sessions, 'composed')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     assert all(len(graph_messages['/hrc/state'][episode]) == 11 for episode in (0, 1, 2))
-    logs = sorted(path.name for path in (tmp_path / 'graph' / 'runs' / 'same' / 'logs').iterdir())
+    logs = sorted(path.name for path in (folder / 'graph' / 'runs' / 'same' / 'logs').iterdir())
     assert logs == ['agent.log', 'sim+human+recorder.log'], logs

@@ -7,11 +7,11 @@ the bags. Discovery as docs/two_hosts.md recommends: LOCALHOST range plus the ot
 static peer, Fast DDS on UDPv4 only (so nothing bypasses the link through shared memory).
 
 A short realtime session (case 5: the human acts from the first episode) runs on each link,
-the three at once (no added delay, a 2 ms wired lab, a poor Wi-Fi of 30 +- 10 ms and 1% loss). From the bag
-(recorder on the trainer, beside the sim) the test measures the human command's age at the
-trainer (reception of the state's answer minus reception of the state), the commands missing at
-the sim, and the state period jitter, prints them, and checks that the session stays correct:
-every episode complete in the bag, every missing command counted in the states.
+the three at once (no added delay, a 2 ms wired lab, a poor Wi-Fi of 30 +- 10 ms and 1% loss).
+From the bag (recorder on the trainer, beside the sim) the test measures the human command's
+age at the trainer (reception of the state's answer minus reception of the state), the commands
+missing at the sim, and the state period jitter, prints them, and checks that the session stays
+correct: every episode complete in the bag, every missing command counted in the states.
 
 It needs root for the namespaces; without it the test fails with the reason (it skips nothing).
 """

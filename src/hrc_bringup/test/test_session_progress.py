@@ -48,9 +48,12 @@ def test_the_verdict_waits_for_the_episodes_when_the_status_comes_first(capsys):
 
 
 def test_a_runner_that_first_sees_the_session_done_still_says_the_test_episodes_follow(capsys):
-    """A runner that joined late gets the 'done' status as the first one (the agent keeps only
-    the newest); the session still ran its test episodes after training, so the verdict says so
-    (test_live_session failed so in CI at c7c4283: the suffix was missing)."""
+    """A late runner's first status says 'done'; the test episodes still followed training.
+
+    The agent keeps only the newest status, so a runner that joined late may get 'done' first;
+    the session still ran its test episodes after training, so the verdict says so
+    (test_live_session failed so in CI at c7c4283: the suffix was missing).
+    """
     context = Context()
     rclpy.init(context=context)
     try:
