@@ -27,11 +27,11 @@ import torch
 
 from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_agent_node.partners import PERSON_PERIODS, person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
-from hrc_partners.partners import evaluation_core, PERSON_PERIODS, person_period
+from hrc_partners.partners import evaluation_core
 from hrc_partners.partners_first import unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
@@ -67,7 +67,7 @@ def sessions(run: pathlib.Path) -> list:
 def evaluate(checkpoint, profile, seed: int, episodes: int, period: str = 'human') -> float:
     """Return the mean total error of the checkpoint's frozen policy with ``profile``.
 
-    ``period``: how often the person acts (``hrc_partners.partners.PERSON_PERIODS``: the sim's
+    ``period``: how often the person acts (``hrc_agent_node.partners.PERSON_PERIODS``: the sim's
     human_period, as the engine's person; ``control``: the control period, as this bench did
     before issue 22's fix).
     """

@@ -24,7 +24,7 @@ import torch
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import run_episode
-from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_agent_node.partners import PERSON_PERIODS, SimulatedHumanPartner
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
@@ -32,7 +32,7 @@ from hrc_common.session_plan import compose, parse_overrides, SessionSettings, S
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners import partners_first
-from hrc_partners.partners import MixturePartner, parse_specs, PERSON_PERIODS
+from hrc_partners.partners import MixturePartner, parse_specs
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 

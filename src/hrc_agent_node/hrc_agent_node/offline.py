@@ -28,7 +28,7 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.partners import ScriptedPartner, SimulatedHumanPartner
+from hrc_agent_node.partners import person_period, ScriptedPartner, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile
@@ -123,7 +123,7 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
 
 
 def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str = 'scripted',
-                 population_every: int = 0, limits: SimLimits = None):
+                 population_every: int = 0, limits: SimLimits = None, period: str = 'human'):
     """Return the partner on the human's degree of freedom of ``core``'s case.
 
     ``limits``: the sim's control period and limits the partner acts with (default: those of
@@ -131,7 +131,8 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
 
     ``kind``: ``scripted`` (the PD partner, ``noise`` = std of its command) or
     ``human:<profile>`` (the simulated human of that profile; ``population_every`` N > 0 draws
-    a new person from the profile's population every N episodes).
+    a new person from the profile's population every N episodes; ``period``: how often that
+    person acts, :data:`~hrc_agent_node.partners.PERSON_PERIODS`).
     """
     if limits is None:
         limits = SimLimits.of(PhysicsParams())
@@ -141,7 +142,7 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
     if not kind.startswith('human:'):
         raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
-                                 limits.human_step, population_every)
+                                 person_period(limits, period), population_every)
 
 
 def main(argv=None) -> int:

@@ -19,7 +19,7 @@ to the partner.
 from dataclasses import dataclass
 import math
 
-from hrc_common.contract import check_dof
+from hrc_common.contract import check_dof, SimLimits
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.sim_human import SimulatedHuman
 import numpy as np
@@ -80,6 +80,24 @@ def person_seed(session_seed: int, draw: int) -> int:
     """Return the population seed of the ``draw``-th person of a session (31-bit)."""
     return int(np.random.SeedSequence([int(session_seed), int(draw), 0x9E3779B9])
                .generate_state(1)[0] & 0x7FFFFFFF)
+
+
+# How often an offline simulated person is told it acts (the SimulatedHuman's control_period):
+# `human` = the sim's human_period (SimLimits.human_step), as the engine's and the graph's
+# person act (hrc_joystick_node.human_core); `control` = the control period, which the offline
+# tools (hrc_partners, the benches) used before (issue 22): with the sim's human_period 0.02 s
+# the offline loop calls the person every 0.02 s, so a person built for 0.2 s calls ran its
+# delays, lags, slew limits, integrator and lapses 10x fast. Same numbers when human_period =
+# control_period. Defined here, next to the offline person, so every layer above (hrc_partners,
+# the benches) chooses an offline person's rate in this one place.
+PERSON_PERIODS = ('human', 'control')
+
+
+def person_period(limits: SimLimits, period: str = 'human') -> float:
+    """Return the s between a simulated person's calls for ``period`` (PERSON_PERIODS)."""
+    if period not in PERSON_PERIODS:
+        raise ValueError(f'person period {period!r} is not one of {PERSON_PERIODS}')
+    return limits.human_step if period == 'human' else limits.control_period
 
 
 class SimulatedHumanPartner:

@@ -294,6 +294,15 @@ class SimLimits:
         """
         return self.human_period if self.human_period > 0 else self.control_period
 
+    @property
+    def human_slices(self) -> int:
+        """Return the human's steps per control period (>= 1; the protocol's slices).
+
+        The period's state and its slice states: the calls a partner of the offline loop
+        (``SimStepper.run_period``) gets per control period while the human is involved.
+        """
+        return max(1, int(round(self.control_period / self.human_step)))
+
     def full_scale(self, dof: str) -> float:
         """Return the force (N) or torque (N*m) of a normalized command of 1 on ``dof``."""
         return self.max_force if check_dof(dof) == TRANSLATION else self.max_torque

@@ -27,7 +27,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, read_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
+from hrc_agent_node.partners import person_period, person_seed, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
 from hrc_joystick_node.human_model import ClonedHuman
@@ -98,45 +98,51 @@ def parse_specs(texts) -> typing.List[PartnerSpec]:
 
 
 class ClonedPartner:
-    """A cloned human model as an offline partner (``start_episode`` resets its history)."""
+    """A cloned human model as an offline partner (``start_episode`` resets its history).
 
-    def __init__(self, path, dof: str, limits: SimLimits):
+    The offline loop calls a partner at the human's rate: the period's state, then each slice
+    state (``limits.human_slices`` calls per control period, every ``limits.human_step`` s).
+    The model was cloned from recordings cut at the control period (one state of history per
+    control step, ``ClonedHuman``). ``period`` ``human`` (the default): it acts on the
+    period's state and holds that command over the period's slices, as the engine's and the
+    graph's human core run a model (``hrc_joystick_node.human_core``) and as a person's stick
+    stays where it is between the robot's steps. ``control``: it acts at every call, as before
+    issue 22's leftovers were fixed (its history then spanned a tenth of the time it was
+    trained on at human_period 0.02 s); the same numbers when human_period = control_period.
+    """
+
+    def __init__(self, path, dof: str, limits: SimLimits, period: str = 'human'):
+        person_period(limits, period)          # refuses an unknown period now
         self.human = ClonedHuman(path, dof, control_period=limits.control_period)
+        # calls of the offline loop per new command of the model (1: a new one at every call)
+        self.calls_per_command = limits.human_slices if period == 'human' else 1
+        self.calls = 0                         # calls since the episode started
+        self.command = 0.0                     # the model's newest command, held in [-1, 1]
 
     def start_episode(self, episode: int) -> None:
-        """Clear the model's state history."""
+        """Clear the model's state history; the next call is a period's state."""
         self.human.reset(int(episode))
+        self.calls = 0
 
     def __call__(self, state, subtasks) -> float:
-        """Return the model's stick command in [-1, 1]."""
-        return float(self.human.act(state, list(subtasks)))
-
-
-# How often an offline simulated person is told it acts (the SimulatedHuman's control_period):
-# `human` = the sim's human_period (SimLimits.human_step), as the engine's and the graph's
-# person act (hrc_joystick_node.human_core); `control` = the control period, which every tool
-# of this package used before (issue 22): with the sim's human_period 0.02 s the offline loop
-# calls the person every 0.02 s, so a person built for 0.2 s calls ran its delays, lags,
-# slew limits, integrator and lapses 10x fast. Same numbers when human_period = control_period.
-PERSON_PERIODS = ('human', 'control')
-
-
-def person_period(limits: SimLimits, period: str = 'human') -> float:
-    """Return the s between a simulated person's calls for ``period`` (PERSON_PERIODS)."""
-    if period not in PERSON_PERIODS:
-        raise ValueError(f'person period {period!r} is not one of {PERSON_PERIODS}')
-    return limits.human_step if period == 'human' else limits.control_period
+        """Return the model's stick command in [-1, 1] (held between its control steps)."""
+        if self.calls % self.calls_per_command == 0:
+            self.command = float(self.human.act(state, list(subtasks)))
+        self.calls += 1
+        return self.command
 
 
 def make_partner(spec: PartnerSpec, dof: str, seed: int, limits: SimLimits, profiles_file=None,
                  period: str = 'human'):
     """Return the offline partner of ``spec`` on ``dof`` (``seed``: its evaluation seed).
 
-    ``limits``: the sim's. ``period``: a simulated person's (:data:`PERSON_PERIODS`; a cloned
-    model acts at the control period, the rate its recordings were cut at).
+    ``limits``: the sim's. ``period``: how often a simulated person acts
+    (``hrc_agent_node.partners.PERSON_PERIODS``); a cloned model acts at the control period,
+    the rate its recordings were cut at, unless ``control`` asks for the old numbers
+    (:class:`ClonedPartner`).
     """
     if spec.kind == 'model':
-        return ClonedPartner(spec.path, dof, limits)
+        return ClonedPartner(spec.path, dof, limits, period)
     if spec.kind == 'mixture':
         return MixturePartner(spec.parts, dof, seed + EVALUATION_SEED_OFFSET, limits, 1,
                               profiles_file, period)
@@ -183,7 +189,7 @@ class MixturePartner:
     ``seed`` and the draw index): ``population:NAME`` gives a new person of that population
     at each draw, ``person:``/``profile:`` that person, ``model:`` the cloned model. The
     offline loop tells it each episode (``start_episode``). ``period``: how often a simulated
-    person acts (:data:`PERSON_PERIODS`).
+    person acts (``hrc_agent_node.partners.PERSON_PERIODS``).
     """
 
     def __init__(self, specs, dof: str, seed: int, limits: SimLimits, every: int = 1,

@@ -47,6 +47,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file
 from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import PERSON_PERIODS
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
@@ -54,7 +55,7 @@ from hrc_common.session_plan import compose, new_session_id, parse_overrides, Se
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
-from hrc_partners.partners import MixturePartner, parse_specs, PERSON_PERIODS
+from hrc_partners.partners import MixturePartner, parse_specs
 
 POPULATION_PROFILES = ('paper', 'novice', 'skilled')
 # People unlike the population, each one trait of a person pushed outside the population's
@@ -201,7 +202,7 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     :func:`default_population`), one drawn for every episode, seeded by the session seed.
     ``population_budget``: episodes of a population step after which it ends unmet
     (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``). ``person_period``:
-    how often the training people act (``hrc_partners.partners.PERSON_PERIODS``; ``control``
+    how often the training people act (``hrc_agent_node.partners.PERSON_PERIODS``; ``control``
     reproduces the pre-training before issue 22's fix). ``sac_updates_per_step`` > 0: the SAC
     learner's gradient steps per transition in the pre-training (the checkpoint's config keeps
     them, the session that resumes it uses its own); 0: the session's.

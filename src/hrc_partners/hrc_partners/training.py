@@ -19,13 +19,13 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_agent_node.partners import person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
-from hrc_partners.partners import MixturePartner, parse_spec, person_period, spec_problem
+from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
 from hrc_partners.training_args import build_parser
 
 
@@ -33,7 +33,7 @@ def training_partner(core, seed: int, limits: SimLimits, profile: str, populatio
                      profiles_file=None, mixture=None, period: str = 'human') -> tuple:
     """Return (the partner :func:`train_agent` trains ``core`` with, its specification text).
 
-    ``period``: how often a simulated person acts (``hrc_partners.partners.PERSON_PERIODS``:
+    ``period``: how often a simulated person acts (``hrc_agent_node.partners.PERSON_PERIODS``:
     ``human`` the sim's human_period, as the offline loop calls it; ``control`` as before
     issue 22's fix).
     """
