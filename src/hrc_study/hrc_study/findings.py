@@ -219,12 +219,17 @@ def _missing(data: CaseData, profile: str, cases) -> list:
     return [case for case in cases if data.count(profile, case) < MIN_SESSIONS]
 
 
+def paired_test_words(comparisons: int) -> str:
+    """Describe the test of a finding whose comparisons go through ``_pairs_test``."""
+    return ('Wilcoxon signed-rank by seed and person (Mann-Whitney U when the sessions do not '
+            f'pair), one-sided, intersection-union over {comparisons}')
+
+
 def finding_a(data: CaseData, profile: str) -> Finding:
     """Test (a): task first gives the best team performance."""
     finding = Finding('a', CLAIMS['a'],
                       'total error (final evaluation): case 1 < 3, 5 and case 2 < 4, 6',
-                      'Wilcoxon signed-rank by seed and person (Mann-Whitney U when the '
-                      'sessions do not pair), one-sided, intersection-union over 4')
+                      paired_test_words(4))
     return _pairs_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)], 'total_error', finding)
 
 
@@ -285,8 +290,7 @@ def finding_d(data: CaseData, profile: str) -> Finding:
 def finding_e(data: CaseData, profile: str, key: str = 'e') -> Finding:
     """Test (e): the robot on rotation beats its swapped twin (under ``profile``)."""
     finding = Finding(key, CLAIMS['e'] + ('' if key == 'e' else f' (simulated human: {profile})'),
-                      'total error: case 2 < 1, 4 < 3, 6 < 5',
-                      'Mann-Whitney U, one-sided, intersection-union over 3 comparisons')
+                      'total error: case 2 < 1, 4 < 3, 6 < 5', paired_test_words(3))
     _pairs_test(data, profile, [(2, 1), (4, 3), (6, 5)], 'total_error', finding)
     rotation = [value for case in (2, 4, 6) for value in data.values(profile, case,
                                                                       'total_error')]

@@ -419,7 +419,8 @@ def document(sessions, profiles, rows, findings, choices, command, experiment,
     primary = profiles[0]
     seeds = sorted({session.seed for session in sessions})
     limits = sorted({session.episode_limit for session in sessions if session.episode_limit})
-    parts = ['# Results: the six cases over seeds, with statistics', '',
+    cases = sorted({session.case_id for session in sessions})
+    parts = [f'# Results: {len(cases)} cases over seeds, with statistics', '',
              'Generated from the bags by', '', '```bash', command, '```', '']
     parts += run_record_lines(experiment)
     if note:

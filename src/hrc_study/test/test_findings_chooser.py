@@ -267,3 +267,26 @@ def test_an_inconclusive_finding_names_the_power_limit():
     assert control.p_value == pytest.approx(1 / 32)
     assert control.verdict == 'inconclusive'
     assert 'power' in control.reason and '0.0312' in control.reason
+
+
+def test_finding_e_names_the_paired_test_it_runs():
+    """(e) is described by the paired comparison it runs, as (a) is.
+
+    Its test column said Mann-Whitney U (unpaired) while its effect reported matched pairs
+    (docs/results.md before this fix).
+    """
+    findings = {finding.key: finding for finding in evaluate_findings(paper_like())}
+    assert findings['e'].test.startswith('Wilcoxon signed-rank by seed and person'), \
+        findings['e'].test
+    assert findings['e'].test.endswith('intersection-union over 3')
+    assert findings['a'].test.endswith('intersection-union over 4')
+
+
+def test_the_results_title_counts_the_cases(tmp_path):
+    from hrc_study.results_doc import write_results
+
+    sessions = [session for session in paper_like(seeds=3) if session.case_id <= 4]
+    write_results(sessions, tmp_path, 'hrc_results x', None, parse_priorities('human=1'),
+                  resamples=50)
+    assert (tmp_path / 'results.md').read_text().startswith(
+        '# Results: 4 cases over seeds, with statistics')
