@@ -16,7 +16,8 @@ Steps, each printed as it starts:
    seed 1 and the partners-first case 8 seed 0) rerun through the ROS graph (the nodes over
    DDS), and every episode of each compared with the engine's: the same returns, errors,
    efforts and kinds, or the rerun fails (exit 1);
-4. ``hrc_results`` on the PPO run into ``--out`` (docs/results.md), SAC into ``--out``/sac.
+4. once every learner has run: ``hrc_results`` on the PPO run into ``--out`` (docs/results.md),
+   SAC into ``--out``/sac.
 
 The learning settings of the study (``hrc_common.session_plan.STUDY_LEARNING``) are the ones
 issue 22 measured to need the fewest episodes with PPO; the paper's own Table I settings stay
@@ -195,6 +196,7 @@ def main(argv=None) -> int:
     profiles = ['--profiles', f'paper:{options.seeds}'] + (
         [f'paper_symmetric:{options.control_seeds}'] if options.control_seeds else [])
     failures = []
+    finished = []     # (learner, its bags folder, minutes of this run when it was done)
     for learner in options.learners:
         name = f'{options.name}-{learner}'
         code = experiment(options, name, learner, ['--seeds', str(options.seeds),
@@ -206,7 +208,11 @@ def main(argv=None) -> int:
         folder = pathlib.Path(options.bags_dir) / name
         failures += [f'{learner}: {problem}'
                      for problem in spot_check(options, learner, folder)]
-        minutes = (time.monotonic() - started) / 60.0
+        finished.append((learner, folder, (time.monotonic() - started) / 60.0))
+    # The pages are written once every learner's sessions have run: pages written into the work
+    # tree between two learners made the next learner's sessions record a "-dirty" version,
+    # which a --resume of that learner then refused to keep.
+    for learner, folder, minutes in finished:
         out = pathlib.Path(options.out) / ('' if learner == 'ppo' else learner)
         note = (f'Rerun by scripts/rerun_study.py at git {version}'
                 f'{" (resumed: see the runs above)" if options.resume else ""}, learner '
