@@ -146,10 +146,10 @@ def run_session(settings: SessionSettings, options) -> int:
     context = Context()
     rclpy.init(context=context, domain_id=options.domain_id,
                signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    progress = Progress(context, sys.stdout.isatty())
-    progress.max_training_episodes = parameters['agent'].get('max_training_episodes')  # issue 25
-    progress.evaluation_episodes = parameters['agent'].get(
-        'evaluation_episodes', AgentParams.evaluation_episodes)
+    progress = Progress(context, sys.stdout.isatty(),
+                        max_training_episodes=parameters['agent'].get('max_training_episodes'),
+                        evaluation_episodes=parameters['agent'].get(
+                            'evaluation_episodes', AgentParams.evaluation_episodes))
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(progress.node)
     guard = (InputGuard(progress.node, live_input, parameters['human'].get('device', ''),

@@ -24,9 +24,14 @@ def episode_label(summary) -> str:
 class Progress:
     """Listens to /hrc/session and /hrc/episode and prints what happens (one rclpy node)."""
 
-    def __init__(self, context, interactive: bool):
+    def __init__(self, context, interactive: bool, max_training_episodes=None,
+                 evaluation_episodes: int = 0):
+        """``max_training_episodes`` (None: no cap) and ``evaluation_episodes`` are the agent's
+        parameters of the session, said in the verdict when training ends unconverged."""
         self.node = rclpy.create_node('session_runner', context=context)
         self.interactive = interactive
+        self.max_training_episodes = max_training_episodes
+        self.evaluation_episodes = evaluation_episodes
         self.status = None
         self.episodes = []
         self.started = time.monotonic()
@@ -89,7 +94,7 @@ class Progress:
         training = [summary for summary in self.episodes if not summary.evaluation]
         if training and training[-1].converged:
             return
-        cap = getattr(self, 'max_training_episodes', None)
+        cap = self.max_training_episodes
         current = training[-1].training_step if training else status.training_step
         step = f'training step {current + 1} of {max(status.training_step_count, 1)}'
         never = ('; the person never trained with the robot' if status.human_subtasks
@@ -98,7 +103,7 @@ class Progress:
         # the newest status): the test episodes follow training all the same when there are any.
         phase = phase_label(status.phase, '')
         tests_follow = phase == 'evaluation' or (
-            phase == 'done' and getattr(self, 'evaluation_episodes', 0) > 0)
+            phase == 'done' and self.evaluation_episodes > 0)
         self._print(f'[session] the robot did not converge in {status.total_episodes} '
                     f'episodes ({step}' + (f', at most {cap}' if cap else '') + ')' + never
                     + ('; the test episodes start' if tests_follow else ''), permanent=True)

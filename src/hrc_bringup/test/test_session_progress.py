@@ -27,8 +27,7 @@ def test_the_verdict_waits_for_the_episodes_when_the_status_comes_first(capsys):
     context = Context()
     rclpy.init(context=context)
     try:
-        progress = Progress(context, interactive=False)
-        progress.max_training_episodes = 2
+        progress = Progress(context, interactive=False, max_training_episodes=2)
         ended = SessionStatus(case_id=2, strategy='responsibility_guided', training_step=1,
                               training_step_count=2, total_episodes=2, human_involved=True,
                               phase=SessionStatus.PHASE_EVALUATION, human_subtasks=['ball'])
@@ -58,9 +57,8 @@ def test_a_runner_that_first_sees_the_session_done_still_says_the_test_episodes_
     rclpy.init(context=context)
     try:
         for evaluation_episodes, suffix in ((1, True), (0, False)):
-            progress = Progress(context, interactive=False)
-            progress.max_training_episodes = 2
-            progress.evaluation_episodes = evaluation_episodes
+            progress = Progress(context, interactive=False, max_training_episodes=2,
+                                evaluation_episodes=evaluation_episodes)
             done = SessionStatus(case_id=2, strategy='responsibility_guided', training_step=1,
                                  training_step_count=2, total_episodes=2, human_involved=True,
                                  phase=SessionStatus.PHASE_DONE, human_subtasks=['ball'])

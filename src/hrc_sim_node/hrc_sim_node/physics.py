@@ -155,6 +155,7 @@ import tempfile
 
 import numpy
 
+from hrc_common.contract import SimLimits
 from hrc_common.params import checked, param
 from hrc_sim_node.body_geometry import BEAM_HEIGHT, model_urdf
 
@@ -230,8 +231,11 @@ class PhysicsParams:
 
     @property
     def human_slices(self) -> int:
-        """Slices of a control period in which the human's command is applied anew (>= 1)."""
-        return max(1, int(round(self.control_period / self.human_period)))
+        """Slices of a control period in which the human's command is applied anew (>= 1).
+
+        The one rule is ``SimLimits.human_slices`` (hrc_common.contract).
+        """
+        return SimLimits.of(self).human_slices
 
     @property
     def substeps_per_slice(self) -> int:

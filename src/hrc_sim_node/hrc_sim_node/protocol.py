@@ -157,10 +157,11 @@ class ProtocolSettings:
 
     @property
     def human_slices(self) -> int:
-        """Human slices per control period (1: the human acts once a period)."""
-        if not self.human_period:
-            return 1
-        return max(1, int(round(self.control_period / self.human_period)))
+        """Human slices per control period (1: the human acts once a period).
+
+        The one rule is ``SimLimits.human_slices`` (hrc_common.contract).
+        """
+        return SimLimits.of(self).human_slices
 
 
 class StepProtocol:
