@@ -26,8 +26,11 @@ class Progress:
 
     def __init__(self, context, interactive: bool, max_training_episodes=None,
                  evaluation_episodes: int = 0):
-        """``max_training_episodes`` (None: no cap) and ``evaluation_episodes`` are the agent's
-        parameters of the session, said in the verdict when training ends unconverged."""
+        """Listen on ``context``; the agent's session parameters go into the verdict.
+
+        ``max_training_episodes`` (None: no cap) and ``evaluation_episodes`` are said when
+        training ends unconverged.
+        """
         self.node = rclpy.create_node('session_runner', context=context)
         self.interactive = interactive
         self.max_training_episodes = max_training_episodes
