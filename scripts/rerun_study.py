@@ -47,9 +47,14 @@ import subprocess
 import sys
 import time
 
-from hrc_common.contract import case_ids
-from hrc_common.session_plan import STUDY_LEARNING
-from hrc_study.loading import load_sessions
+try:
+    from hrc_common.contract import case_ids
+    from hrc_common.session_plan import STUDY_LEARNING
+    from hrc_study.loading import load_sessions
+except ModuleNotFoundError as missing:   # started without the workspace's environment
+    print(f'rerun_study: {missing}: run `make setup` once, then `source scripts/env.sh` in this '
+          'shell', file=sys.stderr)
+    sys.exit(2)
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 # The study's learning settings: hrc_common.session_plan.STUDY_LEARNING (issue 22; why there).

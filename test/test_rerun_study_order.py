@@ -3,7 +3,8 @@
 Pages written into the work tree between the PPO and the SAC arm made the SAC sessions record
 a "-dirty" version, so `--resume` of the SAC arm refused to keep them (found on 2026-12-02: 91
 finished SAC sessions would have run again). The experiment, the spot check and hrc_results are
-replaced by recorders here: the order of the calls is what is tested.
+replaced by recorders here: the order of the calls is what is tested. Also: started without
+the workspace's environment, the script says what to run (exit 2) instead of a traceback.
 """
 
 import importlib.util
@@ -46,3 +47,19 @@ def test_every_learner_runs_before_any_page_is_written(tmp_path, monkeypatch):
     assert code == 0
     assert [kind for kind, _ in calls] == ['run', 'check', 'run', 'check', 'pages', 'pages'], calls
     assert calls[-2:] == [('pages', str(tmp_path)), ('pages', str(tmp_path / 'sac'))]
+
+
+def test_started_without_the_workspace_it_says_what_to_run_and_exits_2():
+    """Without scripts/env.sh the hrc packages are not importable: a sentence, no traceback."""
+    import os
+    import subprocess
+    import sys
+
+    environment = {name: value for name, value in os.environ.items()
+                   if name not in ('PYTHONPATH', 'AMENT_PREFIX_PATH')}
+    finished = subprocess.run([sys.executable, str(SCRIPT), '--help'], env=environment,
+                              capture_output=True, text=True, timeout=60)
+    assert finished.returncode == 2, finished
+    assert 'Traceback' not in finished.stderr
+    assert "No module named 'hrc_" in finished.stderr
+    assert 'source scripts/env.sh' in finished.stderr
