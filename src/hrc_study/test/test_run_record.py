@@ -37,3 +37,20 @@ def test_one_run_reads_as_before():
     text = '\n'.join(run_record_lines(experiment))
     assert 'runs of the same folder' not in text and 'run by\n' in text
     assert '1 of 1 planned sessions finished in 2.0 min wall on 2 CPUs (then, git 2c854d5)' in text
+
+
+def test_the_wall_target_times_the_papers_six_cases_and_says_what_ran_beside_them():
+    """With cases 7 and 8 in the sweep, #12's row timed the last of 80 sessions as '60'.
+
+    Here cases 7 and 8 finish last (at 900 s): the row must time the paper's 60 sessions (the
+    last at 60 + 9 * 10 + 6 = 156 s) and say that 20 other sessions ran beside them.
+    """
+    outcomes = [_outcome(case, seed, after=60.0 + seed * 10 + case) for case in range(1, 7)
+                for seed in range(10)]
+    outcomes += [_outcome(case, seed, after=900.0) for case in (7, 8) for seed in range(10)]
+    experiment = {'outcomes': outcomes, 'wall_seconds': 900.0, 'sessions': 80,
+                  'engine': 'inprocess', 'executor': 'local process pool (2 workers)'}
+    target, measured, met = wall_target(experiment)
+    assert measured.startswith('2.6 min wall for the 60 sessions of profile paper'), measured
+    assert '20 other sessions of the sweep ran beside them' in measured
+    assert met is True
