@@ -286,7 +286,8 @@ class AgentCore:
         if mode == self.learner.mode or self.off_policy:
             return       # SAC learns inside act() itself (sac_update_at), never in a thread
         self._settle_learner()
-        self.learner = make_learner(mode, self.ppo)
+        self.learner = make_learner(mode, self.ppo, self.params.learner_niceness,
+                                    self.params.learner_switch_interval)
 
     @property
     def limits(self) -> SimLimits:

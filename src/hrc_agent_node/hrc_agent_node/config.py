@@ -118,6 +118,16 @@ class AgentParams:
         'cut at the step boundary where it holds horizon samples (bootstrapped from V of that '
         'state) and the update runs before the action for that state',
         choices=UPDATE_RULES)
+    learner_niceness: int = param(
+        10, "Realtime episodes (PPO updates in the learner thread): how much lower the learner "
+        "thread's scheduling priority (nice) is than the node's, so that on a machine with few "
+        "cores the control steps of the sim, the person and the agent run first; 0 = the same "
+        'priority (before)', low=0, high=19)
+    learner_switch_interval: float = param(
+        0.0005, "Realtime episodes: the interpreter's thread switch interval (s) while a PPO "
+        'update runs in the learner thread, about the longest the control thread waits for the '
+        "interpreter lock; 0 = leave Python's (5 ms unless HRC_REALTIME_PRIORITY set 0.5 ms; "
+        'before)', low=0.0, high=0.1)
     minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)
     epochs: int = param(3, 'Epochs per update (Table I)', low=1, high=100)
     learning_rate: float = param(0.001, 'Adam learning rate (Table I)', low=1e-7, high=1.0)

@@ -21,8 +21,17 @@ The learned object (``agent``, the PPO learner) needs ``update(buffer) -> dict``
 from the old policy; PPO's clipped ratio is computed against the log-probabilities they were
 drawn with, so they stay valid for the next update (slightly off-policy, as any asynchronous
 actor-learner).
+
+On a machine with few cores the update competes with the control steps for the CPU and, inside
+the agent's process, for the interpreter lock. So the learner thread lowers its own scheduling
+priority (``niceness``: Linux keeps a nice value per thread) and, while an update runs, the
+interpreter's switch interval is shortened (``switch_interval``) so that the control thread
+waits at most about that long for the lock; both back to what they were when the update is
+swapped in. 0 for either: as before.
 """
 
+import os
+import sys
 import threading
 
 LEARNER_MODES = ('synchronous', 'background')
@@ -59,11 +68,19 @@ class BackgroundLearner:
 
     mode = 'background'
 
-    def __init__(self, agent):
+    def __init__(self, agent, niceness: int = 0, switch_interval: float = 0.0):
+        """Learn for ``agent`` in a thread; see the module docstring for the two settings.
+
+        ``niceness``: added to the learner thread's nice value; ``switch_interval`` (s): the
+        interpreter's while an update runs (0: unchanged).
+        """
         self.agent = agent
+        self.niceness = int(niceness)
+        self.switch_interval = float(switch_interval)
         self._thread = None
         self._stats = None
         self._error = None
+        self._switch_interval_before = None
 
     @property
     def busy(self) -> bool:
@@ -78,11 +95,15 @@ class BackgroundLearner:
         self._stats, self._error = None, None
 
         def run():
+            lower_this_threads_priority(self.niceness)
             try:
                 self._stats = self.agent.update(buffer)
             except BaseException as error:  # noqa: B902 - re-raised in the control thread
                 self._error = error
 
+        if self.switch_interval > 0:
+            self._switch_interval_before = sys.getswitchinterval()
+            sys.setswitchinterval(min(self.switch_interval, self._switch_interval_before))
         self._thread = threading.Thread(target=run, name='hrc-learner', daemon=True)
         self._thread.start()
         return None
@@ -102,6 +123,9 @@ class BackgroundLearner:
     def _finish(self):
         self._thread.join()
         self._thread = None
+        if self._switch_interval_before is not None:
+            sys.setswitchinterval(self._switch_interval_before)
+            self._switch_interval_before = None
         self.agent.release_actor()
         if self._error is not None:
             error, self._error = self._error, None
@@ -110,10 +134,29 @@ class BackgroundLearner:
         return stats
 
 
-def make_learner(mode: str, agent):
-    """Return the learner of ``mode`` (one of LEARNER_MODES) for ``agent``."""
+def lower_this_threads_priority(niceness: int) -> None:
+    """Add ``niceness`` to the calling thread's nice value (at most 19; Linux: per thread).
+
+    Best effort: where the system has no per-thread nice value or refuses, nothing changes
+    (lowering one's own priority needs no privilege on Linux).
+    """
+    if niceness <= 0 or not hasattr(os, 'setpriority'):
+        return
+    thread = threading.get_native_id()
+    try:
+        os.setpriority(os.PRIO_PROCESS, thread,
+                       min(19, os.getpriority(os.PRIO_PROCESS, thread) + niceness))
+    except OSError:
+        pass
+
+
+def make_learner(mode: str, agent, niceness: int = 0, switch_interval: float = 0.0):
+    """Return the learner of ``mode`` (one of LEARNER_MODES) for ``agent``.
+
+    ``niceness`` and ``switch_interval``: the background learner's (see the module docstring).
+    """
     if mode == 'synchronous':
         return SynchronousLearner(agent)
     if mode == 'background':
-        return BackgroundLearner(agent)
+        return BackgroundLearner(agent, niceness, switch_interval)
     raise ValueError(f'learner mode {mode!r} is not one of {LEARNER_MODES}')
