@@ -26,6 +26,9 @@ thread), and prints both and their ratio::
 
     python bench/realtime_jitter.py --compare-learning --rounds 2
 
+``--learner-before`` adds a third arm to each round: the same updates with the learner thread
+as it was before it yielded to the control thread (same priority, Python's switch interval).
+
 ``--realtime-priority N`` (issue 24) runs the session's nodes on SCHED_FIFO at priority N
 (``HRC_REALTIME_PRIORITY``, hrc_common.nodes) and this listener's threads at the same priority,
 so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
@@ -203,6 +206,8 @@ def report(figures: dict, label: str = '') -> None:
 
 # The two arms of --compare-learning: the agent's settings of each.
 NO_UPDATE_INSIDE = ('agent.update_rule=horizon_or_episode_end', 'agent.horizon=1000000')
+# The learner thread before it yielded to the control thread (--learner-before).
+LEARNER_BEFORE = ('agent.learner_niceness=0', 'agent.learner_switch_interval=0')
 
 
 def settings_line(args) -> str:
@@ -234,6 +239,10 @@ def main() -> int:
                         help='run without and with PPO updates inside episodes, alternately')
     parser.add_argument('--rounds', type=int, default=1,
                         help='rounds of the comparison (each: one session of each arm)')
+    parser.add_argument('--learner-before', action='store_true',
+                        help='a third arm: the updates inside episodes with the learner thread '
+                             "as before issue 22's priority fix (agent.learner_niceness=0, "
+                             'agent.learner_switch_interval=0)')
     parser.add_argument('--inside-horizon', type=int, default=64,
                         help='steps between updates inside an episode in the learning arm '
                              '(default 64: 3 updates in a 200-step episode)')
@@ -255,10 +264,12 @@ def main() -> int:
         report(figures)
         return 0
 
+    inside = ['agent.update_rule=horizon_or_episode_end', f'agent.horizon={args.inside_horizon}']
     arms = {'no updates inside episodes': list(args.settings) + list(NO_UPDATE_INSIDE),
-            f'updates every {args.inside_horizon} steps': list(args.settings) + [
-                'agent.update_rule=horizon_or_episode_end',
-                f'agent.horizon={args.inside_horizon}']}
+            f'updates every {args.inside_horizon} steps': list(args.settings) + inside}
+    if args.learner_before:
+        arms[f'updates every {args.inside_horizon} steps, learner as before'] = (
+            list(args.settings) + inside + list(LEARNER_BEFORE))
     results = {label: [] for label in arms}
     for round_index in range(args.rounds):
         for label, settings in arms.items():
@@ -281,8 +292,9 @@ def main() -> int:
         print(f'  {label}: period jitter p99 {p99[label]:.2f} ms (rounds: {each}), command '
               f'latency p99 ' + ', '.join(f'{actor} {value:.2f} ms'
                                           for actor, value in latency.items()))
-    without, with_updates = p99.values()
-    print(f'jitter p99 with / without updates inside episodes: {with_updates / without:.2f}x')
+    without, *with_updates = p99.values()
+    for label, value in zip(list(p99)[1:], with_updates):
+        print(f'jitter p99 {label} / no updates inside episodes: {value / without:.2f}x')
     return 0
 
 
