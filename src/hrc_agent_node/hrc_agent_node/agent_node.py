@@ -164,6 +164,10 @@ class AgentNode(Node):
         self.states_before_limits = []  # states that came before the first reset response
         self.reset_requested_at = None
         self.reset_future = None
+        self.reset_request = None       # the last reset asked for (asked again on retry)
+        self.reset_retry_at = None      # monotonic s: ask again (the sim's writer not matched)
+        self.state_readers_wanted = 0   # readers of /hrc/state the first reset waits for
+        self.state_readers_since = None
         self.waiting_since = time.monotonic()
         self.named_nodes_since = None   # when the nodes of wait_for_subscribers were first seen
         self.exit_at = None
@@ -194,6 +198,9 @@ class AgentNode(Node):
             return
         if self.core.phase == 'paused':
             return
+        if self.reset_retry_at is not None and now >= self.reset_retry_at:
+            self.reset_retry_at = None
+            self.call_reset(self.reset_request)
         if not self.core.in_episode and self.reset_future is None:
             if self.core.phase == 'updating' or (now < self.next_episode_at and
                                                  self.next_clock_mode() == 'realtime'):
@@ -286,6 +293,7 @@ class AgentNode(Node):
             if matched >= len(session_readers) \
                     and self.session_pub.wait_for_all_acked(Duration(seconds=0)):
                 self.subscribers_seen = True
+                self.want_state_readers(now)
                 return False
             if now - self.named_nodes_since > SESSION_MATCH_GRACE_S:
                 # A reader that never matches (another type or QoS, e.g. a tool) must not hold
@@ -295,12 +303,31 @@ class AgentNode(Node):
                     f'{matched} matched (not all acknowledging the first announcement) after '
                     f'{SESSION_MATCH_GRACE_S:g} s: starting anyway')
                 self.subscribers_seen = True
+                self.want_state_readers(now)
                 return False
             return True
         if now - self.waiting_since > self.params.reset_timeout:
             self.abort(f'{", ".join(missing)} did not subscribe to {topics.STATE} and '
                        f'{topics.SESSION} within {self.params.reset_timeout} s')
         return True
+
+    def want_state_readers(self, now: float) -> None:
+        """Ask the first reset to wait until the sim has matched every reader of the states.
+
+        The readers this node's graph shows (itself, the human node, the recorder, a display)
+        may not all be matched by the sim's writer yet: discovery runs pairwise, and a recorder
+        the sim found late missed the first lockstep episodes (seen under load: episodes 0-4,
+        0.35 s in all, were not in the bag). A reader that never matches gets
+        SESSION_MATCH_GRACE_S.
+        """
+        self.state_readers_wanted = len(self.get_subscriptions_info_by_topic(topics.STATE))
+        self.state_readers_since = now
+
+    def call_reset(self, request) -> None:
+        """Ask the sim to reset for ``request`` (kept, to ask again when the sim says retry)."""
+        self.reset_request = request
+        self.reset_future = self.reset_client.call_async(request)
+        self.reset_future.add_done_callback(self.on_reset_done)
 
     def start_episode(self):
         """Begin the next episode in the core and ask the sim to reset for it."""
@@ -327,9 +354,10 @@ class AgentNode(Node):
                              + self.core.status_line())
         self.session_pub.wait_for_all_acked(Duration(seconds=ANNOUNCE_ACK_TIMEOUT_S))
         request = ResetEpisode.Request(seed=plan.seed, episode=plan.episode,
-                                       clock_mode=self.next_clock_mode())
-        self.reset_future = self.reset_client.call_async(request)
-        self.reset_future.add_done_callback(self.on_reset_done)
+                                       clock_mode=self.next_clock_mode(),
+                                       state_readers=self.state_readers_wanted)
+        self.state_readers_wanted = 0   # the first episode only: the readers are matched then
+        self.call_reset(request)
 
     def on_reset_done(self, future):
         """Report a refused reset (the states of the new episode arrive on /hrc/state)."""
@@ -338,6 +366,16 @@ class AgentNode(Node):
             response = future.result()
         except Exception as error:  # the service call itself failed
             self.abort(f'reset call failed: {error}')
+            return
+        if not response.success and response.retry:
+            request = self.reset_request
+            waited = time.monotonic() - (self.state_readers_since or 0.0)
+            if waited > SESSION_MATCH_GRACE_S:
+                self.get_logger().warning(
+                    f'{response.message} after {SESSION_MATCH_GRACE_S:g} s: starting anyway')
+                request.state_readers = 0
+            self.reset_request = request
+            self.reset_retry_at = time.monotonic() + TICK_S
             return
         if not response.success:
             self.abort(f'the sim refused the reset: {response.message}')

@@ -373,8 +373,11 @@ def test_the_first_episode_waits_until_the_session_readers_have_the_first_announ
         session_pub=SessionWriter(), named_nodes_since=None, waiting_since=0.0,
         get_subscriptions_info_by_topic=lambda topic: readers,
         get_logger=lambda: types.SimpleNamespace(warning=logged.append))
+    node.want_state_readers = lambda now: AgentNode.want_state_readers(node, now)
     wait = AgentNode.missing_subscribers
     assert wait(node, 1.0) is True            # both matched, the history not acknowledged yet
     node.session_pub.acknowledged = True
     assert wait(node, 1.5) is False           # acknowledged: the first episode may start
     assert node.subscribers_seen and not logged
+    # and its reset will wait until the sim's state writer matched every reader seen here
+    assert (node.state_readers_wanted, node.state_readers_since) == (2, 1.5)

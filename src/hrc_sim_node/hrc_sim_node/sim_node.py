@@ -251,6 +251,15 @@ class SimNode(Node):
             response.message = 'reset refused: ' + '; '.join(reasons)
             self.get_logger().error(response.message)
             return response
+        # A reader that the agent's graph shows but this writer has not matched yet (a recorder
+        # discovered late) would miss the episode's states: lockstep episodes alone can run in
+        # well under a second. The agent asks for its first episode to wait until they match.
+        response.state_readers_matched = self._state_pub.get_subscription_count()
+        if response.state_readers_matched < request.state_readers:
+            response.success, response.retry = False, True
+            response.message = (f'not started: {response.state_readers_matched} of '
+                                 f'{request.state_readers} readers of {topics.STATE} matched')
+            return response
         if request.clock_mode:
             abandoned = self.protocol.active
             if abandoned:

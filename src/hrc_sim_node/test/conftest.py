@@ -76,10 +76,11 @@ class SimClient:
         # discovery a moment to finish both ways.
         self.spin(0.5)
 
-    def reset(self, seed: int = -1, episode: int = 0, clock_mode: str = ''):
+    def reset(self, seed: int = -1, episode: int = 0, clock_mode: str = '',
+              state_readers: int = 0):
         """Call /hrc/sim/reset and return the response."""
-        future = self.reset_client.call_async(ResetEpisode.Request(seed=seed, episode=episode,
-                                                                   clock_mode=clock_mode))
+        future = self.reset_client.call_async(ResetEpisode.Request(
+            seed=seed, episode=episode, clock_mode=clock_mode, state_readers=state_readers))
         assert self.wait(future.done, 10.0), 'no answer from /hrc/sim/reset'
         return future.result()
 

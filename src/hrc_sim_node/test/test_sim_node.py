@@ -322,6 +322,27 @@ def test_a_reset_switches_the_clock_mode_and_reports_what_the_sim_owns(start_nod
     assert printed(process, 'clock mode switched to lockstep')
 
 
+def test_a_reset_waits_until_the_state_writer_has_matched_the_readers_asked_for(
+        start_node, sim_client):
+    """A reader the agent sees but the sim has not matched yet would miss the first states.
+
+    Seen under load: the recorder matched the sim's /hrc/state writer 0.5 s after the agent's
+    topics, and the five lockstep episodes the robot ran alone meanwhile were not in the bag.
+    The agent's first reset now names the readers it sees; the sim starts no episode (and
+    publishes nothing) until its writer has matched that many, and says retry.
+    """
+    start_sim(start_node, sim_client, control_period=0.1, episode_duration=20.0, **PATIENT)
+    waiting = sim_client.reset(seed=0, episode=0, state_readers=5)
+    assert not waiting.success and waiting.retry
+    assert waiting.state_readers_matched == 1      # this test's reader of /hrc/state
+    assert 'not started: 1 of 5 readers of /hrc/state matched' in waiting.message
+    sim_client.spin(0.5)
+    assert sim_client.states == []                 # no episode started, no state published
+    started = sim_client.reset(seed=0, episode=0, state_readers=1)
+    assert started.success and not started.retry and started.state_readers_matched == 1
+    assert sim_client.wait(lambda: len(sim_client.states) == 1)
+
+
 def test_the_last_uint32_episode_index_holds_instead_of_wrapping(start_node, sim_client):
     process = start_sim(start_node, sim_client, episode_duration=0.2, auto_reset=True,
                         expected_actors=[], marker_rate=0.0)
