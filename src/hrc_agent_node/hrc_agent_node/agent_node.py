@@ -367,15 +367,13 @@ class AgentNode(Node):
         except Exception as error:  # the service call itself failed
             self.abort(f'reset call failed: {error}')
             return
-        if not response.success and response.retry:
-            request = self.reset_request
-            waited = time.monotonic() - (self.state_readers_since or 0.0)
-            if waited > SESSION_MATCH_GRACE_S:
+        if not response.success and response.retry:   # only the first reset asks to wait
+            now = time.monotonic()
+            if now - self.state_readers_since > SESSION_MATCH_GRACE_S:
                 self.get_logger().warning(
                     f'{response.message} after {SESSION_MATCH_GRACE_S:g} s: starting anyway')
-                request.state_readers = 0
-            self.reset_request = request
-            self.reset_retry_at = time.monotonic() + TICK_S
+                self.reset_request.state_readers = 0
+            self.reset_retry_at = now + TICK_S
             return
         if not response.success:
             self.abort(f'the sim refused the reset: {response.message}')

@@ -381,3 +381,32 @@ def test_the_first_episode_waits_until_the_session_readers_have_the_first_announ
     assert node.subscribers_seen and not logged
     # and its reset will wait until the sim's state writer matched every reader seen here
     assert (node.state_readers_wanted, node.state_readers_since) == (2, 1.5)
+
+
+def test_a_reset_the_sim_has_not_started_is_asked_again_and_after_the_grace_without_waiting():
+    """The sim says retry while its state writer lacks readers: ask again a tick later.
+
+    After SESSION_MATCH_GRACE_S the reset asks without waiting (a reader that never matches
+    must not hold the session).
+    """
+    import time
+    import types
+
+    from hrc_agent_node.agent_node import AgentNode, SESSION_MATCH_GRACE_S, TICK_S
+    from hrc_msgs.srv import ResetEpisode
+
+    logged = []
+    request = ResetEpisode.Request(episode=0, state_readers=3)
+    node = types.SimpleNamespace(reset_request=request, reset_future=object(),
+                                 reset_retry_at=None, state_readers_since=time.monotonic(),
+                                 get_logger=lambda: types.SimpleNamespace(warning=logged.append))
+    waiting = ResetEpisode.Response(success=False, retry=True,
+                                    message='not started: 2 of 3 readers of /hrc/state matched')
+    done = types.SimpleNamespace(result=lambda: waiting)
+    before = time.monotonic()
+    AgentNode.on_reset_done(node, done)
+    assert node.reset_future is None and node.reset_retry_at >= before + TICK_S
+    assert request.state_readers == 3 and not logged
+    node.state_readers_since -= SESSION_MATCH_GRACE_S + 1.0
+    AgentNode.on_reset_done(node, done)
+    assert request.state_readers == 0 and 'starting anyway' in logged[0]
