@@ -70,13 +70,13 @@ import math
 
 import numpy as np
 
-from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.config import AgentParams
 from hrc_agent_node.episode_records import Decision, EpisodePlan, EpisodeResult, StepRecord
 from hrc_agent_node.learner import make_learner
 from hrc_agent_node.observation import applied_command, derive_seed, observation_of
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.sac import SAC
-from hrc_agent_node.strategies import load_cases, StrategyProgress
+from hrc_agent_node.strategies import session_case, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import checked
@@ -117,12 +117,7 @@ class AgentCore:
         if limits is not None:
             self.set_limits(limits)
         p = self.params
-        self.tree = tree or TaskTree.from_file(p.task_tree_file or share_file(TREE_FILE_NAME),
-                                               p.preset)
-        cases = cases or load_cases(p.cases_file or share_file(CASES_FILE_NAME), self.tree)
-        if p.case not in cases:
-            raise ValueError(f'case {p.case} is not defined; the cases file has {sorted(cases)}')
-        self.case = cases[p.case]
+        self.tree, self.case = session_case(p, tree, cases)
         self.progress = StrategyProgress(self.case, self.tree, p.convergence_window,
                                          p.satisfied_window)
         self.observation_size = 7 if p.observe_rates else 4

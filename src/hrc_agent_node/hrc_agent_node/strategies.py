@@ -59,7 +59,8 @@ from dataclasses import dataclass
 
 from hrc_common.contract import check_case_table
 
-from hrc_agent_node.task_tree import load_data_file, TaskTreeError
+from hrc_agent_node.config import CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.task_tree import load_data_file, TaskTree, TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
 SELECTOR_PREFIX = 'direct:'
@@ -124,6 +125,21 @@ def load_cases(path, tree) -> dict:
     """Load every case of a cases file, resolved against ``tree``: {case id: Case}."""
     return load_data_file(path, 'cases file', CasesError,
                           lambda document: cases_from_dict(document, tree))
+
+
+def session_case(params, tree: TaskTree = None, cases: dict = None):
+    """Return ``(tree, Case)`` of an agent with ``params`` (AgentParams) without building it.
+
+    The task tree and cases files the parameters name (else the installed ones), resolved as the
+    agent resolves them. No torch: a runner asks what a case needs (the partners-first
+    pre-training) before it imports the learner.
+    """
+    tree = tree or TaskTree.from_file(params.task_tree_file or share_file(TREE_FILE_NAME),
+                                      params.preset)
+    cases = cases or load_cases(params.cases_file or share_file(CASES_FILE_NAME), tree)
+    if params.case not in cases:
+        raise ValueError(f'case {params.case} is not defined; the cases file has {sorted(cases)}')
+    return tree, cases[params.case]
 
 
 def cases_from_dict(document, tree) -> dict:

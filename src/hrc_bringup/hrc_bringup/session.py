@@ -43,11 +43,12 @@ import sys
 import time
 
 from hrc_agent_node.config import AgentParams
+from hrc_agent_node.strategies import session_case
 from hrc_common import paths
 from hrc_common.executables import executable_path
+from hrc_common.params import from_dict
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, NODES, SessionSettings, write_session_files
-from hrc_partners.partners_first import prepare_person_session
 import rclpy
 from rclpy.context import Context
 import yaml
@@ -65,6 +66,15 @@ from hrc_bringup.supervisor import describe_exit, Supervisor
 DISPLAY_ADDRESS_WAIT_S = 15.0
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
+
+
+def needs_pretraining(parameters: dict) -> bool:
+    """Return True when the session's case trains with simulated partners before the person.
+
+    ``parameters``: the composed {node: {...}}; the agent's are already checked.
+    """
+    agent = from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='', resume_from=''))
+    return session_case(agent)[1].has_population_steps
 
 
 def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
@@ -107,7 +117,12 @@ def run_session(settings: SessionSettings, options) -> int:
         # Partners first (cases 7, 8): the robot alone and with the simulated population in
         # this process first (no person: minutes), then the graph from that checkpoint.
         try:
-            start = prepare_person_session(parameters, run_dir)
+            start = None
+            if needs_pretraining(parameters):
+                # Imported here: the pre-training loads torch (1-2 s of every session's
+                # start-up before the nodes were launched), which no other case needs.
+                from hrc_partners.partners_first import prepare_person_session
+                start = prepare_person_session(parameters, run_dir)
         except (ValueError, OSError) as error:
             print(f'session: pre-training with simulated partners failed: {error}',
                   file=sys.stderr)

@@ -1,0 +1,139 @@
+#!/usr/bin/env python3
+"""How well can any robot of a strategy do with a person unlike the study's? (issue 22)
+
+The partners-first robustness target compares a robot's error with people unlike its training
+population (``hrc_partners.partners_first.unlike_people``: slower, heavier-handed, lapsing,
+timid) to its error with the person it trained for. This bench asks what that ratio would be
+for a robot that *did* train with the unlike person: each session of the paper's task-first
+strategy (case 2: the robot rotates, case 1: it translates) is run offline, in one process,
+with the study's learning settings (``hrc_common.session_plan.STUDY_LEARNING``) and the unlike
+person as the session's person, then its frozen policy is evaluated with that same person. The
+error with person N of the ``paper`` population (``person``) is the reference. A ratio well
+above 2x here means the team itself is worse with that person, whoever the robot trained with:
+the robustness target cannot be met for that trait by any policy this learner finds.
+
+    python bench/unlike_people_oracle.py --cases 2 --seeds 0 1 2 3 4 --parallel 2
+
+Prints one table per case: per person (the session's, then each unlike one) the sessions that
+converged, the person's (human-involved) episodes and the final evaluation's total error,
+median [min, max] over the seeds, and the median of the per-seed error ratios to ``person``.
+"""
+
+import argparse
+import json
+import multiprocessing
+import pathlib
+import statistics
+import sys
+
+import torch
+import yaml
+
+from hrc_agent_node.config import AgentParams
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.offline import run_session
+from hrc_agent_node.partners import person_period, SimulatedHumanPartner
+from hrc_common.contract import SimLimits
+from hrc_common.params import with_overrides
+from hrc_common.session_plan import STUDY_LEARNING
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.population import sample_person
+from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
+
+
+def study_settings() -> dict:
+    """Return the study's learning settings as AgentParams fields (without ``agent.``)."""
+    return {key.split('.', 1)[1]: value for key, value in STUDY_LEARNING.items()}
+
+
+def run_one(task: dict) -> dict:
+    """Train one session offline with ``task['who']`` as the person; return its numbers."""
+    torch.set_num_threads(1)
+    person = sample_person(load_profile(task['profile']), task['seed'])
+    people = dict(person=person, **unlike_people(person))
+    physics = PhysicsParams()
+    limits = SimLimits.of(physics)
+    params = with_overrides(AgentParams(), case=task['case'], seed=task['seed'],
+                            max_training_episodes=task['episodes'],
+                            evaluation_episodes=task['evaluation_episodes'],
+                            checkpoint_dir='', torch_threads=1,
+                            **dict(study_settings(), **task['overrides']))
+    core = AgentCore(params, limits=limits)
+    partner = SimulatedHumanPartner(people[task['who']], core.human_dof, task['seed'],
+                                    person_period(limits, 'human'))
+    with SliderPendulumBall(physics) as sim:
+        summary = run_session(core, sim, partner)
+    return dict(task, converged=bool(summary['converged']),
+                human=int(summary['human_involved_episodes']),
+                total=int(summary['training_episodes']),
+                error=float(summary['evaluation']['total_error']),
+                seconds=float(summary['wall_seconds']))
+
+
+def spread(values, digits: int = 3) -> str:
+    """Return 'median [min, max]'."""
+    values = list(values)
+    return (f'{statistics.median(values):.{digits}f} '
+            f'[{min(values):.{digits}f}, {max(values):.{digits}f}]')
+
+
+def main(argv=None) -> int:
+    """Run the sessions, print the tables; return 0."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--cases', type=int, nargs='+', default=[2],
+                        help='cases (default 2: task first, the robot rotates)')
+    parser.add_argument('--seeds', type=int, nargs='+', default=[0, 1, 2, 3, 4],
+                        help='seeds; seed N trains with person N of the profile (default 0-4)')
+    parser.add_argument('--people', nargs='+', choices=PEOPLE, default=list(PEOPLE),
+                        help='who the session trains with (default: all)')
+    parser.add_argument('--profile', default='paper', help='the population (default paper)')
+    parser.add_argument('--episodes', type=int, default=300, help='max training episodes')
+    parser.add_argument('--evaluation-episodes', type=int, default=3)
+    parser.add_argument('--set', nargs='*', default=[], metavar='NAME=VALUE',
+                        help='AgentParams overrides on top of the study settings')
+    parser.add_argument('--parallel', type=int, default=2, help='sessions at once')
+    parser.add_argument('--json', type=pathlib.Path, help='write every session here too')
+    args = parser.parse_args(argv)
+    if args.episodes < 1 or args.evaluation_episodes < 1 or args.parallel < 1:
+        print('unlike_people_oracle: --episodes, --evaluation-episodes and --parallel must '
+              'be >= 1', file=sys.stderr)
+        return 2
+    overrides = {name: yaml.safe_load(value) for name, value in
+                 (item.split('=', 1) for item in args.set)}
+    tasks = [dict(case=case, seed=seed, who=who, profile=args.profile, episodes=args.episodes,
+                  evaluation_episodes=args.evaluation_episodes, overrides=overrides)
+             for case in args.cases for seed in args.seeds for who in args.people]
+    print(f'unlike_people_oracle: {len(tasks)} sessions on {args.parallel} processes; '
+          f'settings {study_settings()} {overrides}', flush=True)
+    with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
+        results = []
+        for result in pool.imap_unordered(run_one, tasks):
+            results.append(result)
+            print(f"  case {result['case']} seed {result['seed']} {result['who']}: "
+                  f"{result['human']} person's episodes, error {result['error']:.4f}, "
+                  f"{'converged' if result['converged'] else 'not converged'}, "
+                  f"{result['seconds']:.0f} s", flush=True)
+    for case in args.cases:
+        rows = [r for r in results if r['case'] == case]
+        reference = {r['seed']: r['error'] for r in rows if r['who'] == 'person'}
+        print(f'\nCase {case}: trained and evaluated with the same person '
+              f'({len(args.seeds)} seeds)')
+        print("| person | converged | person's episodes | total error | ratio to `person` |")
+        print('|---|---|---|---|---|')
+        for who in args.people:
+            mine = [r for r in rows if r['who'] == who]
+            ratios = [r['error'] / reference[r['seed']] for r in mine if r['seed'] in reference]
+            ratio = f'{statistics.median(ratios):.2f}x' if ratios else '-'
+            print(f"| {who} | {sum(r['converged'] for r in mine)}/{len(mine)} | "
+                  f"{spread([r['human'] for r in mine], 0)} | "
+                  f"{spread([r['error'] for r in mine])} | {ratio} |")
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
