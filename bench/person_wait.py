@@ -1,0 +1,109 @@
+#!/usr/bin/env python3
+"""Issue 24: how long a person waits in task first while the robot learns alone, through the graph.
+
+    python bench/person_wait.py                                   # the issue's settings, 3 runs
+    python bench/person_wait.py --study --repeats 2               # the study's (make run's)
+    python bench/person_wait.py --repeats 1 -- --set agent.preset=graded   # more `hrc session` options
+
+Runs ``hrc session --case 2 --mode realtime`` (the graph: sim, agent, simulated human, recorder
+as processes over DDS; the robot-alone episodes of a realtime session run in lockstep, as fast
+as the graph goes) and times, from the command's start, the episode line at which the robot's
+alone step converged: what the person at the joystick waits before the first joint episode.
+Then the session is stopped (SIGINT). Prints per run: that time, the start-up (to the first
+episode's line, which comes when episode 0 ends), the robot-alone episodes, and at the end the
+median [min, max] over the runs.
+
+Settings: by default the issue's ("today's learning settings" when issue 24 was filed: the
+earlier update and judging rules, Table I's PPO, the ``tuned`` preset, a 300-episode cap; 92
+robot-alone episodes for seed 0); ``--study`` adds the study's settings
+(``hrc_common.session_plan.STUDY_LEARNING``, what ``make run`` uses).
+"""
+
+import argparse
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+from hrc_common.session_plan import study_learning_arguments
+
+ISSUE_SETTINGS = ['--episodes', '300', '--set', 'agent.preset=tuned']
+
+
+def one_run(arguments: list, timeout: float) -> dict:
+    """Run one session until its robot-alone step converged; return the times (s)."""
+    started = time.monotonic()
+    process = subprocess.Popen(['hrc', 'session', '--case', '2', '--mode', 'realtime',
+                                *arguments], stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    first_line = None
+    episodes = 0
+    result = {'converged': None, 'first_line': None, 'episodes': 0, 'line': ''}
+    try:
+        for line in process.stdout:
+            now = time.monotonic() - started
+            if now > timeout:
+                break
+            if '| episode' not in line:
+                continue
+            first_line = now if first_line is None else first_line
+            if 'step 1/' not in line:
+                break      # the person's step began without a converged robot-alone step
+            episodes += 1
+            if 'converged' in line:
+                result.update(converged=now, line=line.strip())
+                break
+    finally:
+        os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(30)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    result.update(first_line=first_line, episodes=episodes)
+    return result
+
+
+def main(argv=None) -> int:
+    """Run the sessions and print the times; return 0 (1 when a run never converged)."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--repeats', type=int, default=3, help='sessions run in turn (default 3)')
+    parser.add_argument('--study', action='store_true',
+                        help="the study's learning settings (make run's) instead of the issue's")
+    parser.add_argument('--timeout', type=float, default=600.0,
+                        help='give up on a run after this many seconds (default 600)')
+    parser.add_argument('session_options', nargs='*',
+                        help='more `hrc session` options, after --')
+    args = parser.parse_args(argv)
+    if args.repeats < 1 or args.timeout <= 0:
+        print('person_wait: --repeats must be >= 1 and --timeout > 0', file=sys.stderr)
+        return 2
+    settings = study_learning_arguments() if args.study else ISSUE_SETTINGS
+    with tempfile.TemporaryDirectory(prefix='person-wait-') as scratch:
+        arguments = ['--runs-dir', f'{scratch}/runs', '--bags-dir', f'{scratch}/bags',
+                     *settings, *args.session_options]
+        print(f'person_wait: hrc session --case 2 --mode realtime {" ".join(arguments)}',
+              flush=True)
+        waits = []
+        for run in range(args.repeats):
+            result = one_run(arguments, args.timeout)
+            if result['converged'] is None:
+                print(f'  run {run + 1}: the robot-alone step did not converge '
+                      f'({result["episodes"]} episodes)', flush=True)
+                continue
+            waits.append(result['converged'])
+            print(f'  run {run + 1}: robot-alone step converged {result["converged"]:.1f} s '
+                  f'after the start: start-up and episode 0 {result["first_line"]:.1f} s, '
+                  f'{result["episodes"]} robot-alone episodes', flush=True)
+    if not waits:
+        return 1
+    print(f'person_wait: the person waited median {statistics.median(waits):.1f} s '
+          f'[{min(waits):.1f}, {max(waits):.1f}] over {len(waits)} runs')
+    return 0 if len(waits) == args.repeats else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())
