@@ -3,7 +3,7 @@
 
     python bench/person_wait.py                                   # the settings, 3 runs
     python bench/person_wait.py --study --repeats 2               # the study's (make run's)
-    python bench/person_wait.py --repeats 1 -- --set agent.preset=graded   # more `hrc session` options
+    python bench/person_wait.py --repeats 1 -- --set agent.preset=graded   # more session options
 
 Runs ``hrc session --case 2 --mode realtime`` (the graph: sim, agent, simulated human, recorder
 as processes over DDS; the robot-alone episodes of a realtime session run in lockstep, as fast
