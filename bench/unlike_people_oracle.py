@@ -7,8 +7,11 @@ timid) to its error with the person it trained for. This bench asks what that ra
 for a robot that *did* train with the unlike person: each session of the paper's task-first
 strategy (case 2: the robot rotates, case 1: it translates) is run offline, in one process,
 with the study's learning settings (``hrc_common.session_plan.STUDY_LEARNING``) and the unlike
-person as the session's person, then its frozen policy is evaluated with that same person. The
-error with person N of the ``paper`` population (``person``) is the reference. A ratio well
+person as the session's person, then its frozen policy is evaluated with that same person twice:
+in the session's own final evaluation (the person as the session left them: practised, maybe
+tired) and offline with the person met afresh, as ``bench/partners_first.py`` evaluates the
+partners-first robots (so its ratios compare with that bench's). The error with person N of the
+``paper`` population (``person``) is the reference. A ratio well
 above 2x here means the team itself is worse with that person, whoever the robot trained with:
 the robustness target cannot be met for that trait by any policy this learner finds.
 
@@ -25,12 +28,14 @@ import multiprocessing
 import pathlib
 import statistics
 import sys
+import tempfile
 
 import torch
 import yaml
 
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.offline import run_session
 from hrc_agent_node.partners import person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
@@ -40,6 +45,9 @@ from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from partners_first import evaluate  # noqa: E402  (bench/partners_first.py: the same evaluation)
 
 PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
 
@@ -66,7 +74,14 @@ def run_one(task: dict) -> dict:
                                     person_period(limits, 'human'))
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
-    return dict(task, converged=bool(summary['converged']),
+    with tempfile.TemporaryDirectory(prefix='oracle-') as scratch:
+        checkpoint = pathlib.Path(scratch) / 'final.pt'
+        save_checkpoint(core, checkpoint)
+        # As bench/partners_first.py evaluates the partners-first robots: the frozen policy
+        # with the same person met afresh (new to the task), offline.
+        fresh = evaluate(checkpoint, people[task['who']], task['seed'],
+                         task['evaluation_episodes'])
+    return dict(task, converged=bool(summary['converged']), fresh_error=fresh,
                 human=int(summary['human_involved_episodes']),
                 total=int(summary['training_episodes']),
                 error=float(summary['evaluation']['total_error']),
@@ -78,6 +93,12 @@ def spread(values, digits: int = 3) -> str:
     values = list(values)
     return (f'{statistics.median(values):.{digits}f} '
             f'[{min(values):.{digits}f}, {max(values):.{digits}f}]')
+
+
+def median_ratio(rows, key: str, reference: dict) -> str:
+    """Return the median over seeds of row[key] / reference[seed], as '1.23x' ('-': none)."""
+    ratios = [row[key] / reference[row['seed']] for row in rows if row['seed'] in reference]
+    return f'{statistics.median(ratios):.2f}x' if ratios else '-'
 
 
 def main(argv=None) -> int:
@@ -119,17 +140,20 @@ def main(argv=None) -> int:
     for case in args.cases:
         rows = [r for r in results if r['case'] == case]
         reference = {r['seed']: r['error'] for r in rows if r['who'] == 'person'}
+        fresh_reference = {r['seed']: r['fresh_error'] for r in rows if r['who'] == 'person'}
         print(f'\nCase {case}: trained and evaluated with the same person '
               f'({len(args.seeds)} seeds)')
-        print("| person | converged | person's episodes | total error | ratio to `person` |")
-        print('|---|---|---|---|---|')
+        print("| person | converged | person's episodes | total error, the session's evaluation "
+              "| ratio to `person` | total error, the person met afresh | ratio to `person` |")
+        print('|---|---|---|---|---|---|---|')
         for who in args.people:
             mine = [r for r in rows if r['who'] == who]
-            ratios = [r['error'] / reference[r['seed']] for r in mine if r['seed'] in reference]
-            ratio = f'{statistics.median(ratios):.2f}x' if ratios else '-'
             print(f"| {who} | {sum(r['converged'] for r in mine)}/{len(mine)} | "
                   f"{spread([r['human'] for r in mine], 0)} | "
-                  f"{spread([r['error'] for r in mine])} | {ratio} |")
+                  f"{spread([r['error'] for r in mine])} | "
+                  f"{median_ratio(mine, 'error', reference)} | "
+                  f"{spread([r['fresh_error'] for r in mine])} | "
+                  f"{median_ratio(mine, 'fresh_error', fresh_reference)} |")
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))
     return 0
