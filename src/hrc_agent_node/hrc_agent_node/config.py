@@ -6,7 +6,7 @@ and documented choices where it does not. Mirrored in ``params/agent.yaml``.
 
 from dataclasses import dataclass
 
-from hrc_common.contract import id_problem, make_session_id
+from hrc_common.contract import id_problem, make_session_id, REALTIME_SWITCH_INTERVAL_S
 from hrc_common.paths import params_file
 from hrc_common.params import param
 
@@ -124,10 +124,10 @@ class AgentParams:
         "cores the control steps of the sim, the person and the agent run first; 0 = the same "
         'priority (before)', low=0, high=19)
     learner_switch_interval: float = param(
-        0.0005, "Realtime episodes: the interpreter's thread switch interval (s) while a PPO "
-        'update runs in the learner thread, about the longest the control thread waits for the '
-        "interpreter lock; 0 = leave Python's (5 ms unless HRC_REALTIME_PRIORITY set 0.5 ms; "
-        'before)', low=0.0, high=0.1)
+        REALTIME_SWITCH_INTERVAL_S, "Realtime episodes: the interpreter's thread switch "
+        'interval (s) while a PPO update runs in the learner thread, about the longest the '
+        "control thread waits for the interpreter lock; 0 = leave Python's (5 ms unless "
+        'HRC_REALTIME_PRIORITY set 0.5 ms; before)', low=0.0, high=0.1)
     minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)
     epochs: int = param(3, 'Epochs per update (Table I)', low=1, high=100)
     learning_rate: float = param(0.001, 'Adam learning rate (Table I)', low=1e-7, high=1.0)

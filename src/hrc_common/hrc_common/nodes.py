@@ -23,6 +23,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
 from rclpy.utilities import timeout_sec_to_nsec
 
+from hrc_common.contract import REALTIME_SWITCH_INTERVAL_S
 from hrc_common.params import (describe, node_parameter_problems, ParameterError,
                                parse_ros_arguments, RosArguments, set_process_arguments)
 
@@ -246,10 +247,8 @@ def make_executor(name: str, context=None):
 # it was not permitted and the node runs as before).
 REALTIME_PRIORITY_VARIABLE = 'HRC_REALTIME_PRIORITY'
 REALTIME_PRIORITY_RANGE = (1, 99)   # SCHED_FIFO's priorities on Linux
-# The interpreter's thread switch interval (s) while realtime scheduling is on: a thread that
-# holds the GIL (the agent's learner thread in a PPO update) is asked to hand it over after this
-# long instead of Python's default 5 ms, which the control thread would otherwise wait for.
-REALTIME_SWITCH_INTERVAL_S = 0.0005
+# The interpreter's thread switch interval while realtime scheduling is on:
+# hrc_common.contract.REALTIME_SWITCH_INTERVAL_S (imported above; the agent's learner uses it too).
 
 
 def realtime_priority_of(environ=None) -> tuple:
