@@ -75,7 +75,7 @@ def run_one(task: dict) -> dict:
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     with tempfile.TemporaryDirectory(prefix='oracle-') as scratch:
-        checkpoint = pathlib.Path(scratch) / 'final.pt'
+        checkpoint = pathlib.Path(scratch) / 'trained.pt'
         save_checkpoint(core, checkpoint)
         # As bench/partners_first.py evaluates the partners-first robots: the frozen policy
         # with the same person met afresh (new to the task), offline.

@@ -119,9 +119,9 @@ def run_session(settings: SessionSettings, options) -> int:
         try:
             start = None
             if needs_pretraining(parameters):
-                # Imported here: the pre-training loads torch (1-2 s of every session's
-                # start-up before the nodes were launched), which no other case needs.
-                from hrc_partners.partners_first import prepare_person_session
+                # The pre-training loads torch (1-2 s of every session's start-up before the
+                # nodes were launched), which no other case needs.
+                from hrc_partners.partners_first import prepare_person_session  # lazy: torch
                 start = prepare_person_session(parameters, run_dir)
         except (ValueError, OSError) as error:
             print(f'session: pre-training with simulated partners failed: {error}',
