@@ -20,12 +20,15 @@ robot-alone episodes for seed 0); ``--study`` adds the study's settings
 """
 
 import argparse
+import collections
 import os
+import shutil
 import signal
 import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 from hrc_common.session_plan import study_learning_arguments
@@ -41,12 +44,15 @@ def one_run(arguments: list, timeout: float) -> dict:
                                stderr=subprocess.STDOUT, text=True, start_new_session=True)
     first_line = None
     episodes = 0
+    last_lines = collections.deque(maxlen=8)
     result = {'converged': None, 'first_line': None, 'episodes': 0, 'line': ''}
+    # A session that hangs silently (no line) is stopped all the same.
+    watchdog = threading.Timer(timeout, os.killpg, (process.pid, signal.SIGINT))
+    watchdog.start()
     try:
         for line in process.stdout:
             now = time.monotonic() - started
-            if now > timeout:
-                break
+            last_lines.append(line.rstrip())
             if '| episode' not in line:
                 continue
             first_line = now if first_line is None else first_line
@@ -57,13 +63,16 @@ def one_run(arguments: list, timeout: float) -> dict:
                 result.update(converged=now, line=line.strip())
                 break
     finally:
-        os.killpg(process.pid, signal.SIGINT)
+        watchdog.cancel()
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGINT)
         try:
-            process.wait(30)
+            process.communicate(timeout=30)    # reads on: a long report cannot block the runner
         except subprocess.TimeoutExpired:
             os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-    result.update(first_line=first_line, episodes=episodes)
+            process.communicate()
+    result.update(first_line=first_line, episodes=episodes, exit_code=process.returncode,
+                  last_lines=list(last_lines))
     return result
 
 
@@ -81,6 +90,10 @@ def main(argv=None) -> int:
     if args.repeats < 1 or args.timeout <= 0:
         print('person_wait: --repeats must be >= 1 and --timeout > 0', file=sys.stderr)
         return 2
+    if shutil.which('hrc') is None:
+        print('person_wait: `hrc` is not on the PATH: run `source scripts/env.sh` first',
+              file=sys.stderr)
+        return 2
     settings = study_learning_arguments() if args.study else ISSUE_SETTINGS
     with tempfile.TemporaryDirectory(prefix='person-wait-') as scratch:
         arguments = ['--runs-dir', f'{scratch}/runs', '--bags-dir', f'{scratch}/bags',
@@ -90,6 +103,11 @@ def main(argv=None) -> int:
         waits = []
         for run in range(args.repeats):
             result = one_run(arguments, args.timeout)
+            if result['first_line'] is None and result['exit_code'] not in (0, None, -2):
+                print(f'person_wait: the session ended with exit code {result["exit_code"]} '
+                      'before its first episode:\n  ' + '\n  '.join(result['last_lines']),
+                      file=sys.stderr)
+                return 2
             if result['converged'] is None:
                 print(f'  run {run + 1}: the robot-alone step did not converge '
                       f'({result["episodes"]} episodes)', flush=True)

@@ -38,6 +38,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.offline import run_session
 from hrc_agent_node.partners import person_period, SimulatedHumanPartner
+from hrc_agent_node.strategies import session_case
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.session_plan import STUDY_LEARNING
@@ -113,8 +114,9 @@ def main(argv=None) -> int:
     parser.add_argument('--profile', default='paper', help='the population (default paper)')
     parser.add_argument('--episodes', type=int, default=300, help='max training episodes')
     parser.add_argument('--evaluation-episodes', type=int, default=3)
-    parser.add_argument('--set', nargs='*', default=[], metavar='NAME=VALUE',
-                        help='AgentParams overrides on top of the study settings')
+    parser.add_argument('--set', action='append', default=[], metavar='NAME=VALUE',
+                        help='an AgentParams override on top of the study settings '
+                        '(repeatable; agent.NAME=VALUE is accepted too)')
     parser.add_argument('--parallel', type=int, default=2, help='sessions at once')
     parser.add_argument('--json', type=pathlib.Path, help='write every session here too')
     args = parser.parse_args(argv)
@@ -122,8 +124,31 @@ def main(argv=None) -> int:
         print('unlike_people_oracle: --episodes, --evaluation-episodes and --parallel must '
               'be >= 1', file=sys.stderr)
         return 2
-    overrides = {name: yaml.safe_load(value) for name, value in
-                 (item.split('=', 1) for item in args.set)}
+    problems, overrides = [], {}
+    for item in args.set:
+        name, equals, value = item.partition('=')
+        if not equals:
+            problems.append(f'--set {item!r}: expected NAME=VALUE')
+            continue
+        overrides[name.removeprefix('agent.')] = yaml.safe_load(value)
+    for case in args.cases:
+        try:
+            params = with_overrides(AgentParams(), case=case,
+                                    **dict(study_settings(), **overrides))
+            if session_case(params)[1].has_population_steps:
+                problems.append(f'case {case}: trains with a population first (cases 7, 8: '
+                                'bench/partners_first.py); give a case of the paper')
+        except (ValueError, TypeError) as error:
+            problems.append(f'case {case}: {error}')
+    try:
+        load_profile(args.profile)
+    except (ValueError, KeyError, OSError) as error:
+        problems.append(f'--profile {args.profile}: {error}')
+    if args.json is not None and not args.json.parent.is_dir():
+        problems.append(f'--json {args.json}: no such folder {args.json.parent}')
+    if problems:
+        print('unlike_people_oracle: ' + '; '.join(problems), file=sys.stderr)
+        return 2
     tasks = [dict(case=case, seed=seed, who=who, profile=args.profile, episodes=args.episodes,
                   evaluation_episodes=args.evaluation_episodes, overrides=overrides)
              for case in args.cases for seed in args.seeds for who in args.people]

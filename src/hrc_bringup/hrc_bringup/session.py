@@ -77,6 +77,22 @@ def needs_pretraining(parameters: dict) -> bool:
     return session_case(agent)[1].has_population_steps
 
 
+def pretrain_if_needed(parameters: dict, run_dir):
+    """Pre-train a partners-first session (cases 7, 8); return its agent settings, else None.
+
+    ``hrc_partners.partners_first.prepare_person_session`` for a case that pre-trains; the other
+    cases return None without loading torch (1-2 s of every session's start-up before the
+    nodes were launched).
+    """
+    if not needs_pretraining(parameters):
+        return None
+    from hrc_partners.partners_first import prepare_person_session  # lazy: torch
+    try:
+        return prepare_person_session(parameters, run_dir)
+    except (ValueError, OSError) as error:
+        raise ValueError(f'pre-training with simulated partners failed: {error}') from error
+
+
 def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
     """Write a ROS 2 parameter file with a section per node."""
     path.write_text(yaml.safe_dump(
@@ -117,15 +133,9 @@ def run_session(settings: SessionSettings, options) -> int:
         # Partners first (cases 7, 8): the robot alone and with the simulated population in
         # this process first (no person: minutes), then the graph from that checkpoint.
         try:
-            start = None
-            if needs_pretraining(parameters):
-                # The pre-training loads torch (1-2 s of every session's start-up before the
-                # nodes were launched), which no other case needs.
-                from hrc_partners.partners_first import prepare_person_session  # lazy: torch
-                start = prepare_person_session(parameters, run_dir)
+            start = pretrain_if_needed(parameters, run_dir)
         except (ValueError, OSError) as error:
-            print(f'session: pre-training with simulated partners failed: {error}',
-                  file=sys.stderr)
+            print(f'session: {error}', file=sys.stderr)
             return 2
         if start is not None:
             parameters['agent'].update(start)

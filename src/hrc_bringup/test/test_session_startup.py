@@ -10,20 +10,39 @@ import pathlib
 import subprocess
 import sys
 
-from hrc_bringup.session import needs_pretraining
+from hrc_bringup.session import needs_pretraining, pretrain_if_needed
 from hrc_common.session_plan import compose, SessionSettings
 import pytest
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 
 
-def test_the_session_runner_module_loads_no_torch():
-    check = ('import json, sys; import hrc_bringup.session; '
-             "print(json.dumps('torch' in sys.modules))")
+CHECK = """
+import json, sys
+from hrc_bringup.session import pretrain_if_needed
+from hrc_common.session_plan import compose, SessionSettings
+import pathlib
+parameters = compose(SessionSettings(case=2, seed=0), pathlib.Path({params!r}))
+start = pretrain_if_needed(parameters, {run_dir!r})
+print(json.dumps({{'start': start, 'torch': 'torch' in sys.modules}}))
+"""
+
+
+def test_the_runner_prepares_a_case_without_pretraining_without_loading_torch(tmp_path):
+    check = CHECK.format(params=str(PARAMS_DIR), run_dir=str(tmp_path / 'run'))
     result = subprocess.run([sys.executable, '-c', check], capture_output=True, text=True,
                             timeout=120)
     assert result.returncode == 0, result.stderr
-    assert json.loads(result.stdout.splitlines()[-1]) is False
+    assert json.loads(result.stdout.splitlines()[-1]) == {'start': None, 'torch': False}
+
+
+def test_a_bad_cases_file_is_a_value_error_for_the_runner(tmp_path):
+    bad = tmp_path / 'cases.yaml'
+    bad.write_text('cases: {2: {strategy: nowhere, robot_action: rotation}}\n')
+    parameters = compose(SessionSettings(case=2, seed=0), PARAMS_DIR)
+    parameters['agent']['cases_file'] = str(bad)
+    with pytest.raises(ValueError, match='nowhere'):
+        pretrain_if_needed(parameters, tmp_path / 'run')
 
 
 @pytest.mark.parametrize('case, pretrains', [(1, False), (2, False), (3, False), (4, False),

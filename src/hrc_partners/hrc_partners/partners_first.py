@@ -314,7 +314,7 @@ def main(argv=None) -> int:
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
     try:
         start = prepare_person_session(parameters, run_dir)
-    except ParameterError as error:       # the cases file's population block
+    except ValueError as error:   # the cases file (its population block too), the task tree
         print(f'partners_first: {error}', file=sys.stderr)
         return 2
     if start is None:
