@@ -48,7 +48,7 @@ from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from partners_first import evaluate  # noqa: E402  (bench/partners_first.py: the same evaluation)
+from partners_first import evaluate, spread  # noqa: E402  (bench/partners_first.py: the same)
 
 PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
 
@@ -87,13 +87,6 @@ def run_one(task: dict) -> dict:
                 total=int(summary['training_episodes']),
                 error=float(summary['evaluation']['total_error']),
                 seconds=float(summary['wall_seconds']))
-
-
-def spread(values, digits: int = 3) -> str:
-    """Return 'median [min, max]'."""
-    values = list(values)
-    return (f'{statistics.median(values):.{digits}f} '
-            f'[{min(values):.{digits}f}, {max(values):.{digits}f}]')
 
 
 def median_ratio(rows, key: str, reference: dict) -> str:
@@ -174,10 +167,10 @@ def main(argv=None) -> int:
         for who in args.people:
             mine = [r for r in rows if r['who'] == who]
             print(f"| {who} | {sum(r['converged'] for r in mine)}/{len(mine)} | "
-                  f"{spread([r['human'] for r in mine], 0)} | "
-                  f"{spread([r['error'] for r in mine])} | "
+                  f"{spread(r['human'] for r in mine)} | "
+                  f"{spread(r['error'] for r in mine)} | "
                   f"{median_ratio(mine, 'error', reference)} | "
-                  f"{spread([r['fresh_error'] for r in mine])} | "
+                  f"{spread(r['fresh_error'] for r in mine)} | "
                   f"{median_ratio(mine, 'fresh_error', fresh_reference)} |")
     if args.json:
         args.json.write_text(json.dumps(results, indent=2))

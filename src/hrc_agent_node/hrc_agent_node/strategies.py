@@ -58,8 +58,9 @@ declares converged is the one evaluated afterwards.
 from dataclasses import dataclass
 
 from hrc_common.contract import check_case_table
+from hrc_common.params import from_dict
 
-from hrc_agent_node.config import CASES_FILE_NAME, share_file, TREE_FILE_NAME
+from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.task_tree import load_data_file, TaskTree, TaskTreeError
 
 ADVANCE_CONDITIONS = ('converged', 'lower_levels_satisfied')
@@ -140,6 +141,16 @@ def session_case(params, tree: TaskTree = None, cases: dict = None):
     if params.case not in cases:
         raise ValueError(f'case {params.case} is not defined; the cases file has {sorted(cases)}')
     return tree, cases[params.case]
+
+
+def pretrains_with_population(agent_parameters: dict) -> bool:
+    """Return True when the agent's case trains with simulated partners before the person.
+
+    ``agent_parameters``: the agent node's parameters ({name: value}, as a session composes
+    them). No torch: the session runner asks before it loads the pre-training (cases 7, 8).
+    """
+    params = from_dict(AgentParams, dict(agent_parameters, checkpoint_dir='', resume_from=''))
+    return session_case(params)[1].has_population_steps
 
 
 def cases_from_dict(document, tree) -> dict:

@@ -43,10 +43,9 @@ import sys
 import time
 
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.strategies import session_case
+from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common import paths
 from hrc_common.executables import executable_path
-from hrc_common.params import from_dict
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, NODES, SessionSettings, write_session_files
 import rclpy
@@ -68,15 +67,6 @@ DISPLAY_ADDRESS_WAIT_S = 15.0
 STOP_ORDER = ('agent', 'human', 'sim', 'recorder')
 
 
-def needs_pretraining(parameters: dict) -> bool:
-    """Return True when the session's case trains with simulated partners before the person.
-
-    ``parameters``: the composed {node: {...}}; the agent's are already checked.
-    """
-    agent = from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='', resume_from=''))
-    return session_case(agent)[1].has_population_steps
-
-
 def pretrain_if_needed(parameters: dict, run_dir):
     """Pre-train a partners-first session (cases 7, 8); return its agent settings, else None.
 
@@ -84,7 +74,7 @@ def pretrain_if_needed(parameters: dict, run_dir):
     cases return None without loading torch (1-2 s of every session's start-up before the
     nodes were launched).
     """
-    if not needs_pretraining(parameters):
+    if not pretrains_with_population(parameters['agent']):
         return None
     from hrc_partners.partners_first import prepare_person_session  # lazy: torch
     try:

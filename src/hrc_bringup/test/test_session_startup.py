@@ -10,7 +10,8 @@ import pathlib
 import subprocess
 import sys
 
-from hrc_bringup.session import needs_pretraining, pretrain_if_needed
+from hrc_agent_node.strategies import pretrains_with_population
+from hrc_bringup.session import pretrain_if_needed
 from hrc_common.session_plan import compose, SessionSettings
 import pytest
 
@@ -49,4 +50,4 @@ def test_a_bad_cases_file_is_a_value_error_for_the_runner(tmp_path):
                                              (5, False), (6, False), (7, True), (8, True)])
 def test_only_the_partners_first_cases_pretrain(case, pretrains):
     parameters = compose(SessionSettings(case=case, seed=0), PARAMS_DIR)
-    assert needs_pretraining(parameters) is pretrains
+    assert pretrains_with_population(parameters['agent']) is pretrains

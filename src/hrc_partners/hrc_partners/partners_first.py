@@ -48,7 +48,7 @@ from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file
 from hrc_agent_node.offline import run_session
 from hrc_agent_node.partners import PERSON_PERIODS
-from hrc_agent_node.strategies import session_case
+from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
@@ -268,10 +268,10 @@ def prepare_person_session(parameters: dict, run_dir, population=None):
     ``resume_from`` (the checkpoint) and ``max_training_episodes`` (the pre-training's episodes
     plus the session's own budget, which the person's step gets whole).
     """
+    if not pretrains_with_population(parameters['agent']):
+        return None
     agent = from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='',
                                         resume_from=''))
-    if not session_case(agent)[1].has_population_steps:
-        return None
     physics = physics_params_of(from_dict(SimParams, parameters['sim']))
     settings = population_settings(agent.cases_file)
     run_dir = pathlib.Path(run_dir)
