@@ -34,8 +34,9 @@ pytestmark = pytest.mark.dds
 STEPS = 40
 PERIOD_NS = 200_000_000
 SLICES = 10          # the sim's default human_period 0.02 s: the human answers 10 times a step
-TOPICS = ('/hrc/state', '/hrc/robot/cmd_wrench', '/hrc/human/cmd_wrench', '/hrc/human/action',
-          '/hrc/agent/step', '/hrc/episode')
+HUMAN_TOPICS = ('/hrc/human/cmd_wrench', '/hrc/human/action')
+TOPICS = ('/hrc/state', '/hrc/robot/cmd_wrench', *HUMAN_TOPICS, '/hrc/agent/step',
+          '/hrc/episode')
 
 
 def fields_of(message):
@@ -92,8 +93,14 @@ def run_both(tmp_path, domain_id: int, args: list, read_rosbag, env=None) -> tup
 def assert_same(graph_bag, engine_bag, episodes) -> dict:
     """Assert every message of TOPICS equal episode by episode; return the graph's grouped."""
     graph_messages, engine_messages = by_episode(graph_bag), by_episode(engine_bag)
+    # A human who sits out a training step sends nothing (issue 24): the human's topics have
+    # the episodes where the human is involved only, in both.
+    involved = [episode for episode in episodes
+                if graph_messages['/hrc/episode'][episode][0]['human_involved']]
     for topic in TOPICS:
-        assert sorted(graph_messages[topic]) == list(episodes), topic
+        wanted = involved if topic in HUMAN_TOPICS else list(episodes)
+        assert sorted(graph_messages[topic]) == wanted, topic
+        assert sorted(engine_messages[topic]) == wanted, topic
         for episode in episodes:
             expected, got = graph_messages[topic][episode], engine_messages[topic][episode]
             assert len(got) == len(expected), (topic, episode, len(got), len(expected))
@@ -182,6 +189,10 @@ def sessions(tmp_path_factory, rosbags_typestore):
         finally:
             reservation.release()
 
+    # Made once before the threads: pytest creates its base folder on first use, and five
+    # threads doing that at once race (a module run alone failed with "case3 is not a
+    # normalized and relative path").
+    tmp_path_factory.getbasetemp()
     with ThreadPoolExecutor(max_workers=CONCURRENT_SESSIONS) as pool:
         return dict(zip(SESSIONS, pool.map(run, SESSIONS)))
 
@@ -203,7 +214,10 @@ def test_every_case_is_the_same_in_the_graph_and_the_engine(sessions, case):
     in the evaluation episode); a PPO update after the second episode.
     """
     graph_bag, engine_bag, _ = outcome_of(sessions, f'case{case}')
-    assert_same(graph_bag, engine_bag, (0, 1, 2))
+    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
+    if case in (1, 2):    # the robot learns alone first: the human sends nothing then
+        assert not graph_messages['/hrc/episode'][0][0]['human_involved']
+        assert not graph_messages['/hrc/human/action'][0]
 
 
 

@@ -105,6 +105,10 @@ class InputGuard:
     def _on_status(self, status):
         if self._status_pub is None:   # the agent's, not our own stand-in status
             self.last_status = status
+            if status.human_involved and not self.involved:
+                # The person's side sends nothing while the robot learns alone: the silence
+                # the link watchdog measures starts when the person joins, not before.
+                self.states_flow_since = time.monotonic()
             self.involved = bool(status.human_involved)
             # The person's step begins while their input is already gone: pause now.
             if self.involved and self.input_status.get('pause_requested') == 'true':

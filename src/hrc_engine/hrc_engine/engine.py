@@ -231,9 +231,9 @@ class InProcessSession:
         """One episode: reset, the lockstep steps, the episode's end as the agent handles it.
 
         Each control step as the lockstep graph takes it (hrc_sim_node.stepper): both actors
-        answer the period's state; at the human's rate the human then answers each slice
-        state (only its wrench is published for those, as the human node does) while the
-        robot's answer holds for the period.
+        answer the period's state (the human only while involved); at the human's rate the
+        human then answers each slice state (only its wrench is published for those, as the
+        human node does) while the robot's answer holds for the period.
         """
         core, stepper = self.core, self.stepper
         started = time.perf_counter()
@@ -246,8 +246,10 @@ class InProcessSession:
         self._publish_state(advanced)
         while not advanced.episode_over:
             state, stamp = advanced.state, advanced.stamp
-            answer = self.human.answer(plan.episode, state, stamp)
-            human_wrench = messages.wrench_on(answer.dof, answer.wrench)
+            # A human who sits out sends nothing (as the human node; the sim awaits no answer).
+            answer = (self.human.answer(plan.episode, state, stamp)
+                      if self.human.answers_states else None)
+            human_wrench = messages.wrench_on(answer.dof, answer.wrench) if answer else None
             # The human's answer to the same state only when the core asks for it (same_step).
             decision = core.act(advanced.observed,
                                 answer.command if core.needs_human_action else None)
@@ -255,9 +257,11 @@ class InProcessSession:
             self._write('/hrc/robot/cmd_wrench', messages.wrench_stamped(stamp, robot_wrench))
             if decision.previous is not None:
                 self._write_step(decision.previous)
-            self._write('/hrc/human/action',
-                        messages.human_action(stamp, plan.episode, state.step, answer))
-            self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(stamp, human_wrench))
+            if answer is not None:
+                self._write('/hrc/human/action',
+                            messages.human_action(stamp, plan.episode, state.step, answer))
+                self._write('/hrc/human/cmd_wrench',
+                            messages.wrench_stamped(stamp, human_wrench))
             advanced = stepper.run_period(
                 robot_wrench, human_wrench,
                 lambda middle, episode=plan.episode: self._answer_slice(episode, middle))

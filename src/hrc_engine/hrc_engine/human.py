@@ -40,6 +40,11 @@ class SimulatedHumanSide:
         """Take the roles a SessionStatus announces."""
         self.core.on_session(dof, involved, list(subtasks))
 
+    @property
+    def answers_states(self) -> bool:
+        """Return True while the human answers states (involved; HumanCore.answers_states)."""
+        return self.core.answers_states
+
     def answer(self, episode: int, state, stamp_ns: int, slice_index: int = 0) -> HumanAnswer:
         """Return the answer to a non-final (slice) state of ``episode`` stamped ``stamp_ns``."""
         answer = self.core.answer(episode, state.step, stamp_ns, state,

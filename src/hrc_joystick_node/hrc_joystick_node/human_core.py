@@ -14,7 +14,9 @@ What it decides, per state (not the last of its episode, which needs no answer):
 * the session aborted: zero, ``engaged`` false, source ``none``;
 * the same state again (same episode and step): the same answer, ``repeated`` true, and the
   simulated human is not advanced twice;
-* the human not involved in this training step: zero, ``engaged`` false, source ``none``;
+* the human not involved in this training step: no answer is sent at all
+  (:attr:`HumanCore.answers_states` false: the sim neither awaits nor applies one, issue 24);
+  asked anyway, zero, ``engaged`` false, source ``none``;
 * otherwise the active input (:class:`~hrc_joystick_node.inputs.InputSelector`): the stick of
   the device or ``/joy`` (deadzone, inversion, deadman), the simulated human (reset at each new
   episode or when a step does not follow the last one; its clock is the state's stamp, so
@@ -279,6 +281,18 @@ class HumanCore:
                            selector.status_line())
 
     # -- the step ------------------------------------------------------------------------
+    @property
+    def answers_states(self) -> bool:
+        """Return True when the human answers the sim's states: only while involved.
+
+        A human who sits out a training step has nothing of theirs applied, and the sim does
+        not await them then (``hrc_sim_node.protocol.StepProtocol.awaits_human``, from the same
+        announcement): answering every state with zero was two of a lockstep step's five
+        messages in the robot-alone episodes. The simulated human is not advanced by such
+        states either way, so the session's numbers are the same.
+        """
+        return self.involved
+
     def answer(self, episode: int, step: int, stamp_ns: int, state,
                sticks: typing.Optional[dict] = None, slice_index: int = 0) -> HumanAnswer:
         """Answer one state (not the last of its episode).

@@ -11,12 +11,12 @@ input drove it) and ``/hrc/human/cmd_wrench`` (WrenchStamped, only the human's d
 freedom set, scaled by the sim's ``max_force``/``max_torque``), both carrying the state's
 stamp, so the lockstep sim can match them to the step. The sim owns its control period and
 limits: the node reads them at start from the sim's parameter service (node ``sim_node``); a
-state that arrives before they are known is answered when they come. It answers even when the
-human is not involved (zero,
-``engaged`` false), so the sim can always wait for both actors. When the session is aborted
-(phase ``aborted``) it sends a zero command at once, answering the newest state, and zero for
-anything after. The joystick device is sampled (drained without blocking) when each state
-arrives, so the command is the stick's position at that moment.
+state that arrives before they are known is answered when they come. While the session says
+the human is not involved (the robot learns alone) it answers nothing: the sim does not await
+the human then (issue 24; until then it answered every such state with zero). When the
+session is aborted (phase ``aborted``) it sends a zero command at once, answering the newest
+state, and zero for anything after. The joystick device is sampled (drained without blocking)
+when each state arrives, so the command is the stick's position at that moment.
 
 It publishes the input status on ``/hrc/human/input`` (diagnostic_msgs/DiagnosticStatus,
 reliable, transient local, depth 1) at every change and every second: ``level`` OK / WARN /
@@ -355,6 +355,8 @@ class HumanNode(Node):
         """Answer one sim state with the human's action and wrench (not the last state)."""
         if message.truncated or message.terminated:
             return  # the last state of an episode needs no answer
+        if not self.core.answers_states:
+            return  # sitting out this training step: the sim awaits nothing of the human
         if self.core.limits is None:
             self._state_before_limits = message   # the newest: answered once the sim says
             return

@@ -227,7 +227,7 @@ def test_answers_every_lockstep_step_exactly_as_the_pure_simulated_human(start_n
     assert len({(a.episode, a.step) for a in harness.action_log}) == 25 + 1
 
 
-def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node, harness):
+def test_follows_the_session_roles_and_sends_nothing_when_not_involved(start_node, harness):
     # A sim with a 4 N slider: the human's wrench follows the sim's limit, read at run time.
     process = harness.start(start_node, params_file=PARAMS / 'human.yaml',
                             parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1},
@@ -252,11 +252,19 @@ def test_follows_the_session_roles_and_answers_zero_when_not_involved(start_node
 
     harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
     assert harness.spin_until(lambda: 'not involved' in process.output), process.output
-    for step in range(2, 5):  # still answered every step, so the lockstep sim can advance
-        action, wrench = harness.step(task_state(0, step, slider_position=0.05), process)
-        assert (action.command, action.engaged) == (0.0, False)
-        assert action.source == HumanAction.SOURCE_NONE
-        assert wrench.wrench.force.z == 0.0
+    # Sitting out: no answer at all (issue 24; the sim awaits the robot only then).
+    silent = [task_state(0, step, slider_position=0.05) for step in range(2, 5)]
+    for state in silent:
+        harness.states.publish(state)
+    harness.spin_until(lambda: False, 1.0)
+    keys = {stamp_key(state.header.stamp) for state in silent}
+    assert not keys & (set(harness.actions) | set(harness.wrenches)), process.output
+    # Involved again: the next state is answered (the node was there all along).
+    harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, True, ['T2_1'], 2))
+    assert harness.spin_until(
+        lambda: process.output.count('human drives translation, involved') == 2), process.output
+    action, wrench = harness.step(task_state(0, 5, slider_position=0.05), process)
+    assert action.engaged and action.command < 0
 
 
 def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness):

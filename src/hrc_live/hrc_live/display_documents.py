@@ -110,7 +110,12 @@ def console_document(snapshot: Snapshot) -> dict:
     session, human, now = snapshot.session, snapshot.human, snapshot.now
     source = {'source': 'unknown', 'detail': 'no human command received yet', 'age_s': None,
               'engaged': False, 'healthy': False}
-    if human is not None:
+    if session is not None and not session.human_involved:
+        # the human node sends nothing while the person sits out (issue 24): say why
+        source = {'source': 'none', 'age_s': None, 'engaged': False, 'healthy': False,
+                  'detail': 'not involved in this training step: the robot learns alone, '
+                            'the human node sends nothing'}
+    elif human is not None:
         age = max(0.0, now - human.received)
         source = {'source': human.source, 'detail': human.detail, 'age_s': round(age, 2),
                   'engaged': human.engaged,

@@ -59,6 +59,15 @@ def test_the_robot_learning_alone_asks_the_person_to_wait():
     assert not any(line.startswith('You ') for line in words.lines)
 
 
+def test_the_console_says_the_human_sends_nothing_while_the_robot_learns_alone():
+    """Issue 24: no HumanAction comes then; the console says why, not "no command yet"."""
+    model = model_in_episode(human_involved=False, human_subtasks=(), training_step=0)
+    model.on_human(HumanView('sim', 'paper', True, 0.3, received=0.5))   # an earlier step's
+    document = console_document(model.snapshot(now=3.5))
+    assert document['input']['source'] == 'none' and not document['input']['healthy']
+    assert document['input']['detail'].startswith('not involved in this training step')
+
+
 def test_after_an_episode_the_result_and_a_countdown_to_the_next_one():
     model = model_in_episode()
     model.on_result(ResultView(5, False, True, 0.02, 0.10, 0.05, 0.17, False), now=0.5)

@@ -15,6 +15,8 @@ timers. The rules (docs/architecture.md, "The step protocol"):
   ``lockstep_timeout`` (:meth:`StepProtocol.on_timeout`: the missing commands count as zero
   and are reported); with no expected actor the sim runs free (:meth:`StepProtocol.free_run`).
   A command with another stamp is stale: ignored, counted, reported.
+* The human counts only while involved (:attr:`StepProtocol.awaits_human`): a human who sits
+  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing.
 * ``realtime``: a wall timer calls :meth:`StepProtocol.on_tick` every control period; each
   actor's kept command is applied unless older than ``command_timeout`` (wall s). The kept
   command is the one answering the newest state of the running episode, not the latest
@@ -275,7 +277,7 @@ class StepProtocol:
             return False
         if self.mode == REALTIME:
             return True
-        return self.human_involved and HUMAN in self.expected
+        return self.awaits_human
 
     @property
     def slice_index(self) -> int:
@@ -367,16 +369,37 @@ class StepProtocol:
             self._count(actor + '_duplicate')   # the first answer to a state stands
             return result
         self._answers[actor] = command
-        if all(expected in self._answers for expected in self._awaited_actors()):
+        awaited_actors = self.awaited_actors()
+        if all(expected in self._answers for expected in awaited_actors):
             missing = {expected: not self._answers[expected].accepted
-                       for expected in self._awaited_actors()}
+                       for expected in awaited_actors}
             result.order = self._order(self._answers, missing, 'answered')
         return result
 
-    def _awaited_actors(self) -> tuple:
-        """Return the actors whose answer the awaited (slice) state needs (lockstep)."""
-        if self._slice == 0:
+    @property
+    def awaits_human(self) -> bool:
+        """Return True when the human's commands are awaited (lockstep) or expected (realtime).
+
+        Only while the human is involved: a human who sits out a training step has nothing
+        applied, so their answers would carry nothing; the human node does not send them then
+        (issue 24: two of a lockstep step's five messages in the robot-alone episodes).
+        """
+        return self.human_involved and HUMAN in self.expected
+
+    def expected_now(self) -> tuple:
+        """Return the expected actors whose commands count now (the human only if involved)."""
+        if self.awaits_human:
             return self.expected
+        return tuple(actor for actor in self.expected if actor != HUMAN)
+
+    def awaited_actors(self) -> tuple:
+        """Return the actors whose answer the awaited (slice) state needs (lockstep).
+
+        Empty: nothing is awaited (no expected actor, or only a human who sits out): the sim
+        runs free (:meth:`free_run`).
+        """
+        if self._slice == 0:
+            return self.expected_now()
         return (HUMAN,)    # a slice state: the robot's answer holds for the whole period
 
     def on_timeout(self) -> typing.Optional[StepOrder]:
@@ -384,12 +407,12 @@ class StepProtocol:
         if self.mode != LOCKSTEP or not self.waiting:
             return None
         missing = {actor: actor not in self._answers or not self._answers[actor].accepted
-                   for actor in self._awaited_actors()}
+                   for actor in self.awaited_actors()}
         return self._order(self._answers, missing, 'timeout')
 
     def free_run(self) -> typing.Optional[StepOrder]:
-        """Lockstep without expected actors: step with what arrived (nothing is missing)."""
-        if self.mode != LOCKSTEP or self.expected or not self.waiting:
+        """Lockstep awaiting no actor: step with what arrived (nothing is missing)."""
+        if self.mode != LOCKSTEP or self.awaited_actors() or not self.waiting:
             return None
         return self._order(self._answers, {}, 'free_run')
 
@@ -398,13 +421,14 @@ class StepProtocol:
         if self.mode != REALTIME or not self.waiting:
             return None
         commands, missing = {}, {}
+        expected = self.expected_now()
         for actor in ACTORS:
             command, received, _ = self._kept.get(actor, (None, None, None))
             fresh = (command is not None and command.accepted
                      and now - received <= self.settings.command_timeout)
             if fresh:
                 commands[actor] = command
-            if actor in self.expected:
+            if actor in expected:
                 missing[actor] = not fresh
         return self._order(commands, missing, 'tick')
 

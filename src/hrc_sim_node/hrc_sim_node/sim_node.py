@@ -7,8 +7,9 @@ Publishes ``/hrc/state`` (TaskState), ``/clock`` (lockstep), ``/hrc/sim/markers`
 Step protocol (docs/architecture.md): a command answers a state by carrying the state's stamp.
 In ``lockstep`` the sim advances as soon as every actor in ``expected_actors`` has answered the
 current state (or after ``lockstep_timeout`` wall seconds: the missing command counts as zero
-and the next state's ``*_command_missing`` flag says so); with ``expected_actors`` empty it runs
-free, as fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
+and the next state's ``*_command_missing`` flag says so); the human only while the session says
+they are involved (one who sits out sends nothing); with no actor to await it runs free, as
+fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
 actor's command answering the newest state; one older than ``command_timeout`` counts as zero
 and is reported. The rules are the pure core ``hrc_sim_node.protocol`` (shared with the
 in-process engine); a reset may switch the clock mode (``ResetEpisode.clock_mode``), and its
@@ -301,7 +302,7 @@ class SimNode(Node):
         else:
             self._slice_pub.publish(message)
         if lockstep and not last:
-            if self.protocol.expected:
+            if self.protocol.awaited_actors():
                 self._timeout_timer.reset()
             else:
                 self._free_run.reset()

@@ -103,15 +103,18 @@ class SimStepper:
         """Lockstep, in one process: the period's state answered, to the next period's state.
 
         ``robot_wrench``, ``human_wrench``: both actors' answers to the period's state
-        (Wrench-like); ``answer_slice(advanced)`` returns the human's answer to a slice state
-        (called only at the human's rate, while the human is involved). The robot's answer
-        holds for the period. The in-process engine, the offline runner and the Gymnasium
-        environments step through this, as the sim node and the human node do over DDS.
+        (Wrench-like; the human's is not read, and may be None, while the human sits out:
+        :attr:`StepProtocol.awaits_human`); ``answer_slice(advanced)`` returns the human's
+        answer to a slice state (called only at the human's rate, while the human is
+        involved). The robot's answer holds for the period. The in-process engine, the
+        offline runner and the Gymnasium environments step through this, as the sim node and
+        the human node do over DDS.
         """
         protocol = self.protocol
         stamp = protocol.awaited
-        protocol.on_command(ROBOT, stamp, robot_wrench, 0.0)
-        order = protocol.on_command(HUMAN, stamp, human_wrench, 0.0).order
+        order = protocol.on_command(ROBOT, stamp, robot_wrench, 0.0).order
+        if protocol.awaits_human:
+            order = protocol.on_command(HUMAN, stamp, human_wrench, 0.0).order
         while True:
             if order is None:  # cannot happen: every awaited actor answered
                 raise RuntimeError(f'step {protocol.step}: the protocol did not step')

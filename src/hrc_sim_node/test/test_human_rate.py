@@ -95,9 +95,11 @@ def run_period(params, human_torques, human_involved=True, seed=2):
         stepper = SimStepper(physics, protocol)
         advanced = stepper.start_episode(0, seed)
         seen = []
-        protocol.on_command('robot', advanced.stamp, wrench(force_z=0.5), 0.0)
-        order = protocol.on_command('human', advanced.stamp, wrench(torque_x=human_torques[0]),
-                                    0.0).order
+        order = protocol.on_command('robot', advanced.stamp, wrench(force_z=0.5), 0.0).order
+        if human_involved:   # a human who sits out is not awaited and sends nothing
+            assert order is None
+            order = protocol.on_command('human', advanced.stamp,
+                                        wrench(torque_x=human_torques[0]), 0.0).order
         answers = iter(human_torques[1:])
         while True:
             advanced = stepper.apply(order)
@@ -123,9 +125,34 @@ def test_lockstep_asks_the_human_every_slice_and_records_what_it_applied():
 
 def test_a_human_who_sits_out_or_acts_once_a_period_steps_whole_periods_as_before():
     for params, involved in ((SLICED, False), (HELD, True)):
-        advanced, seen, _ = run_period(params, [0.3], human_involved=involved)
+        advanced, seen, protocol = run_period(params, [0.3], human_involved=involved)
         assert seen == [] and advanced.period_end
         assert len(advanced.human_applied) == 1
+        assert protocol.counters['human_missing'] == 0
+
+
+def test_a_human_who_sits_out_is_neither_awaited_nor_missing():
+    """Issue 24: the robot's answer alone steps a robot-alone period; nothing is missing."""
+    protocol = lockstep(SLICED, human_involved=False)
+    assert not protocol.awaits_human and protocol.awaited_actors() == ('robot',)
+    protocol.start_episode(0)
+    stamp = protocol.next_stamp(0, False)
+    order = protocol.on_command('robot', stamp, wrench(force_z=0.5), 0.0).order
+    assert order is not None and order.missing == {'robot': False} and order.final
+    assert not protocol.waiting
+    # realtime: a silent human who sits out is not counted missing
+    realtime = StepProtocol(ProtocolSettings(mode='realtime', control_period=0.2,
+                                             robot_dof='translation'))
+    realtime.set_roles('translation', False)
+    realtime.start_episode(0)
+    stamp = realtime.next_stamp(0, False)
+    realtime.on_command('robot', stamp, wrench(force_z=0.5), 1.0)
+    order = realtime.on_tick(1.1)
+    assert order.missing == {'robot': False}
+    assert realtime.counters['human_missing'] == 0
+    # only a human who acts is awaited again
+    protocol.set_roles('translation', True)
+    assert protocol.awaits_human and protocol.awaited_actors() == ('robot', 'human')
 
 
 def test_at_the_old_rate_the_stepper_equals_the_plain_physics_step():
