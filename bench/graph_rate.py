@@ -27,6 +27,7 @@ start, 3-6). The bare loop (``offline.run_episode``) always lets the human act o
 import argparse
 import os
 import pathlib
+import queue
 import statistics
 import subprocess
 import sys
@@ -99,10 +100,87 @@ def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
                              for step, seconds in zip(steps, result.episode_seconds))
 
 
+def descendants(root_pid: int) -> list:
+    """Return the pids of ``root_pid``'s living descendants (from /proc's parent links)."""
+    children = {}
+    for entry in os.scandir('/proc'):
+        if not entry.name.isdigit():
+            continue
+        try:
+            with open(f'/proc/{entry.name}/stat') as stat:
+                # "pid (comm) state ppid ...": comm may hold spaces and parentheses
+                ppid = int(stat.read().rsplit(')', 1)[1].split()[1])
+        except (OSError, IndexError, ValueError):
+            continue   # the process ended meanwhile
+        children.setdefault(ppid, []).append(int(entry.name))
+    found, todo = [], [root_pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def tree_cpu_seconds(root_pid: int) -> float:
+    """Return the CPU time (s) of the living threads of ``root_pid``'s descendants.
+
+    From each thread's /proc schedstat (nanoseconds; /proc/<pid>/stat counts 10 ms ticks, too
+    coarse for a window of a second). Threads that ended are not counted: across a window, the
+    work of a thread that started and ended inside it (an update's learner thread) is left out.
+    """
+    total_ns = 0
+    for pid in descendants(root_pid):
+        try:
+            tasks = os.listdir(f'/proc/{pid}/task')
+        except OSError:
+            continue
+        for task in tasks:
+            try:
+                with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
+                    total_ns += int(schedstat.read().split()[0])
+            except (OSError, IndexError, ValueError):
+                continue
+    return total_ns / 1e9
+
+
+class CpuMarks:
+    """Samples a process tree's CPU (``tree_cpu_seconds``) on request, in a thread of its own.
+
+    ``mark(label)`` returns at once (the listener that calls it is not held up by reading
+    /proc); ``marks`` holds (label, CPU s) in the order asked.
+    """
+
+    def __init__(self, root_pid: int):
+        self.root_pid = root_pid
+        self.marks = []
+        self._requests = queue.Queue()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def mark(self, label) -> None:
+        self._requests.put(label)
+
+    def _run(self):
+        while (label := self._requests.get()) is not None:
+            self.marks.append((label, tree_cpu_seconds(self.root_pid)))
+
+    def close(self) -> list:
+        """Finish the pending samples; return the marks."""
+        self._requests.put(None)
+        self._thread.join(timeout=10)
+        return self.marks
+
+
 class StateTimer:
-    """Records the receive time of every /hrc/state message on a domain (own thread)."""
+    """Records the receive time of every /hrc/state message on a domain (own thread).
+
+    ``cpu``: a CpuMarks to mark at the first state received ('first') and at every episode's
+    last state ((episode, step)): the nodes' CPU while the episodes run, start-up and shutdown
+    left out.
+    """
 
     def __init__(self, domain_id: int):
+        self.cpu = None
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.node = rclpy.create_node('bench_state_timer', context=self.context)
@@ -115,6 +193,11 @@ class StateTimer:
 
     def _on_state(self, state):
         self.samples.append((state.episode, state.step, time.perf_counter()))
+        if self.cpu is not None:
+            if len(self.samples) == 1:
+                self.cpu.mark('first')
+            elif state.terminated or state.truncated:
+                self.cpu.mark((state.episode, state.step))
 
     def _spin(self):
         try:
@@ -146,6 +229,9 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
                work: pathlib.Path, human_period: float = None, settings=()) -> dict:
     """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s, ...}.
 
+    'cpu' is the whole session's (start-up included); 'running_cpu' the nodes' CPU (s) from the
+    first state to the last episode's last state and 'cpu_per_step' that per state received.
+
     ``settings``: more ``NODE.PARAM=VALUE`` overrides (``hrc session --set``). The result also
     names the session (``session_id``; its logs are in ``work/runs/<session_id>/logs``).
     """
@@ -163,17 +249,28 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
         command += ['--set', setting]
     before = os.times()
     start = time.perf_counter()
-    result = subprocess.run(command, capture_output=True, text=True, cwd=work)
+    session = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, cwd=work)
+    timer.cpu = CpuMarks(session.pid)
+    stdout, stderr = session.communicate()
     wall = time.perf_counter() - start
     after = os.times()
     time.sleep(0.5)
     timer.close()
-    if result.returncode != 0:
-        raise RuntimeError(f'session failed:\n{result.stdout}\n{result.stderr}')
+    marks = timer.cpu.close()
+    if session.returncode != 0:
+        raise RuntimeError(f'session failed:\n{stdout}\n{stderr}')
     rates = timer.episode_rates()
+    # The nodes' CPU from the first state to the last episode's last state, per step: the
+    # running cost without the start-up and the shutdown (which dominate a short session).
+    ends = [(label, cpu) for label, cpu in marks if label != 'first']
+    first = [cpu for label, cpu in marks if label == 'first']
+    steps = len(timer.samples)
+    running = ends[-1][1] - first[0] if first and ends else float('nan')
     return {'rate': statistics.median(rates) if rates else float('nan'), 'episodes': len(rates),
             'cpu': (after.children_user + after.children_system)
             - (before.children_user + before.children_system), 'wall': wall,
+            'running_cpu': running, 'cpu_per_step': running / max(steps - 1, 1),
             'session_id': name}
 
 

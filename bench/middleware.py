@@ -19,8 +19,12 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    acting once a period and ``control_period / human_period`` round trips at the human's rate
    (one slice answer each; the robot's answer travels with the first). The round trip is the
    'rclpy' one when measured (the middleware with rclpy's executor), else the first executor's.
-   The recorder's overhead on the rate and on the nodes' CPU (all the session's processes), and
-   the recorder process's own CPU (its last log line), for each recorder variant named
+   The recorder's overhead on the rate and on the nodes' CPU (all the session's processes):
+   over the whole session (start-up included: the recorder's own start, ~0.5 s of CPU, is most
+   of it in a session of two episodes) and per step while the episodes ran (from the first state
+   to the last, read from the threads' /proc schedstat; threads that end inside the window, an
+   update's learner thread, are left out in both runs), and the recorder process's own CPU (its
+   last log line), for each recorder variant named
    (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
    ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
 5. with ``--compose sim,human ...``: the graph with those nodes in one process
@@ -29,7 +33,8 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    separate graph with it, one without against the graph without a recorder.
 
 Case 5 by default: the human acts from the start (case 2's first episodes are the robot's alone
-and would hide the human's rate). Episodes run 200 steps; updates between episodes are left out
+and would hide the human's rate; ``--case 2 --human-periods 0.2`` measures them: the person's
+wait in task first). Episodes run 200 steps; updates between episodes are left out
 of the step times (steps are timed within episodes by a listener on /hrc/state).
 """
 
@@ -234,7 +239,8 @@ def main() -> int:
                         print(f'round {index + 1}: graph ({name}), human_period {period:g} s'
                               f'{what}: {1000 / result["rate"]:.3f} ms/step '
                               f'({result["rate"]:.0f} steps/s, nodes CPU {result["cpu"]:.1f} s'
-                              f'{own} in {result["wall"]:.1f} s)', flush=True)
+                              f'{own} in {result["wall"]:.1f} s; while the episodes ran '
+                              f'{result["cpu_per_step"] * 1000:.3f} ms CPU/step)', flush=True)
             rounds.append(figures)
     median = statistics.median
     reference = 'rclpy' if 'rclpy' in args.executors else args.executors[0]
@@ -262,12 +268,17 @@ def main() -> int:
                 rate_costs = sorted(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
                 cpu_cost = median(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
                 cpu_costs = sorted(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
+                running_costs = sorted(g['cpu_per_step'] / p['cpu_per_step'] - 1
+                                       for g, p in zip(recorded, plain))
                 own = median(g['recorder_cpu'] for g in recorded)
                 print(f'    with recorder {recorder:11s}: {step_recorded:7.3f} ms/step; costs '
                       f'{rate_cost * 100:+.1f}% of the rate (rounds {rate_costs[0] * 100:+.1f}'
                       f'..{rate_costs[-1] * 100:+.1f}), {cpu_cost * 100:+.1f}% nodes CPU '
                       f'({cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f}); recorder '
                       f'process {own:.2f} s CPU')
+                print(f'      nodes CPU per step while the episodes ran (start-up and shutdown '
+                      f'left out): {median(running_costs) * 100:+.1f}% (rounds '
+                      f'{running_costs[0] * 100:+.1f}..{running_costs[-1] * 100:+.1f})')
             for compose in args.compose:
                 separate = 'batched' if 'recorder' in compose.split(',') else None
                 if (period, name, separate) not in rounds[0]['graph']:

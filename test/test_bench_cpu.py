@@ -1,0 +1,69 @@
+"""The benchmarks' CPU of a process tree (bench/graph_rate.py): what it counts and leaves out.
+
+``tree_cpu_seconds`` sums the living threads of a process's descendants, from /proc schedstat:
+a busy grandchild counts, the caller itself does not, and a process that has left the tree no
+longer does. ``bench/middleware.py`` reports the recorder's running CPU cost with it.
+"""
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'bench'))
+from graph_rate import descendants, tree_cpu_seconds  # noqa: E402  (bench/ is not a package)
+
+# A child that starts a grandchild which spins on the CPU for 0.4 s, then both sleep.
+SPIN = ('import subprocess, sys, time\n'
+        'code = "import time\\nend = time.process_time() + 0.4\\n'
+        'while time.process_time() < end: pass\\ntime.sleep(30)"\n'
+        'grandchild = subprocess.Popen([sys.executable, "-c", code])\n'
+        'time.sleep(30)\n')
+
+
+def spin_here(seconds: float) -> None:
+    end = time.process_time() + seconds
+    while time.process_time() < end:
+        pass
+
+
+def test_a_busy_grandchild_counts_and_the_caller_does_not():
+    child = subprocess.Popen([sys.executable, '-c', SPIN])
+    grandchild = None
+    try:
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline and tree_cpu_seconds(os.getpid()) < 0.4:
+            time.sleep(0.05)
+        grandchildren = descendants(child.pid)
+        assert len(grandchildren) == 1
+        grandchild = grandchildren[0]
+        # the grandchild's 0.4 s of spinning and two interpreters' start-up
+        counted = tree_cpu_seconds(os.getpid())
+        assert 0.4 <= counted < 5.0
+        assert tree_cpu_seconds(grandchild) == 0.0       # it has no descendants of its own
+        # Now the tree sleeps: 0.5 s of this process's own CPU must not show.
+        time.sleep(0.3)
+        before = tree_cpu_seconds(os.getpid())
+        spin_here(0.5)
+        assert tree_cpu_seconds(os.getpid()) - before < 0.1
+    finally:
+        child.kill()
+        child.wait()
+        if grandchild is not None:
+            # Orphaned by the kill: no longer a descendant of this process, so not counted.
+            assert grandchild not in descendants(os.getpid())
+            os.kill(grandchild, signal.SIGKILL)
+
+
+def test_a_process_without_children_has_no_descendants():
+    child = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(10)'])
+    try:
+        time.sleep(0.2)
+        assert descendants(child.pid) == []
+        assert tree_cpu_seconds(child.pid) == 0.0
+        assert child.pid in descendants(os.getpid())
+    finally:
+        child.kill()
+        child.wait()
