@@ -13,6 +13,7 @@ import hashlib
 import json
 
 from hrc_common.session_plan import SessionSettings
+from hrc_common.testing import exact_plain
 from hrc_engine.engine import EngineConfig, InProcessSession
 import pytest
 
@@ -36,21 +37,6 @@ FIELDS = {
 }
 
 
-def plain(value):
-    """Return ``value`` as JSON-able plain values (floats as their repr)."""
-    if isinstance(value, dict):
-        return {key: plain(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain(item) for item in value]
-    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
-        return value
-    if isinstance(value, float):
-        return repr(value)
-    if hasattr(value, '__dict__'):
-        return plain(vars(value))
-    return repr(float(value))
-
-
 class _Capturing(InProcessSession):
     def __init__(self, config):
         super().__init__(config)
@@ -58,7 +44,7 @@ class _Capturing(InProcessSession):
 
     def _write(self, topic, message):
         if topic in FIELDS:
-            self.captured.append([topic, {name: plain(message[name])
+            self.captured.append([topic, {name: exact_plain(message[name])
                                           for name in FIELDS[topic]}])
 
 

@@ -15,10 +15,9 @@ import hashlib
 import json
 
 import pytest
-import yaml
 
-from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
+from hrc_common.testing import easy_task_tree, exact_plain
 from hrc_engine.engine import EngineConfig, InProcessSession
 
 HUMAN_TOPICS = ('/hrc/human/action', '/hrc/human/cmd_wrench')
@@ -40,23 +39,8 @@ class _Capturing(InProcessSession):
         if topic == '/hrc/state':
             self._state_episode = message['episode']
         if topic != '/hrc/session':
-            self.captured.append((topic, self._state_episode, json.dumps(plain(message),
+            self.captured.append((topic, self._state_episode, json.dumps(exact_plain(message),
                                                                    sort_keys=True)))
-
-
-def plain(value):
-    """Return ``value`` as JSON-able plain values (floats as their repr: compared exactly)."""
-    if isinstance(value, dict):
-        return {key: plain(item) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [plain(item) for item in value]
-    if isinstance(value, bool) or value is None or isinstance(value, (int, str)):
-        return value
-    if isinstance(value, float):
-        return repr(value)
-    if hasattr(value, '__dict__'):
-        return plain(vars(value))
-    return repr(float(value))
 
 
 def digest(items) -> tuple:
@@ -91,19 +75,7 @@ def digests(tree_file: str) -> dict:
 @pytest.fixture
 def easy_tree(tmp_path):
     """Return a task tree file whose tolerances any state meets (the robot-alone step ends)."""
-    tree = yaml.safe_load((params_dir() / 'task_tree.yaml').read_text())
-
-    def widen(node):
-        if isinstance(node, dict):
-            return {key: 100.0 if key == 'tolerance' else widen(item)
-                    for key, item in node.items()}
-        if isinstance(node, list):
-            return [widen(item) for item in node]
-        return node
-
-    path = tmp_path / 'easy_tree.yaml'
-    path.write_text(yaml.safe_dump(widen(tree)))
-    return str(path)
+    return easy_task_tree(tmp_path)
 
 
 def test_a_human_who_sits_out_sends_nothing_and_the_session_is_the_same(easy_tree):

@@ -20,6 +20,7 @@ from hrc_common.contract import EpisodeKind, SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
+from hrc_common.testing import easy_task_tree
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
@@ -38,19 +39,7 @@ SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size
 @pytest.fixture
 def easy_tree(tmp_path):
     """Return a task tree file whose tolerances any state of the episode meets."""
-    tree = yaml.safe_load((params_dir() / 'task_tree.yaml').read_text())
-
-    def widen(node):
-        if isinstance(node, dict):
-            for key, value in node.items():
-                node[key] = 100.0 if key == 'tolerance' else widen(value)
-        elif isinstance(node, list):
-            return [widen(item) for item in node]
-        return node
-
-    path = tmp_path / 'easy_tree.yaml'
-    path.write_text(yaml.safe_dump(widen(tree)))
-    return str(path)
+    return easy_task_tree(tmp_path)
 
 
 def test_the_population_leaves_out_the_sessions_people():
