@@ -121,15 +121,14 @@ def descendants(root_pid: int) -> list:
     return found
 
 
-def tree_cpu_seconds(root_pid: int) -> float:
-    """Return the CPU time (s) of the living threads of ``root_pid``'s descendants.
+def thread_cpu_ns(root_pid: int) -> dict:
+    """Return {(pid, tid): CPU ns} of the living threads of ``root_pid`` and its descendants.
 
     From each thread's /proc schedstat (nanoseconds; /proc/<pid>/stat counts 10 ms ticks, too
-    coarse for a window of a second). Threads that ended are not counted: across a window, the
-    work of a thread that started and ended inside it (an update's learner thread) is left out.
+    coarse for a window of a second).
     """
-    total_ns = 0
-    for pid in descendants(root_pid):
+    cpu = {}
+    for pid in [root_pid] + descendants(root_pid):
         try:
             tasks = os.listdir(f'/proc/{pid}/task')
         except OSError:
@@ -137,17 +136,31 @@ def tree_cpu_seconds(root_pid: int) -> float:
         for task in tasks:
             try:
                 with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
-                    total_ns += int(schedstat.read().split()[0])
+                    cpu[(pid, int(task))] = int(schedstat.read().split()[0])
             except (OSError, IndexError, ValueError):
                 continue
-    return total_ns / 1e9
+    return cpu
+
+
+def tree_cpu_seconds(root_pid: int) -> float:
+    """Return the CPU time (s) of the living threads of ``root_pid``'s descendants."""
+    return sum(ns for (pid, _), ns in thread_cpu_ns(root_pid).items() if pid != root_pid) / 1e9
+
+
+def cpu_between(start: dict, end: dict) -> float:
+    """Return the CPU (s) the threads alive at ``end`` spent since ``start`` (thread_cpu_ns).
+
+    A thread born after ``start`` counts whole; one that ended before ``end`` (an update's
+    learner thread) is not counted at all: its time is lost with it.
+    """
+    return sum(ns - start.get(key, 0) for key, ns in end.items()) / 1e9
 
 
 class CpuMarks:
-    """Samples a process tree's CPU (``tree_cpu_seconds``) on request, in a thread of its own.
+    """Samples a process tree's threads' CPU (``thread_cpu_ns``) on request, in its own thread.
 
     ``mark(label)`` returns at once (the listener that calls it is not held up by reading
-    /proc); ``marks`` holds (label, CPU s) in the order asked.
+    /proc); ``marks`` holds (label, {(pid, tid): ns}, processes alive) in the order asked.
     """
 
     def __init__(self, root_pid: int):
@@ -162,13 +175,28 @@ class CpuMarks:
 
     def _run(self):
         while (label := self._requests.get()) is not None:
-            self.marks.append((label, tree_cpu_seconds(self.root_pid)))
+            cpu = thread_cpu_ns(self.root_pid)
+            self.marks.append((label, cpu, len({pid for pid, _ in cpu})))
 
     def close(self) -> list:
         """Finish the pending samples; return the marks."""
         self._requests.put(None)
         self._thread.join(timeout=10)
         return self.marks
+
+    def running_cpu(self) -> float:
+        """Return the CPU (s) from the 'first' mark to the last one with every process alive.
+
+        A mark sampled after a node exited would lose that node's time, so the last mark that
+        saw as many processes as the first is the end; nan without such a pair.
+        """
+        first = [(cpu, alive) for label, cpu, alive in self.marks if label == 'first']
+        if not first:
+            return float('nan')
+        start, alive_then = first[0]
+        ends = [cpu for label, cpu, alive in self.marks
+                if label != 'first' and alive >= alive_then]
+        return cpu_between(start, ends[-1]) if ends else float('nan')
 
 
 class StateTimer:
@@ -229,8 +257,9 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
                work: pathlib.Path, human_period: float = None, settings=()) -> dict:
     """Run a session and return {'rate': median steps/s, 'cpu': child CPU s, 'wall': s, ...}.
 
-    'cpu' is the whole session's (start-up included); 'running_cpu' the nodes' CPU (s) from the
-    first state to the last episode's last state and 'cpu_per_step' that per state received.
+    'cpu' is the whole session's (start-up included); 'running_cpu' the session's CPU (s; the
+    runner and its nodes) from the first state to the last episode's last state and
+    'cpu_per_step' that per state received (nan when no state or no last state was seen).
 
     ``settings``: more ``NODE.PARAM=VALUE`` overrides (``hrc session --set``). The result also
     names the session (``session_id``; its logs are in ``work/runs/<session_id>/logs``).
@@ -257,16 +286,15 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
     after = os.times()
     time.sleep(0.5)
     timer.close()
-    marks = timer.cpu.close()
+    timer.cpu.close()
     if session.returncode != 0:
         raise RuntimeError(f'session failed:\n{stdout}\n{stderr}')
     rates = timer.episode_rates()
-    # The nodes' CPU from the first state to the last episode's last state, per step: the
-    # running cost without the start-up and the shutdown (which dominate a short session).
-    ends = [(label, cpu) for label, cpu in marks if label != 'first']
-    first = [cpu for label, cpu in marks if label == 'first']
+    # The session's CPU (the runner and its nodes) from the first state to the last episode's
+    # last state, per step: the running cost without the start-up and the shutdown (which
+    # dominate a short session).
     steps = len(timer.samples)
-    running = ends[-1][1] - first[0] if first and ends else float('nan')
+    running = timer.cpu.running_cpu()
     return {'rate': statistics.median(rates) if rates else float('nan'), 'episodes': len(rates),
             'cpu': (after.children_user + after.children_system)
             - (before.children_user + before.children_system), 'wall': wall,

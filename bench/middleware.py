@@ -39,6 +39,7 @@ of the step times (steps are timed within episodes by a listener on /hrc/state).
 """
 
 import argparse
+import math
 import os
 import pathlib
 import re
@@ -268,17 +269,24 @@ def main() -> int:
                 rate_costs = sorted(1 - g['rate'] / p['rate'] for g, p in zip(recorded, plain))
                 cpu_cost = median(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
                 cpu_costs = sorted(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
+                # rounds where both runs gave a running CPU (nan: no state, or none at an
+                # episode's end, was heard)
                 running_costs = sorted(g['cpu_per_step'] / p['cpu_per_step'] - 1
-                                       for g, p in zip(recorded, plain))
+                                       for g, p in zip(recorded, plain)
+                                       if math.isfinite(g['cpu_per_step'])
+                                       and math.isfinite(p['cpu_per_step'])
+                                       and p['cpu_per_step'] > 0)
                 own = median(g['recorder_cpu'] for g in recorded)
                 print(f'    with recorder {recorder:11s}: {step_recorded:7.3f} ms/step; costs '
                       f'{rate_cost * 100:+.1f}% of the rate (rounds {rate_costs[0] * 100:+.1f}'
                       f'..{rate_costs[-1] * 100:+.1f}), {cpu_cost * 100:+.1f}% nodes CPU '
                       f'({cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f}); recorder '
                       f'process {own:.2f} s CPU')
-                print(f'      nodes CPU per step while the episodes ran (start-up and shutdown '
-                      f'left out): {median(running_costs) * 100:+.1f}% (rounds '
-                      f'{running_costs[0] * 100:+.1f}..{running_costs[-1] * 100:+.1f})')
+                running = (f'{median(running_costs) * 100:+.1f}% (rounds '
+                           f'{running_costs[0] * 100:+.1f}..{running_costs[-1] * 100:+.1f})'
+                           if running_costs else 'n/a (no round measured it)')
+                print(f'      session CPU per step while the episodes ran (start-up and '
+                      f'shutdown left out): {running}')
             for compose in args.compose:
                 separate = 'batched' if 'recorder' in compose.split(',') else None
                 if (period, name, separate) not in rounds[0]['graph']:

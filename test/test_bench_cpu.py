@@ -12,8 +12,11 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'bench'))
-from graph_rate import descendants, tree_cpu_seconds  # noqa: E402  (bench/ is not a package)
+from graph_rate import (cpu_between, descendants, thread_cpu_ns,  # noqa: E402 (bench/: no package)
+                        tree_cpu_seconds)
 
 # A child that starts a grandchild which spins on the CPU for 0.4 s, then both sleep.
 SPIN = ('import subprocess, sys, time\n'
@@ -34,27 +37,39 @@ def test_a_busy_grandchild_counts_and_the_caller_does_not():
     grandchild = None
     try:
         deadline = time.monotonic() + 20
-        while time.monotonic() < deadline and tree_cpu_seconds(os.getpid()) < 0.4:
-            time.sleep(0.05)
+        while time.monotonic() < deadline and not descendants(child.pid):
+            time.sleep(0.02)
         grandchildren = descendants(child.pid)
         assert len(grandchildren) == 1
         grandchild = grandchildren[0]
-        # the grandchild's 0.4 s of spinning and two interpreters' start-up
-        counted = tree_cpu_seconds(os.getpid())
-        assert 0.4 <= counted < 5.0
+        start = thread_cpu_ns(child.pid)
+        while time.monotonic() < deadline and tree_cpu_seconds(child.pid) < 0.4:
+            time.sleep(0.05)
+        # the grandchild's 0.4 s of spinning (and its interpreter's start-up)
+        assert 0.4 <= tree_cpu_seconds(child.pid) < 5.0
         assert tree_cpu_seconds(grandchild) == 0.0       # it has no descendants of its own
+        # With the root: the child's own threads too; the window counts what was spent in it.
+        assert cpu_between(start, thread_cpu_ns(child.pid)) > 0.2
         # Now the tree sleeps: 0.5 s of this process's own CPU must not show.
         time.sleep(0.3)
-        before = tree_cpu_seconds(os.getpid())
+        before = tree_cpu_seconds(child.pid)
         spin_here(0.5)
-        assert tree_cpu_seconds(os.getpid()) - before < 0.1
+        assert tree_cpu_seconds(child.pid) - before < 0.1
+        child.kill()
+        child.wait()
+        # Orphaned by the kill: no longer a descendant of this process, so not counted.
+        assert grandchild not in descendants(os.getpid())
     finally:
         child.kill()
         child.wait()
         if grandchild is not None:
-            # Orphaned by the kill: no longer a descendant of this process, so not counted.
-            assert grandchild not in descendants(os.getpid())
             os.kill(grandchild, signal.SIGKILL)
+
+
+def test_a_window_counts_threads_born_in_it_and_loses_those_that_ended():
+    start = {(1, 1): 5_000_000_000, (1, 2): 1_000_000_000, (2, 2): 300_000_000}
+    end = {(1, 1): 5_500_000_000, (1, 3): 200_000_000}     # (1, 2) and (2, 2) ended
+    assert cpu_between(start, end) == pytest.approx(0.5 + 0.2)
 
 
 def test_a_process_without_children_has_no_descendants():

@@ -62,14 +62,20 @@ def recorder_of(runner_pid: int):
     return None
 
 
-def check_episode(folder, name, summary_steps) -> list:
-    """Return what episode file ``name`` lacks (empty when whole)."""
+def check_episode(folder, name, summary_steps, human_involved) -> list:
+    """Return what episode file ``name`` lacks (empty when whole).
+
+    The human's topics are expected only in episodes with the human involved: a human who sits
+    out sends nothing (issue 24).
+    """
     counts = {}
     for message in bag_reader.scan_file(pathlib.Path(folder) / name).messages:
         counts[message.topic] = counts.get(message.topic, 0) + 1
     expected = {'/hrc/state': summary_steps + 1, '/hrc/robot/cmd_wrench': summary_steps,
-                '/hrc/human/cmd_wrench': summary_steps, '/hrc/human/action': summary_steps,
                 '/hrc/agent/step': summary_steps, '/hrc/episode': 1}
+    if human_involved:
+        expected.update({'/hrc/human/cmd_wrench': summary_steps,
+                         '/hrc/human/action': summary_steps})
     return [f'{topic} {counts.get(topic, 0)}/{count}' for topic, count in expected.items()
             if counts.get(topic, 0) < count]
 
@@ -85,10 +91,11 @@ def trial(number: int, kill_after: float, finished: float, episodes: int, work: 
     context = rclpy.Context()
     rclpy.init(context=context)
     node = rclpy.create_node('sigkill_listener', context=context)
-    heard = {}                                          # episode -> (wall ns, steps)
+    heard = {}                              # episode -> (wall ns, steps, human involved)
     node.create_subscription(EpisodeSummary, topics.EPISODE,
                              lambda message: heard.setdefault(
-                                 message.episode, (time.time_ns(), message.steps)),
+                                 message.episode, (time.time_ns(), message.steps,
+                                                   message.human_involved)),
                              qos.EPISODE_QOS)
     executor = rclpy.executors.SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -132,12 +139,12 @@ def trial(number: int, kill_after: float, finished: float, episodes: int, work: 
     problems = {}
     done = {episode: info for episode, info in heard.items()
             if kill_ns - info[0] > finished * 1e9}
-    for episode, (_, steps) in sorted(done.items()):
+    for episode, (_, steps, human_involved) in sorted(done.items()):
         name = f'{session_id}_ep{episode:04d}.mcap'
         if name not in closed:
             problems[episode] = ['not closed before the kill']
         else:
-            lacking = check_episode(folder, name, steps)
+            lacking = check_episode(folder, name, steps, human_involved)
             if lacking:
                 problems[episode] = lacking
     # the open episode: finished by recovery; how much before the kill is missing

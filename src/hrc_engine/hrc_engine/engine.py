@@ -48,6 +48,7 @@ from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
 from hrc_engine import cdr, messages
 from hrc_engine.human import SimulatedHumanSide
+from hrc_sim_node.commands import ACTORS
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
 from hrc_sim_node.sim_params import LOCKSTEP, SimParams
@@ -138,6 +139,15 @@ class InProcessSession:
         self.session_id = self.settings.session_id
         sim_values = dict(self.parameters['sim'], mode=LOCKSTEP)
         self.sim_params = from_dict(SimParams, sim_values)
+        if sorted(self.sim_params.expected_actors) != sorted(ACTORS):
+            # The engine steps when the robot has answered and the human too while involved,
+            # as the graph's sim does with both actors expected; with one actor expected the
+            # graph's sim steps on that actor's command alone and takes the other's only if it
+            # came first, a race the engine cannot reproduce.
+            raise ValueError(f'sim.expected_actors {list(self.sim_params.expected_actors)}: '
+                             f'the in-process engine waits for both actors '
+                             f'({", ".join(ACTORS)}), as the lockstep graph does by default; '
+                             'use --engine graph for other settings')
         self.agent_params = from_dict(AgentParams, self.parameters['agent'])
         self.physics = SliderPendulumBall(physics_params_of(self.sim_params))
         self.protocol = StepProtocol(ProtocolSettings.of(self.sim_params))

@@ -163,3 +163,14 @@ def test_the_engine_takes_the_one_session_configuration():
     assert parameters['human']['profile'] == 'novice' and parameters['sim']['seed'] == 4
     with pytest.raises(ValueError, match='lockstep only'):
         compose_parameters(EngineConfig(SessionSettings(mode='realtime')))
+
+
+@pytest.mark.parametrize('actors', [['robot'], ['human']])
+def test_the_engine_refuses_a_sim_that_waits_for_one_actor(tmp_path, actors, capsys):
+    """One expected actor is a race in the graph (the other's command applied only if first)."""
+    config = short_config(tmp_path, overrides=dict(SHORT, **{'sim.expected_actors': actors}))
+    with pytest.raises(ValueError, match=r'sim.expected_actors .*waits for both actors'):
+        run_session(config)
+    assert main(['--set', f'sim.expected_actors=[{actors[0]}]', '--no-record',
+                 '--runs-dir', str(tmp_path / 'runs')]) == 2
+    assert 'use --engine graph' in capsys.readouterr().err

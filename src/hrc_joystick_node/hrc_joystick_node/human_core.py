@@ -343,9 +343,13 @@ class HumanCore:
         return answer
 
     def abort_answer(self) -> typing.Optional[HumanAnswer]:
-        """Return a zero answer to the last answered state (sent at once on an abort)."""
+        """Return a zero answer to the last answered state (sent at once on an abort).
+
+        None when nothing was answered, or when the human sits out the aborted step: the sim
+        applies nothing of theirs then, and the last answer belongs to an earlier episode.
+        """
         last = self.last_answer
-        if last is None:
+        if last is None or not self.involved:
             return None
         return self._zero(last.episode, last.step, last.stamp_ns,
                           'session aborted by the operator')

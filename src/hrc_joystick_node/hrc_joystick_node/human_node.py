@@ -139,6 +139,7 @@ class HumanNode(Node):
         self.create_subscription(TaskState, topics.SLICE_STATE, self.on_state, qos.STATE_QOS,
                                  event_callbacks=quiet_sub)
         self._state_before_limits = None
+        self._state_while_out = None     # the newest state not answered while sitting out
         self._waiting_since = time.monotonic()
         self.joy_subscription = None
         if self.joy is not None:
@@ -349,14 +350,36 @@ class HumanNode(Node):
                 f'{message.strategy}, training step {message.training_step}): human drives '
                 f'{core.dof}, {"involved" if core.involved else "not involved"}, '
                 f'subtasks {core.subtasks}')
+            self._answer_late_first_state(message.episode)
+
+    def _answer_late_first_state(self, episode: int) -> None:
+        """Answer the announced episode's first state if it came before the announcement.
+
+        The agent announces an episode and waits (at most ANNOUNCE_ACK_TIMEOUT_S) for the
+        readers' acknowledgement before the sim starts it; when that wait timed out, the first
+        state can come first, while the human still sat out. The sim awaits the human from its
+        own copy of the announcement: answering the state now saves a lockstep timeout (and a
+        command counted missing). Only the first state of that very episode: any other kept
+        state belongs to the robot alone.
+        """
+        late, self._state_while_out = self._state_while_out, None
+        if (late is not None and self.core.answers_states and late.episode == episode
+                and late.step == 0 and late.slice == 0):
+            self.get_logger().info(f'episode {episode}: its announcement came after its first '
+                                   'state: answering that state now')
+            self.on_state(late)
 
     # -- the step --------------------------------------------------------------------------
     def on_state(self, message: TaskState) -> None:
         """Answer one sim state with the human's action and wrench (not the last state)."""
         if message.truncated or message.terminated:
+            self._state_while_out = None
             return  # the last state of an episode needs no answer
         if not self.core.answers_states:
-            return  # sitting out this training step: the sim awaits nothing of the human
+            # Sitting out this training step: the sim awaits nothing of the human. Kept in
+            # case the announcement of an episode with the human comes after its first state.
+            self._state_while_out = message
+            return
         if self.core.limits is None:
             self._state_before_limits = message   # the newest: answered once the sim says
             return

@@ -124,6 +124,9 @@ def test_roles_not_involved_and_abort():
     assert (zero.command, zero.engaged, zero.source) == (0.0, False, ZERO)
     after = core.answer(0, 3, stamp(0, 3), State(slider_position=0.05))
     assert after.command == 0.0 and 'aborted' in after.detail
+    # An abort while the human sits out sends nothing: the last answer is of another step.
+    core.on_session('translation', False, [], aborted=True)
+    assert core.abort_answer() is None
 
 
 def test_a_joystick_drives_it_and_its_loss_holds_zero_and_asks_for_a_pause():

@@ -410,6 +410,20 @@ class StepProtocol:
                    for actor in self.awaited_actors()}
         return self._order(self._answers, missing, 'timeout')
 
+    def on_roles_changed(self) -> typing.Optional[StepOrder]:
+        """Lockstep, a role change during a wait: the step if the awaited actors have answered.
+
+        A late announcement (its acknowledgement wait timed out) can change who is awaited
+        after the state went out: when every actor awaited now has answered, the step is due.
+        """
+        if self.mode != LOCKSTEP or not self.waiting:
+            return None
+        awaited_actors = self.awaited_actors()
+        if not awaited_actors or not all(actor in self._answers for actor in awaited_actors):
+            return None
+        missing = {actor: not self._answers[actor].accepted for actor in awaited_actors}
+        return self._order(self._answers, missing, 'answered')
+
     def free_run(self) -> typing.Optional[StepOrder]:
         """Lockstep awaiting no actor: step with what arrived (nothing is missing)."""
         if self.mode != LOCKSTEP or self.awaited_actors() or not self.waiting:

@@ -416,6 +416,29 @@ class SimNode(Node):
             self.get_logger().info(f'session {message.session_id!r}: robot drives {robot}, '
                                    f'human drives {human}, human involved: '
                                    f'{self.protocol.human_involved}')
+            self._rearm_lockstep_wait()
+
+    def _rearm_lockstep_wait(self):
+        """After a role change during a lockstep wait: step if due, else wait as now needed.
+
+        Roles change between episodes; an announcement that comes late (after the state it
+        concerns) changes who is awaited: without this the sim could wait for nobody's
+        command with no timer armed, or on a free-run timer for an actor it now awaits.
+        """
+        if self.protocol.mode != LOCKSTEP or not self.protocol.waiting:
+            return
+        order = self.protocol.on_roles_changed()
+        if order is not None:
+            self._timeout_timer.cancel()
+            self._free_run.cancel()
+            self._advance(order)
+        elif self.protocol.awaited_actors():
+            self._free_run.cancel()
+            if self._timeout_timer.is_canceled():
+                self._timeout_timer.reset()
+        else:
+            self._timeout_timer.cancel()
+            self._free_run.reset()
 
     def _hold_after_abort(self, message: SessionStatus):
         """Stop the running episode at once: no more steps, nothing applied, hold."""

@@ -94,6 +94,27 @@ def test_human_not_involved_is_not_applied_and_reported():
     assert protocol.on_command('human', 0, wrench(torque_x=0.2), 0.0).kind == 'stale'
 
 
+def test_a_late_role_change_during_a_wait_steps_or_waits_as_the_roles_now_say():
+    # The human was involved when the state went out; the robot answered; an announcement
+    # that comes late says the human sits out: the step is due at once.
+    protocol = started()
+    assert protocol.on_command('robot', 0, wrench(force_z=0.5), 0.0).order is None
+    assert protocol.on_roles_changed() is None            # nothing changed yet
+    protocol.set_roles('translation', human_involved=False)
+    order = protocol.on_roles_changed()
+    assert order is not None and order.missing == {'robot': False}
+    assert (order.force, order.torque) == (0.5, 0.0) and order.reason == 'answered'
+    # Only the human expected and sitting out: nothing awaited (free run); a late "involved"
+    # makes the human awaited, and with no answer yet nothing is due (the node arms the wait).
+    protocol = started(expected=('human',))
+    protocol.set_roles('translation', human_involved=False)
+    assert protocol.awaited_actors() == ()
+    protocol.set_roles('translation', human_involved=True)
+    assert protocol.on_roles_changed() is None and protocol.awaited_actors() == ('human',)
+    assert protocol.on_command('human', 0, wrench(torque_x=0.1), 0.0).order is not None
+    assert protocol.on_roles_changed() is None            # not waiting any more
+
+
 def test_roles_swap_the_degrees_of_freedom():
     protocol = started(robot_dof='rotation')
     protocol.on_command('robot', 0, wrench(torque_x=0.1, force_z=1.0), 0.0)
