@@ -46,6 +46,7 @@ from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.executables import executable_path
 from hrc_common.params import from_dict
+from hrc_common.proc_tree import cpu_between, thread_cpu_ns
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_engine.human import SimulatedHumanSide
@@ -98,62 +99,6 @@ def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
     steps = [episode['steps'] for episode in result.episodes]
     return statistics.median(step / seconds
                              for step, seconds in zip(steps, result.episode_seconds))
-
-
-def descendants(root_pid: int) -> list:
-    """Return the pids of ``root_pid``'s living descendants (from /proc's parent links)."""
-    children = {}
-    for entry in os.scandir('/proc'):
-        if not entry.name.isdigit():
-            continue
-        try:
-            with open(f'/proc/{entry.name}/stat') as stat:
-                # "pid (comm) state ppid ...": comm may hold spaces and parentheses
-                ppid = int(stat.read().rsplit(')', 1)[1].split()[1])
-        except (OSError, IndexError, ValueError):
-            continue   # the process ended meanwhile
-        children.setdefault(ppid, []).append(int(entry.name))
-    found, todo = [], [root_pid]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.append(child)
-            todo.append(child)
-    return found
-
-
-def thread_cpu_ns(root_pid: int) -> dict:
-    """Return {(pid, tid): CPU ns} of the living threads of ``root_pid`` and its descendants.
-
-    From each thread's /proc schedstat (nanoseconds; /proc/<pid>/stat counts 10 ms ticks, too
-    coarse for a window of a second).
-    """
-    cpu = {}
-    for pid in [root_pid] + descendants(root_pid):
-        try:
-            tasks = os.listdir(f'/proc/{pid}/task')
-        except OSError:
-            continue
-        for task in tasks:
-            try:
-                with open(f'/proc/{pid}/task/{task}/schedstat') as schedstat:
-                    cpu[(pid, int(task))] = int(schedstat.read().split()[0])
-            except (OSError, IndexError, ValueError):
-                continue
-    return cpu
-
-
-def tree_cpu_seconds(root_pid: int) -> float:
-    """Return the CPU time (s) of the living threads of ``root_pid``'s descendants."""
-    return sum(ns for (pid, _), ns in thread_cpu_ns(root_pid).items() if pid != root_pid) / 1e9
-
-
-def cpu_between(start: dict, end: dict) -> float:
-    """Return the CPU (s) the threads alive at ``end`` spent since ``start`` (thread_cpu_ns).
-
-    A thread born after ``start`` counts whole; one that ended before ``end`` (an update's
-    learner thread) is not counted at all: its time is lost with it.
-    """
-    return sum(ns - start.get(key, 0) for key, ns in end.items()) / 1e9
 
 
 class CpuMarks:

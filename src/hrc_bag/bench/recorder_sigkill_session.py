@@ -28,26 +28,8 @@ import rclpy
 from hrc_bag import bag_reader
 from hrc_bag.recovery import recover_file
 from hrc_common import qos, topics
+from hrc_common.proc_tree import descendants
 from hrc_msgs.msg import EpisodeSummary
-
-
-def descendants(pid: int) -> list:
-    """Return the ids of the processes below ``pid`` (Linux /proc)."""
-    children = {}
-    for entry in pathlib.Path('/proc').iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            parent = int((entry / 'stat').read_text().rsplit(')', 1)[1].split()[1])
-        except (OSError, IndexError, ValueError):
-            continue
-        children.setdefault(parent, []).append(int(entry.name))
-    found, todo = [], [pid]
-    while todo:
-        for child in children.get(todo.pop(), []):
-            found.append(child)
-            todo.append(child)
-    return found
 
 
 def recorder_of(runner_pid: int):

@@ -1,12 +1,12 @@
-"""The benchmarks' CPU of a process tree (bench/graph_rate.py): what it counts and leaves out.
+"""A process tree's CPU for the benchmarks (hrc_common.proc_tree): what it counts, leaves out.
 
 ``tree_cpu_seconds`` sums the living threads of a process's descendants, from /proc schedstat:
 a busy grandchild counts, the caller itself does not, and a process that has left the tree no
-longer does. ``bench/middleware.py`` reports the recorder's running CPU cost with it.
+longer does. ``bench/middleware.py`` reports the recorder's running CPU cost with it; the
+SIGKILL bench finds the recorder among a session's processes with ``descendants``.
 """
 
 import os
-import pathlib
 import signal
 import subprocess
 import sys
@@ -14,9 +14,7 @@ import time
 
 import pytest
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'bench'))
-from graph_rate import (cpu_between, descendants, thread_cpu_ns,  # noqa: E402 (bench/: no package)
-                        tree_cpu_seconds)
+from hrc_common.proc_tree import cpu_between, descendants, thread_cpu_ns, tree_cpu_seconds
 
 # A child that starts a grandchild which spins on the CPU for 0.4 s, then both sleep.
 SPIN = ('import subprocess, sys, time\n'
