@@ -242,6 +242,42 @@ def bag_metadata(files: list, entries: list, custom_data: dict) -> dict:
     }
 
 
+# metadata.yaml's two lists that grow with every closed file. The whole document was dumped
+# again at every close: the pure-Python YAML representer over every file so far, 4.8 ms at 100
+# files and 14 ms at 300 (quadratic over a session, 12% of the recorder's Python in a
+# 30-episode session); each file's lines are dumped once now and joined.
+GROWING_LISTS = ('relative_file_paths', 'files')
+
+
+def dump_bag_metadata(files: list, entries: list, custom_data: dict, cache: dict) -> str:
+    """Return metadata.yaml's text: ``dump_yaml`` of ``bag_metadata``, the same text.
+
+    ``cache`` (a dict the caller keeps between calls) holds each file's lines of the two lists
+    that grow with the session, dumped once each; the rest is dumped every time.
+    """
+    information = bag_metadata(files, entries, custom_data)
+    placeholders = {key: f'HRCGROWINGLIST{index}' for index, key in enumerate(GROWING_LISTS)}
+    lists = {key: information[key] for key in GROWING_LISTS}
+    information.update(placeholders)
+    text = dump_yaml({'rosbag2_bagfile_information': information})
+    for key in GROWING_LISTS:
+        if not lists[key]:
+            lines = f'  {key}: []\n'
+        else:
+            items = []
+            for info, item in zip(files, lists[key]):
+                cache_key = (key, info.name, info.start, info.end, info.message_count)
+                if cache_key not in cache:
+                    # a sequence inside a mapping is written without indentation of its own
+                    # ("  files:" then "  - path: ..."): the item's lines indented by two
+                    cache[cache_key] = ''.join('  ' + line for line in
+                                               dump_yaml([item]).splitlines(keepends=True))
+                items.append(cache[cache_key])
+            lines = f'  {key}:\n' + ''.join(items)
+        text = text.replace(f'  {key}: {placeholders[key]}\n', lines, 1)
+    return text
+
+
 def custom_data_of(information: dict) -> dict:
     """Return the custom_data mapping of a rosbag2 metadata dict (or {})."""
     custom = information.get('custom_data') if isinstance(information, dict) else None
@@ -542,6 +578,7 @@ class SessionIndex:
         self.files = []
         self.problem = ''
         self._entries = {}                  # description_key -> [topic, description, count]
+        self._file_lines = {}               # dump_bag_metadata's cache of each file's lines
         if self.path.is_file():
             try:
                 self._load()
@@ -601,10 +638,9 @@ class SessionIndex:
     def write(self) -> None:
         """Rewrite metadata.yaml atomically."""
         entries = [tuple(entry) for entry in self._entries.values()]
-        document = {'rosbag2_bagfile_information':
-                    bag_metadata(self.files, entries, self.custom_data)}
+        text = dump_bag_metadata(self.files, entries, self.custom_data, self._file_lines)
         try:
-            atomic_write(self.path, dump_yaml(document), self.mode)
+            atomic_write(self.path, text, self.mode)
         except OSError as error:
             raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
 

@@ -13,8 +13,10 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader, cdr_peek, report
-from hrc_bag.format import (contract_description, EPISODE_RECORD, MessageEncoder,
-                            plain_values, RawMessage, SESSION_RECORD)
+from hrc_bag.format import (bag_metadata, contract_description, dump_bag_metadata,
+                            EPISODE_RECORD, FileInfo, MessageEncoder, plain_values, RawMessage,
+                            SESSION_RECORD)
+from hrc_bag.qos_yaml import dump_yaml
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, EpisodeRecorder
 from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
@@ -256,3 +258,26 @@ def test_each_episode_records_which_input_drove_the_human(tmp_path):
     assert record['message_count'] == '16'
     empty = bag_reader.read_metadata(tmp_path / 'src' / 'src_ep0001.mcap')[EPISODE_RECORD]
     assert empty['human_source'] == '' and empty['control_period'] == ''
+
+
+@pytest.mark.parametrize('names', [
+    [],
+    [f'case2-seed0-20261203-054508_ep{episode:04d}.mcap' for episode in range(120)],
+    # names a plain YAML scalar cannot hold, and a long one with spaces (the dumper may fold it)
+    ['odd: name.mcap', "it's #1.mcap", '- dash.mcap', 'x ' * 60 + '.mcap', 'ü.mcap'],
+])
+def test_metadata_yaml_is_the_whole_dump_with_each_files_lines_dumped_once(names):
+    state = contract_description('/hrc/state')
+    files = [FileInfo(name, 10**9 * index, 10**9 * index + 5, 3 * index,
+                      {'/hrc/state': 3 * index}, {'/hrc/state': state})
+             for index, name in enumerate(names)]
+    entries = [('/hrc/state', state, sum(range(len(names))) * 3)]
+    custom = {'session_id': 'case2', 'hrc_session': 'a: 1'}
+    whole = dump_yaml({'rosbag2_bagfile_information': bag_metadata(files, entries, custom)})
+    cache = {}
+    for count in (len(files) // 2, len(files)):       # a session growing: the cache reused
+        text = dump_bag_metadata(files[:count], entries, custom, cache)
+    assert len(cache) == 2 * len(files)
+    assert yaml.safe_load(text) == yaml.safe_load(whole)
+    if all(' ' not in name for name in names):        # nothing to fold: the same text
+        assert text == whole
