@@ -104,8 +104,8 @@ def engine_rate(case: int, episodes: int, seed: int, work: pathlib.Path,
 class CpuMarks:
     """Samples a process tree's threads' CPU (``thread_cpu_ns``) on request, in its own thread.
 
-    ``mark(label)`` returns at once (the listener that calls it is not held up by reading
-    /proc); ``marks`` holds (label, {(pid, tid): ns}, processes alive) in the order asked.
+    ``mark(label)`` ('first' or 'end') returns at once (the listener that calls it is not held
+    up by reading /proc); ``marks`` holds (label, {(pid, tid): ns}, processes alive) in order.
     """
 
     def __init__(self, root_pid: int):
@@ -123,11 +123,10 @@ class CpuMarks:
             cpu = thread_cpu_ns(self.root_pid)
             self.marks.append((label, cpu, len({pid for pid, _ in cpu})))
 
-    def close(self) -> list:
-        """Finish the pending samples; return the marks."""
+    def close(self) -> None:
+        """Finish the pending samples."""
         self._requests.put(None)
         self._thread.join(timeout=10)
-        return self.marks
 
     def running_cpu(self) -> float:
         """Return the CPU (s) from the 'first' mark to the last one with every process alive.
@@ -139,8 +138,7 @@ class CpuMarks:
         if not first:
             return float('nan')
         start, alive_then = first[0]
-        ends = [cpu for label, cpu, alive in self.marks
-                if label != 'first' and alive >= alive_then]
+        ends = [cpu for label, cpu, alive in self.marks if label == 'end' and alive >= alive_then]
         return cpu_between(start, ends[-1]) if ends else float('nan')
 
 
@@ -148,8 +146,8 @@ class StateTimer:
     """Records the receive time of every /hrc/state message on a domain (own thread).
 
     ``cpu``: a CpuMarks to mark at the first state received ('first') and at every episode's
-    last state ((episode, step)): the nodes' CPU while the episodes run, start-up and shutdown
-    left out.
+    last state ('end'): the session's CPU while the episodes run, start-up and shutdown left
+    out.
     """
 
     def __init__(self, domain_id: int):
@@ -170,7 +168,7 @@ class StateTimer:
             if len(self.samples) == 1:
                 self.cpu.mark('first')
             elif state.terminated or state.truncated:
-                self.cpu.mark((state.episode, state.step))
+                self.cpu.mark('end')
 
     def _spin(self):
         try:

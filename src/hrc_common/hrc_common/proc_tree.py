@@ -46,11 +46,6 @@ def thread_cpu_ns(root_pid: int) -> dict:
     return cpu
 
 
-def tree_cpu_seconds(root_pid: int) -> float:
-    """Return the CPU time (s) of the living threads of ``root_pid``'s descendants."""
-    return sum(ns for (pid, _), ns in thread_cpu_ns(root_pid).items() if pid != root_pid) / 1e9
-
-
 def cpu_between(start: dict, end: dict) -> float:
     """Return the CPU (s) the threads alive at ``end`` spent since ``start`` (thread_cpu_ns).
 

@@ -1,9 +1,10 @@
 """A process tree's CPU for the benchmarks (hrc_common.proc_tree): what it counts, leaves out.
 
-``tree_cpu_seconds`` sums the living threads of a process's descendants, from /proc schedstat:
-a busy grandchild counts, the caller itself does not, and a process that has left the tree no
-longer does. ``bench/middleware.py`` reports the recorder's running CPU cost with it; the
-SIGKILL bench finds the recorder among a session's processes with ``descendants``.
+``thread_cpu_ns`` reads the living threads of a process and its descendants from /proc
+schedstat: a busy grandchild counts, a process outside the tree (this one) does not, and one
+that has left the tree no longer does. ``bench/middleware.py`` reports the recorder's running
+CPU cost with it; the SIGKILL bench finds the recorder among a session's processes with
+``descendants``.
 """
 
 import os
@@ -14,7 +15,12 @@ import time
 
 import pytest
 
-from hrc_common.proc_tree import cpu_between, descendants, thread_cpu_ns, tree_cpu_seconds
+from hrc_common.proc_tree import cpu_between, descendants, thread_cpu_ns
+
+
+def tree_cpu_seconds(root_pid: int) -> float:
+    """Return the CPU (s) of the living threads of ``root_pid``'s descendants, not its own."""
+    return sum(ns for (pid, _), ns in thread_cpu_ns(root_pid).items() if pid != root_pid) / 1e9
 
 # A child that starts a grandchild which spins on the CPU for 0.4 s, then both sleep.
 SPIN = ('import subprocess, sys, time\n'

@@ -369,12 +369,16 @@ class StepProtocol:
             self._count(actor + '_duplicate')   # the first answer to a state stands
             return result
         self._answers[actor] = command
-        awaited_actors = self.awaited_actors()
-        if all(expected in self._answers for expected in awaited_actors):
-            missing = {expected: not self._answers[expected].accepted
-                       for expected in awaited_actors}
-            result.order = self._order(self._answers, missing, 'answered')
+        result.order = self._order_if_answered()
         return result
+
+    def _order_if_answered(self) -> typing.Optional[StepOrder]:
+        """Return the step when every actor awaited now has answered the awaited state."""
+        awaited_actors = self.awaited_actors()
+        if not all(actor in self._answers for actor in awaited_actors):
+            return None
+        missing = {actor: not self._answers[actor].accepted for actor in awaited_actors}
+        return self._order(self._answers, missing, 'answered')
 
     @property
     def awaits_human(self) -> bool:
@@ -416,13 +420,9 @@ class StepProtocol:
         A late announcement (its acknowledgement wait timed out) can change who is awaited
         after the state went out: when every actor awaited now has answered, the step is due.
         """
-        if self.mode != LOCKSTEP or not self.waiting:
-            return None
-        awaited_actors = self.awaited_actors()
-        if not awaited_actors or not all(actor in self._answers for actor in awaited_actors):
-            return None
-        missing = {actor: not self._answers[actor].accepted for actor in awaited_actors}
-        return self._order(self._answers, missing, 'answered')
+        if self.mode != LOCKSTEP or not self.waiting or not self.awaited_actors():
+            return None     # awaiting nobody: the free-run timer steps
+        return self._order_if_answered()
 
     def free_run(self) -> typing.Optional[StepOrder]:
         """Lockstep awaiting no actor: step with what arrived (nothing is missing)."""
