@@ -111,6 +111,7 @@ class CpuMarks:
     def __init__(self, root_pid: int):
         self.root_pid = root_pid
         self.marks = []
+        self.names = {}   # pid -> process_label
         self._requests = queue.Queue()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
@@ -122,6 +123,9 @@ class CpuMarks:
         while (label := self._requests.get()) is not None:
             cpu = thread_cpu_ns(self.root_pid)
             self.marks.append((label, cpu, len({pid for pid, _ in cpu})))
+            for pid, _ in cpu:
+                if pid not in self.names:
+                    self.names[pid] = process_label(pid, self.root_pid)
 
     def close(self) -> None:
         """Finish the pending samples."""
@@ -134,12 +138,50 @@ class CpuMarks:
         A mark sampled after a node exited would lose that node's time, so the last mark that
         saw as many processes as the first is the end; nan without such a pair.
         """
+        window = self._window()
+        return cpu_between(*window) if window else float('nan')
+
+    def running_cpu_by_process(self) -> dict:
+        """Return {process label: CPU s} over the window of :meth:`running_cpu` ({} without)."""
+        window = self._window()
+        if not window:
+            return {}
+        start, end = window
+        by_process = {}
+        for pid in {pid for pid, _ in end}:
+            threads = {key: ns for key, ns in end.items() if key[0] == pid}
+            label = self.names.get(pid, str(pid))
+            by_process[label] = by_process.get(label, 0.0) + cpu_between(start, threads)
+        return by_process
+
+    def _window(self):
+        """Return (first mark's CPU, last full 'end' mark's CPU), or None."""
         first = [(cpu, alive) for label, cpu, alive in self.marks if label == 'first']
         if not first:
-            return float('nan')
+            return None
         start, alive_then = first[0]
         ends = [cpu for label, cpu, alive in self.marks if label == 'end' and alive >= alive_then]
-        return cpu_between(start, ends[-1]) if ends else float('nan')
+        return (start, ends[-1]) if ends else None
+
+
+def process_label(pid: int, root_pid: int) -> str:
+    """Name a session's process: 'runner' for the root, else its executable ('sim_node', ...).
+
+    A composed process (``python -m hrc_bringup.compose_nodes sim human``) is named after its
+    nodes ('sim+human').
+    """
+    if pid == root_pid:
+        return 'runner'
+    try:
+        with open(f'/proc/{pid}/cmdline', 'rb') as cmdline:
+            words = cmdline.read().decode(errors='replace').split('\0')
+    except OSError:
+        return str(pid)
+    head = [word for word in (words[:words.index('--ros-args')] if '--ros-args' in words
+                              else words[:2]) if word]
+    if 'hrc_bringup.compose_nodes' in head:
+        return '+'.join(head[head.index('hrc_bringup.compose_nodes') + 1:])
+    return pathlib.Path(head[-1]).name if head else str(pid)
 
 
 class StateTimer:
@@ -242,6 +284,8 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
             'cpu': (after.children_user + after.children_system)
             - (before.children_user + before.children_system), 'wall': wall,
             'running_cpu': running, 'cpu_per_step': running / max(steps - 1, 1),
+            'cpu_per_step_by_process': {label: seconds / max(steps - 1, 1) for label, seconds
+                                        in timer.cpu.running_cpu_by_process().items()},
             'session_id': name}
 
 

@@ -174,6 +174,12 @@ def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, ex
             os.environ['HRC_EXECUTOR'] = previous
 
 
+def by_process(result: dict) -> str:
+    """Return a graph run's running CPU per step by process ('sim_node 0.812, ...', ms)."""
+    return ', '.join(f'{label} {seconds * 1000:.3f}' for label, seconds
+                     in sorted(result['cpu_per_step_by_process'].items())) or 'n/a'
+
+
 def main() -> int:
     """Measure everything in rounds and print the figures and ratios."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
@@ -241,7 +247,8 @@ def main() -> int:
                               f'{what}: {1000 / result["rate"]:.3f} ms/step '
                               f'({result["rate"]:.0f} steps/s, nodes CPU {result["cpu"]:.1f} s'
                               f'{own} in {result["wall"]:.1f} s; while the episodes ran '
-                              f'{result["cpu_per_step"] * 1000:.3f} ms CPU/step)', flush=True)
+                              f'{result["cpu_per_step"] * 1000:.3f} ms CPU/step: '
+                              f'{by_process(result)})', flush=True)
             rounds.append(figures)
     median = statistics.median
     reference = 'rclpy' if 'rclpy' in args.executors else args.executors[0]
@@ -287,6 +294,21 @@ def main() -> int:
                            if running_costs else 'n/a (no round measured it)')
                 print(f'      session CPU per step while the episodes ran (start-up and '
                       f'shutdown left out): {running}')
+                # where that goes: the recorder process's own and what the others add (their
+                # deliveries to one more reader), medians of the rounds, ms per step
+                labels = sorted({label for g in recorded + plain
+                                 for label in g['cpu_per_step_by_process']})
+                shares = []
+                for label in labels:
+                    added = [g['cpu_per_step_by_process'].get(label, 0.0)
+                             - p['cpu_per_step_by_process'].get(label, 0.0)
+                             for g, p in zip(recorded, plain)
+                             if g['cpu_per_step_by_process'] and p['cpu_per_step_by_process']]
+                    if added:
+                        shares.append(f'{label} {median(added) * 1000:+.3f}')
+                if shares:
+                    print(f'      by process, ms CPU per step with the recorder minus without: '
+                          f'{", ".join(shares)}')
             for compose in args.compose:
                 separate = 'batched' if 'recorder' in compose.split(',') else None
                 if (period, name, separate) not in rounds[0]['graph']:

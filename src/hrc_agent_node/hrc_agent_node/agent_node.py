@@ -143,8 +143,12 @@ class AgentNode(Node):
                                                 qos.COMMAND_QOS, event_callbacks=quiet_pub)
         self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
                                  event_callbacks=quiet_sub)
-        self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
-                                 qos.HUMAN_ACTION_QOS, event_callbacks=quiet_sub)
+        if self.params.human_action_source == 'same_step':
+            # only same_step reads the human's answers; with 'applied' (the default) a reader
+            # here would cost the human node a delivery and this process a wake-up per step for
+            # nothing (issue 24: the recorder is then the topic's only reader)
+            self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
+                                     qos.HUMAN_ACTION_QOS, event_callbacks=quiet_sub)
         self.reset_client = self.create_client(ResetEpisode, topics.RESET_SERVICE)
         self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)

@@ -58,6 +58,7 @@ class FakeSim:
         self.current = None          # the TaskState waiting for its command
         self.published = []          # every TaskState published
         self.answers = []            # (episode, step) of every command matched to a state
+        self.human_action_readers = set()
         self.stale = []              # commands whose stamp matched no waiting state
         self.off_axis = []
         self.resets = []
@@ -85,6 +86,8 @@ class FakeSim:
                 wrench.torque.z) != (0.0,) * 5:
             self.off_axis.append(msg)
         self.answers.append((self.current.episode, self.current.step))
+        # readers of the human's action while the agent answers (the agent's, with same_step)
+        self.human_action_readers.add(self.human_pub.get_subscription_count())
         self.current = None
         self.publish(self.sim.step(wrench.force.z, 0.0))
 
@@ -169,6 +172,7 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     expected = [(episode, step) for episode in range(7) for step in range(STEPS)]
     assert fake.answers == expected, 'every non-final state answered exactly once, in order'
     assert fake.stale == [] and fake.off_axis == []
+    assert fake.human_action_readers == {1}, 'same_step: the agent reads /hrc/human/action'
 
     summaries = fake.episodes
     # A judging episode is no Table II evaluation: evaluation false, counted with training.
@@ -266,8 +270,13 @@ def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
         # discovery can take longer than the sim's first states).
         'wait_for_subscribers': ['observer']})
     deadline = time.monotonic() + 90
+    readers = set()  # (readers of /hrc/state, of /hrc/human/action) seen while states came
     while agent.process.poll() is None and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.05)
+        if states:
+            readers.add(tuple(tuple(sorted(info.node_name for info in
+                                           node.get_subscriptions_info_by_topic(topic)))
+                              for topic in (topics.STATE, topics.HUMAN_ACTION)))
     for _ in range(20):
         executor.spin_once(timeout_sec=0.02)
     executor.shutdown()
@@ -280,6 +289,9 @@ def test_agent_drives_the_real_sim_node(start_node, rclpy_context):
     assert any(s.applied_torque != 0.0 for s in states)
     assert all(s.applied_force == 0.0 for s in states)
     assert sessions[-1].phase == SessionStatus.PHASE_DONE
+    # human_action_source 'applied' (the default) reads the human's command from the state:
+    # the agent does not subscribe to /hrc/human/action (a wake-up per step for nothing)
+    assert ((('agent', 'observer'), ()) in readers), readers
 
 
 def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_context,
@@ -315,8 +327,13 @@ def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_co
         'wait_for_subscribers': ['observer']})
     answers = []
     deadline = time.monotonic() + 90
+    readers = set()  # (readers of /hrc/state, of /hrc/human/action) seen while states came
     while agent.process.poll() is None and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.05)
+        if states:
+            readers.add(tuple(tuple(sorted(info.node_name for info in
+                                           node.get_subscriptions_info_by_topic(topic)))
+                              for topic in (topics.STATE, topics.HUMAN_ACTION)))
         if not answers and pause.service_is_ready():
             answers.append(pause.call_async(Trigger.Request()))
     for _ in range(20):

@@ -3,8 +3,8 @@
 Subscribes (raw CDR, no deserialization except the three topics that mark episode boundaries)
 to the configured topics and hands every message to :class:`hrc_bag.recording.EpisodeRecorder`,
 which owns the files. By default (``batch_period`` > 0) the recording subscriptions are hidden
-from the executor (:attr:`RecorderNode.subscriptions`): a message does not wake the recorder; a
-timer takes every waiting message of every subscription each ``batch_period`` and hands them
+from the executor (:class:`hrc_common.nodes.DrainedNode`): a message does not wake the recorder;
+a timer takes every waiting message of every subscription each ``batch_period`` and hands them
 over in one batch (TaskState's episode boundaries read from its bytes, not deserialized). With
 ``batch_period`` 0 each message is a callback of the recorder's executor, as before issue 24.
 The /hrc topics are subscribed at start with their contract QoS (so the first state of a
@@ -25,9 +25,8 @@ import time
 
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
-from hrc_common.nodes import run_node
+from hrc_common.nodes import DrainedNode, run_node, take_waiting
 from hrc_common.params import as_dict, declare_parameters, ParameterError
-from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 import yaml
@@ -67,7 +66,7 @@ def recording_qos(reliable: bool, transient_local: bool, depth: int) -> QoSProfi
                     else DurabilityPolicy.VOLATILE))
 
 
-class RecorderNode(Node):
+class RecorderNode(DrainedNode):
 
     def __init__(self):
         super().__init__('recorder')
@@ -78,8 +77,7 @@ class RecorderNode(Node):
         # batched: the recording subscriptions are not the executor's (a message does not wake
         # this process); _drain takes their messages
         self._batched = self.params.batch_period > 0
-        self._drained = []                  # (subscription, type, topic, type name, deserialize)
-        self._drained_handles = set()
+        self._drained = []                  # (subscription, topic, type name, deserialize)
         self.core = EpisodeRecorder(
             self.params, self._describe_topic, session_config=config,
             session_config_text=config_text, logger=self.get_logger(),
@@ -131,14 +129,12 @@ class RecorderNode(Node):
         marks_boundaries = type_name in BOUNDARY_TYPES
         resolved = self.resolve_topic_name(topic)
         if self._batched:
-            subscription = self.create_subscription(
-                message_type, topic, self._not_served, qos, raw=True,
+            subscription = self.create_drained_subscription(
+                message_type, topic, qos, raw=True,
                 event_callbacks=hrc_qos.NO_SUBSCRIPTION_EVENTS)
             self._subscriptions_by_topic[topic] = subscription
-            self._drained_handles.add(subscription)
-            self._drained.append((subscription, message_type, resolved, type_name,
-                                  functools.partial(deserialize_message,
-                                                    message_type=message_type)))
+            self._drained.append((subscription, resolved, type_name, functools.partial(
+                deserialize_message, message_type=message_type)))
             self.get_logger().info(
                 f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
                 f'{qos.durability.name.lower()}, drained every {self.params.batch_period:g} s)')
@@ -160,20 +156,6 @@ class RecorderNode(Node):
             f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
             f'{qos.durability.name.lower()})')
 
-    @property
-    def subscriptions(self):
-        """Return the subscriptions an executor serves: not those _drain takes from.
-
-        Executors (rclpy's and hrc_common.nodes.LeanExecutor) wait on what this property
-        gives; ``destroy_node`` still destroys every subscription of the node.
-        """
-        return [subscription for subscription in super().subscriptions
-                if subscription not in getattr(self, '_drained_handles', ())]
-
-    @staticmethod
-    def _not_served(_message) -> None:
-        """Never called: _drain takes these subscriptions' messages."""
-
     def _take_waiting(self) -> list:
         """Return (RawMessage, event) of every message waiting in the recording subscriptions.
 
@@ -182,13 +164,8 @@ class RecorderNode(Node):
         """
         batch = []
         depth = self.params.subscription_depth
-        for subscription, message_type, topic, type_name, deserialize in self._drained:
-            take = subscription.handle.take_message
-            for _ in range(depth):
-                taken = take(message_type, True)
-                if taken is None:
-                    break
-                data, info = taken
+        for subscription, topic, type_name, deserialize in self._drained:
+            for data, info in take_waiting(subscription, depth):
                 log_time = info.get('received_timestamp') or time.time_ns()
                 batch.append((RawMessage(topic, type_name, data, log_time,
                                          info.get('source_timestamp') or log_time,

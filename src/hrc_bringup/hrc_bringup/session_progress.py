@@ -1,12 +1,20 @@
 """What the session runner prints while a session runs: a line per episode and milestone."""
 
+import copy
 import time
 
 from hrc_common import qos, topics
 from hrc_common.contract import Phase, phase_label, source_label
+from hrc_common.nodes import DrainedNode, take_waiting
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
-import rclpy
 
+# The human's actions (one per step, up to ~500 steps/s in lockstep) are taken in batches every
+# ACTION_DRAIN_PERIOD_S instead of an executor turn each (issue 24: the runner's turn per action
+# was ~0.5 ms of CPU per step, a sixth of a lockstep session's); the reader keeps the newest
+# ACTION_HISTORY, so no change of source is missed below ACTION_HISTORY / ACTION_DRAIN_PERIOD_S
+# actions per second.
+ACTION_DRAIN_PERIOD_S = 0.1
+ACTION_HISTORY = 1000
 
 
 # The label of an episode on its progress line, by EpisodeSummary.kind (0: a bag's episode from
@@ -31,7 +39,7 @@ class Progress:
         ``max_training_episodes`` (None: no cap) and ``evaluation_episodes`` are said when
         training ends unconverged.
         """
-        self.node = rclpy.create_node('session_runner', context=context)
+        self.node = DrainedNode('session_runner', context=context)
         self.interactive = interactive
         self.max_training_episodes = max_training_episodes
         self.evaluation_episodes = evaluation_episodes
@@ -46,8 +54,16 @@ class Progress:
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self._on_episode,
                                       qos.EPISODE_QOS)
         self.input_source = None   # (source, detail) of the person's side, as last announced
-        self.node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
-                                      qos.HUMAN_ACTION_QOS)
+        actions_qos = copy.copy(qos.HUMAN_ACTION_QOS)
+        actions_qos.depth = ACTION_HISTORY
+        self._actions = self.node.create_drained_subscription(HumanAction, topics.HUMAN_ACTION,
+                                                              actions_qos)
+        self.node.create_timer(ACTION_DRAIN_PERIOD_S, self.take_actions)
+
+    def take_actions(self):
+        """Read the human's actions that arrived since the last call, in order."""
+        for action, _ in take_waiting(self._actions, ACTION_HISTORY):
+            self._on_action(action)
 
     def _on_status(self, status):
         # Announce what changes the task for the team; the training <-> updating toggles between
@@ -187,5 +203,6 @@ class Progress:
 
     def close(self):
         """Say what is still due, then destroy the node."""
+        self.take_actions()
         self._settle_verdict(final=True)
         self.node.destroy_node()

@@ -74,3 +74,50 @@ def test_a_runner_that_first_sees_the_session_done_still_says_the_test_episodes_
             progress.close()
     finally:
         rclpy.shutdown(context=context)
+
+
+def test_the_human_actions_are_taken_in_batches_and_every_change_of_source_is_said(capsys):
+    """The runner reads /hrc/human/action without an executor turn per action (issue 24).
+
+    Its executor never waits on that subscription (a turn per action was ~0.5 ms of the
+    runner's CPU per lockstep step); a timer takes what arrived, in order, so every change of
+    the driving input is still said once, even among many actions that arrive together.
+    """
+    import time
+
+    from hrc_common import qos, topics
+    from hrc_msgs.msg import HumanAction
+    from rclpy.executors import SingleThreadedExecutor
+
+    context = Context()
+    rclpy.init(context=context)
+    try:
+        progress = Progress(context, interactive=False)
+        served = [s.topic_name for s in progress.node.subscriptions]
+        assert topics.SESSION in served and topics.EPISODE in served
+        assert topics.HUMAN_ACTION not in served, served
+        publisher_node = rclpy.create_node('fake_human', context=context)
+        publisher = publisher_node.create_publisher(HumanAction, topics.HUMAN_ACTION,
+                                                    qos.HUMAN_ACTION_QOS)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(progress.node)
+        deadline = time.monotonic() + 10
+        while publisher.get_subscription_count() < 1 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        sources = ([(HumanAction.SOURCE_SIMULATED, 'paper (person 0)')] * 300
+                   + [(HumanAction.SOURCE_DEVICE, '/dev/input/js0')]
+                   + [(HumanAction.SOURCE_SIMULATED, 'paper (person 0)')] * 300)
+        for step, (source, detail) in enumerate(sources):
+            publisher.publish(HumanAction(step=step, source=source, source_detail=detail))
+        out, deadline = '', time.monotonic() + 20
+        while out.count('driven by') < 3 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+            out += capsys.readouterr().out
+        progress.close()
+        publisher_node.destroy_node()
+        said = [line for line in out.splitlines() if 'driven by' in line]
+        assert said == ['[session] the human side is driven by: simulated (paper)',
+                        '[session] the human side is driven by: device (/dev/input/js0)',
+                        '[session] the human side is driven by: simulated (paper)'], out
+    finally:
+        rclpy.shutdown(context=context)

@@ -20,6 +20,7 @@ from rclpy.executors import (ExternalShutdownException, SingleThreadedExecutor,
                              TimeoutObject)
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.node import Node
 from rclpy.subscription import Subscription
 from rclpy.utilities import timeout_sec_to_nsec
 
@@ -228,6 +229,54 @@ class LeanExecutor(SingleThreadedExecutor):
         if handler.done():
             with self._tasks_lock:
                 self._tasks = [entry for entry in self._tasks if entry[0] is not handler]
+
+
+class DrainedNode(Node):
+    """A node with subscriptions no executor waits on: the node takes their messages itself.
+
+    A subscription made with :meth:`create_drained_subscription` is left out of
+    :attr:`subscriptions`, what every executor (rclpy's and :class:`LeanExecutor`) waits on, so a
+    message does not wake the process for an executor turn; the node takes what waited with
+    :func:`take_waiting`, from a timer, in batches (the recorder; the session runner's watch of
+    the human's input source). The subscription is the node's all the same: the ROS graph, QoS
+    matching and ``destroy_node`` see it (issue 24: a turn per message was most of a reader's
+    cost).
+    """
+
+    def create_drained_subscription(self, msg_type, topic: str, qos_profile, raw=False,
+                                    **kwargs) -> Subscription:
+        """Create a subscription that only :func:`take_waiting` reads (no callback)."""
+        subscription = self.create_subscription(msg_type, topic, _never_called, qos_profile,
+                                                raw=raw, **kwargs)
+        self._drained_subscriptions = getattr(self, '_drained_subscriptions', set())
+        self._drained_subscriptions.add(subscription)
+        return subscription
+
+    @property
+    def subscriptions(self):
+        """Return the subscriptions an executor serves: not the drained ones."""
+        drained = getattr(self, '_drained_subscriptions', ())
+        return [subscription for subscription in super().subscriptions
+                if subscription not in drained]
+
+
+def _never_called(_message) -> None:
+    """The callback of a drained subscription: never called (take_waiting reads it)."""
+
+
+def take_waiting(subscription: Subscription, limit: int):
+    """Yield (message, info) of up to ``limit`` messages waiting in ``subscription``, in order.
+
+    The message is bytes for a raw subscription; ``info`` rclpy's dict (``received_timestamp``,
+    ``source_timestamp``, ``publication_sequence_number``). ``limit`` (the history's depth)
+    keeps a publisher faster than the caller from holding it here.
+    """
+    take = subscription.handle.take_message
+    for _ in range(limit):
+        taken = take(subscription.msg_type, subscription.raw)
+        if taken is None:
+            return
+        yield taken
 
 
 def make_executor(name: str, context=None):
