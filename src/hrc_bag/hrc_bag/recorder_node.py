@@ -129,9 +129,7 @@ class RecorderNode(DrainedNode):
         marks_boundaries = type_name in BOUNDARY_TYPES
         resolved = self.resolve_topic_name(topic)
         if self._batched:
-            subscription = self.create_drained_subscription(
-                message_type, topic, qos, raw=True,
-                event_callbacks=hrc_qos.NO_SUBSCRIPTION_EVENTS)
+            subscription = self.create_drained_subscription(message_type, topic, qos, raw=True)
             self._subscriptions_by_topic[topic] = subscription
             self._drained.append((subscription, resolved, type_name, functools.partial(
                 deserialize_message, message_type=message_type)))

@@ -20,6 +20,7 @@ from rclpy.executors import (ExternalShutdownException, SingleThreadedExecutor,
                              TimeoutObject)
 from rclpy.experimental import EventsExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.subscription import Subscription
 from rclpy.utilities import timeout_sec_to_nsec
@@ -243,11 +244,17 @@ class DrainedNode(Node):
     cost).
     """
 
-    def create_drained_subscription(self, msg_type, topic: str, qos_profile, raw=False,
-                                    **kwargs) -> Subscription:
-        """Create a subscription that only :func:`take_waiting` reads (no callback)."""
-        subscription = self.create_subscription(msg_type, topic, _never_called, qos_profile,
-                                                raw=raw, **kwargs)
+    def create_drained_subscription(self, msg_type, topic: str, qos_profile,
+                                    raw=False) -> Subscription:
+        """Create a subscription that only :func:`take_waiting` reads (no callback).
+
+        Without QoS event handlers: an executor would wait on those (a subscription's events
+        are its node's waitables), and they kept a runner's rclpy executor turning without
+        pause (measured: 1.7 ms of CPU per lockstep step instead of 0.5).
+        """
+        subscription = self.create_subscription(
+            msg_type, topic, _never_called, qos_profile, raw=raw,
+            event_callbacks=SubscriptionEventCallbacks(use_default_callbacks=False))
         self._drained_subscriptions = getattr(self, '_drained_subscriptions', set())
         self._drained_subscriptions.add(subscription)
         return subscription
