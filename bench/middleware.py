@@ -323,6 +323,25 @@ def main() -> int:
                 print(f'    composed {compose:19s}: {composed_step:7.3f} ms/step; step time '
                       f'composed / a process per node {median(ratios):.2f} (rounds '
                       f'{ratios[0]:.2f}..{ratios[-1]:.2f}), nodes CPU x{cpu:.2f}')
+                without = ','.join(n for n in compose.split(',') if n != 'recorder')
+                if without != compose and (period, name, without) in rounds[0]['graph']:
+                    # the recorder's cost inside a composition: against the same composition
+                    # without it, in the same rounds
+                    bare = [r['graph'][(period, name, without)] for r in rounds]
+                    rate_costs = sorted(1 - c['rate'] / b['rate'] for c, b in zip(composed, bare))
+                    cpu_costs = sorted(c['cpu_per_step'] / b['cpu_per_step'] - 1
+                                       for c, b in zip(composed, bare)
+                                       if math.isfinite(c['cpu_per_step'])
+                                       and math.isfinite(b['cpu_per_step'])
+                                       and b['cpu_per_step'] > 0)
+                    cpu_text = (f'{median(cpu_costs) * 100:+.1f}% (rounds '
+                                f'{cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f})'
+                                if cpu_costs else 'n/a')
+                    print(f'      the recorder composed with {without} (against {without} '
+                          f'composed without it): costs {median(rate_costs) * 100:+.1f}% of '
+                          f'the rate (rounds {rate_costs[0] * 100:+.1f}..'
+                          f'{rate_costs[-1] * 100:+.1f}), session CPU per step while the '
+                          f'episodes ran {cpu_text}')
     print(f'load average at the end: {os.getloadavg()[0]:.1f}')
     return 0
 
