@@ -180,8 +180,10 @@ def process_label(pid: int, root_pid: int) -> str:
     head = [word for word in (words[:words.index('--ros-args')] if '--ros-args' in words
                               else words[:2]) if word]
     if 'hrc_bringup.compose_nodes' in head:
-        return '+'.join(head[head.index('hrc_bringup.compose_nodes') + 1:])
-    return pathlib.Path(head[-1]).name if head else str(pid)
+        label = '+'.join(head[head.index('hrc_bringup.compose_nodes') + 1:])
+    else:
+        label = pathlib.Path(head[-1]).name if head else ''
+    return label if label and not label.startswith('-') else str(pid)
 
 
 class StateTimer:
@@ -244,7 +246,8 @@ def graph_rate(case: int, episodes: int, seed: int, record: bool, domain_id: int
 
     'cpu' is the whole session's (start-up included); 'running_cpu' the session's CPU (s; the
     runner and its nodes) from the first state to the last episode's last state and
-    'cpu_per_step' that per state received (nan when no state or no last state was seen).
+    'cpu_per_step' that per state received (nan when no state or no last state was seen);
+    'cpu_per_step_by_process' the same split by process ({process_label: s}, {} without).
 
     ``settings``: more ``NODE.PARAM=VALUE`` overrides (``hrc session --set``). The result also
     names the session (``session_id``; its logs are in ``work/runs/<session_id>/logs``).

@@ -30,7 +30,7 @@ def episode_label(summary) -> str:
                               'evaluation' if summary.evaluation else 'training')
 
 class Progress:
-    """Listens to /hrc/session and /hrc/episode and prints what happens (one rclpy node)."""
+    """Prints what happens: /hrc/session, /hrc/episode, /hrc/human/action (every 0.1 s)."""
 
     def __init__(self, context, interactive: bool, max_training_episodes=None,
                  evaluation_episodes: int = 0):

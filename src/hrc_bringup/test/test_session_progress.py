@@ -96,6 +96,9 @@ def test_the_human_actions_are_taken_in_batches_and_every_change_of_source_is_sa
         served = [s.topic_name for s in progress.node.subscriptions]
         assert topics.SESSION in served and topics.EPISODE in served
         assert topics.HUMAN_ACTION not in served, served
+        # and no QoS event handlers an executor would wait on (they kept the runner's rclpy
+        # executor turning without pause)
+        assert progress._actions.event_handlers == []
         publisher_node = rclpy.create_node('fake_human', context=context)
         publisher = publisher_node.create_publisher(HumanAction, topics.HUMAN_ACTION,
                                                     qos.HUMAN_ACTION_QOS)
