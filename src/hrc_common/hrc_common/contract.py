@@ -285,15 +285,18 @@ class SimLimits:
     max_torque: float       # N*m, full-scale torque on the pendulum's hinge
     human_period: float = 0.0   # s: the human's command is applied this often; 0 = unknown
     #                             (the reset response does not carry it: the robot needs none)
+    await_absent_human: bool = False   # the sim awaits the human's (zero) answers also while
+    #                             they sit out a training step (SimParams.await_absent_human)
 
     NAMES = ('control_period', 'max_force', 'max_torque')   # as the sim's parameters
-    OPTIONAL_NAMES = ('human_period',)                      # the sim's too, not in every source
+    OPTIONAL_NAMES = ('human_period', 'await_absent_human')  # the sim's, not in every source
 
     @classmethod
     def of(cls, source) -> 'SimLimits':
-        """Return the limits of an object with these fields (PhysicsParams, a reset response)."""
+        """Return the limits of an object with these fields (SimParams, a reset response)."""
         return cls(*(float(getattr(source, name)) for name in cls.NAMES),
-                   *(float(getattr(source, name, None) or 0.0) for name in cls.OPTIONAL_NAMES))
+                   human_period=float(getattr(source, 'human_period', None) or 0.0),
+                   await_absent_human=bool(getattr(source, 'await_absent_human', False)))
 
     @property
     def human_step(self) -> float:
@@ -326,7 +329,9 @@ class SimLimits:
     def describe(self) -> str:
         """Return one line for logs."""
         return (f'control period {self.control_period:g} s, max_force {self.max_force:g} N, '
-                f'max_torque {self.max_torque:g} N*m')
+                f'max_torque {self.max_torque:g} N*m'
+                + (', the human answers while sitting out (await_absent_human)'
+                   if self.await_absent_human else ''))
 
 
 # --------------------------------------------------------------------------- message types

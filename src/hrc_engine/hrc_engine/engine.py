@@ -154,7 +154,7 @@ class InProcessSession:
         self.stepper = SimStepper(self.physics, self.protocol)
         # What the sim owns, passed as the graph passes it (the reset response, the sim's
         # parameters): the physics' control period and limits.
-        self.limits = SimLimits.of(self.physics.params)
+        self.limits = SimLimits.of(self.sim_params)
         self.core = AgentCore(self.agent_params, limits=self.limits)
         if self.agent_params.resume_from:
             load_into(self.core, self.agent_params.resume_from,

@@ -289,9 +289,10 @@ class HumanCore:
         not await them then (``hrc_sim_node.protocol.StepProtocol.awaits_human``, from the same
         announcement): answering every state with zero was two of a lockstep step's five
         messages in the robot-alone episodes. The simulated human is not advanced by such
-        states either way, so the session's numbers are the same.
+        states either way, so the session's numbers are the same. With the sim's
+        ``await_absent_human`` (carried in its limits) it answers them with zero, as before.
         """
-        return self.involved
+        return self.involved or bool(self.limits and self.limits.await_absent_human)
 
     def answer(self, episode: int, step: int, stamp_ns: int, state,
                sticks: typing.Optional[dict] = None, slice_index: int = 0) -> HumanAnswer:
@@ -345,11 +346,11 @@ class HumanCore:
     def abort_answer(self) -> typing.Optional[HumanAnswer]:
         """Return a zero answer to the last answered state (sent at once on an abort).
 
-        None when nothing was answered, or when the human sits out the aborted step: the sim
-        applies nothing of theirs then, and the last answer belongs to an earlier episode.
+        None when nothing was answered, or when the human sits out the aborted step and sends
+        nothing (:attr:`answers_states`): the last answer belongs to an earlier episode then.
         """
         last = self.last_answer
-        if last is None or not self.involved:
+        if last is None or not self.answers_states:
             return None
         return self._zero(last.episode, last.step, last.stamp_ns,
                           'session aborted by the operator')

@@ -375,13 +375,15 @@ class HumanNode(Node):
         if message.truncated or message.terminated:
             self._state_while_out = None
             return  # the last state of an episode needs no answer
+        if self.core.limits is None:
+            # the newest: answered (or kept as below) once the sim says its limits, which also
+            # say whether a human who sits out answers (await_absent_human)
+            self._state_before_limits = message
+            return
         if not self.core.answers_states:
             # Sitting out this training step: the sim awaits nothing of the human. Kept in
             # case the announcement of an episode with the human comes after its first state.
             self._state_while_out = message
-            return
-        if self.core.limits is None:
-            self._state_before_limits = message   # the newest: answered once the sim says
             return
         if not self.core.aborted:
             self.check_inputs()

@@ -284,6 +284,24 @@ def test_follows_the_session_roles_and_sends_nothing_when_not_involved(start_nod
     assert harness.actions[key].engaged and 'its announcement came after' in process.output
 
 
+def test_with_the_sims_await_absent_human_it_answers_zero_while_sitting_out(start_node,
+                                                                             harness):
+    """The protocol before issue 24, as a setting of the sim read from its parameters."""
+    process = harness.start(start_node, params_file=PARAMS / 'human.yaml',
+                            parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1},
+                            limits=SimLimits(control_period=0.2, max_force=4.0,
+                                             max_torque=0.5, await_absent_human=True))
+    harness.wait_for_human_node(process)
+    assert harness.spin_until(lambda: 'answers while sitting out' in process.output), \
+        process.output
+    harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
+    assert harness.spin_until(lambda: 'not involved' in process.output), process.output
+    action, wrench = harness.step(task_state(0, 2, slider_position=0.05), process)
+    assert (action.command, action.engaged, action.source) == (0.0, False,
+                                                              HumanAction.SOURCE_NONE)
+    assert (wrench.wrench.force.z, wrench.wrench.torque.x) == (0.0, 0.0)
+
+
 def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness):
     process = harness.start(start_node, parameters={
         'input': 'joy', 'on_input_lost': 'zero', 'joy_timeout': 0.5, 'axis': 1,

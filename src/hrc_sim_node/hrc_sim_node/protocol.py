@@ -148,6 +148,7 @@ class ProtocolSettings:
     robot_dof: str = TRANSLATION
     human_period: typing.Optional[float] = None   # s: the human's command is applied this
     #                                         often; None: once a period (the sim passes its own)
+    await_absent_human: bool = False   # await the human also while they sit out (SimParams)
 
     @classmethod
     def of(cls, params) -> 'ProtocolSettings':
@@ -155,7 +156,8 @@ class ProtocolSettings:
         return cls(params.mode, tuple(params.expected_actors), params.lockstep_timeout,
                    params.command_timeout, params.control_period, params.max_force,
                    params.max_torque, params.robot_dof,
-                   getattr(params, 'human_period', params.control_period))
+                   getattr(params, 'human_period', params.control_period),
+                   bool(getattr(params, 'await_absent_human', False)))
 
     @property
     def human_slices(self) -> int:
@@ -277,7 +279,7 @@ class StepProtocol:
             return False
         if self.mode == REALTIME:
             return True
-        return self.awaits_human
+        return self.human_involved and HUMAN in self.expected
 
     @property
     def slice_index(self) -> int:
@@ -387,8 +389,10 @@ class StepProtocol:
         Only while the human is involved: a human who sits out a training step has nothing
         applied, so their answers would carry nothing; the human node does not send them then
         (issue 24: two of a lockstep step's five messages in the robot-alone episodes).
+        ``await_absent_human`` keeps the protocol before that: the human always counts.
         """
-        return self.human_involved and HUMAN in self.expected
+        return ((self.human_involved or self.settings.await_absent_human)
+                and HUMAN in self.expected)
 
     def expected_now(self) -> tuple:
         """Return the expected actors whose commands count now (the human only if involved)."""
