@@ -23,14 +23,16 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    over the whole session (start-up included: the recorder's own start, ~0.5 s of CPU, is most
    of it in a session of two episodes) and per step while the episodes ran (from the first state
    to the last, read from the threads' /proc schedstat; threads that end inside the window, an
-   update's learner thread, are left out in both runs), and the recorder process's own CPU (its
+   update's learner thread, are left out in both runs; also split by process, and what each
+   process spends more with the recorder), and the recorder process's own CPU (its
    last log line), for each recorder variant named
    (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
    ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
 5. with ``--compose sim,human ...``: the graph with those nodes in one process
    (``HRC_COMPOSE``, hrc_bringup.compose_nodes) against the same graph with a process per node:
    a composition with the recorder runs with the (batched) recorder and is compared with the
-   separate graph with it, one without against the graph without a recorder.
+   separate graph with it, one without against the graph without a recorder; with both
+   ``sim,human`` and ``sim,human,recorder``, the recorder's cost inside the composition.
 
 Case 5 by default: the human acts from the start (case 2's first episodes are the robot's alone
 and would hide the human's rate; ``--case 2 --human-periods 0.2`` measures them: the person's
