@@ -294,9 +294,11 @@ class SimLimits:
     @classmethod
     def of(cls, source) -> 'SimLimits':
         """Return the limits of an object with these fields (SimParams, a reset response)."""
-        return cls(*(float(getattr(source, name)) for name in cls.NAMES),
-                   human_period=float(getattr(source, 'human_period', None) or 0.0),
-                   await_absent_human=bool(getattr(source, 'await_absent_human', False)))
+        optional = {}
+        for name in cls.OPTIONAL_NAMES:   # a source without one: the field's default
+            default = cls.__dataclass_fields__[name].default
+            optional[name] = type(default)(getattr(source, name, None) or default)
+        return cls(*(float(getattr(source, name)) for name in cls.NAMES), **optional)
 
     @property
     def human_step(self) -> float:

@@ -15,8 +15,8 @@ What it decides, per state (not the last of its episode, which needs no answer):
 * the same state again (same episode and step): the same answer, ``repeated`` true, and the
   simulated human is not advanced twice;
 * the human not involved in this training step: no answer is sent at all
-  (:attr:`HumanCore.answers_states` false: the sim neither awaits nor applies one, issue 24);
-  asked anyway, zero, ``engaged`` false, source ``none``;
+  (:attr:`HumanCore.answers_states` false: the sim neither awaits nor applies one, issue 24;
+  true with the sim's ``await_absent_human``); asked, zero, ``engaged`` false, source ``none``;
 * otherwise the active input (:class:`~hrc_joystick_node.inputs.InputSelector`): the stick of
   the device or ``/joy`` (deadzone, inversion, deadman), the simulated human (reset at each new
   episode or when a step does not follow the last one; its clock is the state's stamp, so

@@ -111,10 +111,11 @@ def console_document(snapshot: Snapshot) -> dict:
     source = {'source': 'unknown', 'detail': 'no human command received yet', 'age_s': None,
               'engaged': False, 'healthy': False}
     if session is not None and not session.human_involved:
-        # the human node sends nothing while the person sits out (issue 24): say why
+        # the human node sends nothing while the person sits out (issue 24; zeros with the
+        # sim's await_absent_human): say why, whichever
         source = {'source': 'none', 'age_s': None, 'engaged': False, 'healthy': False,
                   'detail': 'not involved in this training step: the robot learns alone, '
-                            'the human node sends nothing'}
+                            'nothing of the person is applied'}
     elif human is not None:
         age = max(0.0, now - human.received)
         source = {'source': human.source, 'detail': human.detail, 'age_s': round(age, 2),

@@ -16,7 +16,8 @@ timers. The rules (docs/architecture.md, "The step protocol"):
   and are reported); with no expected actor the sim runs free (:meth:`StepProtocol.free_run`).
   A command with another stamp is stale: ignored, counted, reported.
 * The human counts only while involved (:attr:`StepProtocol.awaits_human`): a human who sits
-  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing.
+  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing
+  (``await_absent_human``: awaited and expected always, as before issue 24).
 * ``realtime``: a wall timer calls :meth:`StepProtocol.on_tick` every control period; each
   actor's kept command is applied unless older than ``command_timeout`` (wall s). The kept
   command is the one answering the newest state of the running episode, not the latest
@@ -271,7 +272,7 @@ class StepProtocol:
     def sliced(self) -> bool:
         """Return True when the running period is applied slice by slice (human's rate).
 
-        Lockstep: only while the human is involved and awaited (a human who sits out, or a
+        Lockstep: only while the human is involved and expected (a human who sits out, or a
         graph that does not wait for the human, steps whole periods, as before human slices);
         realtime: whenever the period has several slices (the wall timer ticks per slice).
         """
@@ -395,7 +396,7 @@ class StepProtocol:
                 and HUMAN in self.expected)
 
     def expected_now(self) -> tuple:
-        """Return the expected actors whose commands count now (the human only if involved)."""
+        """Return the expected actors whose commands count now (the human: awaits_human)."""
         if self.awaits_human:
             return self.expected
         return tuple(actor for actor in self.expected if actor != HUMAN)

@@ -170,6 +170,11 @@ def test_await_absent_human_keeps_the_protocol_before_issue_24():
     protocol.start_episode(0)
     stamp = protocol.next_stamp(0, False)
     assert protocol.on_command('robot', stamp, wrench(force_z=0.5), 0.0).order is None
+    # a role change during the wait does not step without the human (awaited either way)
+    protocol.set_roles('translation', human_involved=True)
+    assert protocol.on_roles_changed() is None and protocol.waiting
+    protocol.set_roles('translation', human_involved=False)
+    assert protocol.on_roles_changed() is None and protocol.waiting
     order = protocol.on_command('human', stamp, wrench(), 0.0).order
     assert order is not None and order.missing == {'robot': False, 'human': False}
     realtime = StepProtocol(ProtocolSettings(mode='realtime', control_period=0.2,
