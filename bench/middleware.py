@@ -176,6 +176,14 @@ def graph_step(case, episodes, seed, recorder, domain_id, work, human_period, ex
             os.environ['HRC_EXECUTOR'] = previous
 
 
+def running_cpu_costs(runs, baselines) -> list:
+    """Return the sorted running CPU per step ratios - 1 of paired runs (both measured)."""
+    return sorted(run['cpu_per_step'] / base['cpu_per_step'] - 1
+                  for run, base in zip(runs, baselines)
+                  if math.isfinite(run['cpu_per_step']) and math.isfinite(base['cpu_per_step'])
+                  and base['cpu_per_step'] > 0)
+
+
 def by_process(result: dict) -> str:
     """Return a graph run's running CPU per step by process ('sim_node 0.812, ...', ms)."""
     return ', '.join(f'{label} {seconds * 1000:.3f}' for label, seconds
@@ -280,11 +288,7 @@ def main() -> int:
                 cpu_costs = sorted(g['cpu'] / p['cpu'] - 1 for g, p in zip(recorded, plain))
                 # rounds where both runs gave a running CPU (nan: no state, or none at an
                 # episode's end, was heard)
-                running_costs = sorted(g['cpu_per_step'] / p['cpu_per_step'] - 1
-                                       for g, p in zip(recorded, plain)
-                                       if math.isfinite(g['cpu_per_step'])
-                                       and math.isfinite(p['cpu_per_step'])
-                                       and p['cpu_per_step'] > 0)
+                running_costs = running_cpu_costs(recorded, plain)
                 own = median(g['recorder_cpu'] for g in recorded)
                 print(f'    with recorder {recorder:11s}: {step_recorded:7.3f} ms/step; costs '
                       f'{rate_cost * 100:+.1f}% of the rate (rounds {rate_costs[0] * 100:+.1f}'
@@ -331,11 +335,7 @@ def main() -> int:
                     # without it, in the same rounds
                     bare = [r['graph'][(period, name, without)] for r in rounds]
                     rate_costs = sorted(1 - c['rate'] / b['rate'] for c, b in zip(composed, bare))
-                    cpu_costs = sorted(c['cpu_per_step'] / b['cpu_per_step'] - 1
-                                       for c, b in zip(composed, bare)
-                                       if math.isfinite(c['cpu_per_step'])
-                                       and math.isfinite(b['cpu_per_step'])
-                                       and b['cpu_per_step'] > 0)
+                    cpu_costs = running_cpu_costs(composed, bare)
                     cpu_text = (f'{median(cpu_costs) * 100:+.1f}% (rounds '
                                 f'{cpu_costs[0] * 100:+.1f}..{cpu_costs[-1] * 100:+.1f})'
                                 if cpu_costs else 'n/a')
