@@ -4,8 +4,8 @@
 Each trial starts a recorder node (defaults of params/recorder.yaml), sends a first episode,
 then episodes of ``--steps`` states ``--step-period`` s apart (five messages per step, as the
 graph in lockstep: state, two commands, human action, agent step; a summary per episode) and
-kills the recorder with SIGKILL at a random moment (seeded). Files left open are finished by
-recovery. Printed per trial and as a summary:
+kills the recorder with SIGKILL at a random moment (seeded, 1.2-3.0 s after the recorder closed
+the first of them). Files left open are finished by recovery. Printed per trial and as a summary:
 
 * loss: kill time minus the send time of the oldest message missing from the bags (the part
   of the open episode that was lost);

@@ -437,11 +437,8 @@ class KillTrial:
     undelivered: dict
     loss: float                     # s: kill time - send time of the oldest message lost
     unclosed_after: float           # s: the longest a sent summary waited in vain for its close
-
-    def finished(self, seconds: float) -> list:
-        """Return the episodes whose summary was sent more than ``seconds`` before the kill."""
-        return sorted(episode for episode, sent in self.summaries.items()
-                      if self.kill_ns - sent > seconds * NS_PER_S)
+    # episodes (>= 1) whose file metadata.yaml listed just before the kill
+    closed_before_kill: list = field(default_factory=list)
 
 
 def _recorded_by_episode(folder, prefix: str, stamps: dict) -> tuple:
@@ -466,38 +463,48 @@ def _recorded_by_episode(folder, prefix: str, stamps: dict) -> tuple:
 
 
 def kill_trial(session: SyntheticSession, recorder_pid: int, folder, kill_after: float,
-               steps: int = 25, step_period: float = 0.01, timeout: float = 60.0) -> KillTrial:
-    """SIGKILL a recorder (its process group) ``kill_after`` s into lockstep-paced episodes.
+               steps: int = 25, step_period: float = 0.01, timeout: float = 120.0) -> KillTrial:
+    """SIGKILL a recorder (its process group) during lockstep-paced episodes.
 
     A first episode (0) is sent and waited for until metadata.yaml lists it, which proves the
-    recorder hears every topic; then episodes follow until the kill. Afterwards the files the
-    recorder left open are finished by :func:`hrc_bag.recovery.recover_file`, and the bags
-    are compared with what ``session`` sent.
+    recorder hears every topic; then episodes follow until the kill. The kill comes
+    ``kill_after`` s after metadata.yaml listed one of them (an event, not a time: a loaded
+    machine may take long to send and record an episode), so at least one finished episode is
+    known to be closed and the moment still varies. ``timeout`` (s) bounds each wait for a
+    close. Afterwards the files the recorder left open are finished by
+    :func:`hrc_bag.recovery.recover_file`, and the bags are compared with what ``session`` sent.
     """
     folder = pathlib.Path(folder)
 
     def listed():
         return bag_reader.read_bag_metadata_yaml(folder).get('relative_file_paths') or []
 
+    def closed_one():
+        return any(_episode_of_file(name) not in (None, 0) for name in listed())
+
     session.publish_status(0)
     session.publish_episode(0, steps=5, step_period=step_period)
-    deadline = time.monotonic() + timeout
-    while not listed():
-        if time.monotonic() > deadline:
-            raise TimeoutError(f'the recorder did not close episode 0 in {folder}')
-        time.sleep(0.05)
+    if not _wait(listed, timeout):
+        raise TimeoutError(f'the recorder did not close episode 0 in {folder}')
     killed = threading.Event()
-    kill_time = []
+    kill_time, closed_at_kill, late = [], [], []
 
     def kill():
+        if _wait(closed_one, timeout):
+            time.sleep(kill_after)      # the moment of the kill, after the close
+        else:
+            late.append(f'the recorder closed no episode after episode 0 in {timeout} s')
+        closed_at_kill.extend(listed())
         kill_time.append(time.time_ns())
         os.killpg(recorder_pid, signal.SIGKILL)
         killed.set()
 
-    timer = threading.Timer(kill_after, kill)
-    timer.start()
+    killer = threading.Thread(target=kill, daemon=True)
+    killer.start()
     summaries = publish_until(session, killed.is_set, steps, step_period, first_episode=1)
-    timer.join()
+    killer.join()
+    if late:
+        raise TimeoutError(f'{late[0]} ({folder})')
     kill_ns = kill_time[0]
     closed = listed()
     for path in sorted(folder.glob('*.mcap')):
@@ -528,7 +535,19 @@ def kill_trial(session: SyntheticSession, recorder_pid: int, folder, kill_after:
     waiting = [kill_ns - sent for episode, sent in summaries.items()
                if episode not in closed_episodes]
     return KillTrial(folder, kill_ns, summaries, closed, misplaced, undelivered,
-                     loss_window(session, totals, kill_ns), max(waiting, default=0) / NS_PER_S)
+                     loss_window(session, totals, kill_ns), max(waiting, default=0) / NS_PER_S,
+                     sorted(episode for episode in map(_episode_of_file, closed_at_kill)
+                            if episode not in (None, 0)))
+
+
+def _wait(condition, timeout: float, interval: float = 0.05) -> bool:
+    """Poll ``condition()`` until true (True) or ``timeout`` s passed (False)."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(interval)
+    return True
 
 
 def _episode_of_file(name: str) -> typing.Optional[int]:

@@ -267,19 +267,21 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
         assert sum(1 for _ in reader.messages()) == session.published.count()
 
 
-# The recorder's default reorder_window (0.2 s) plus its tick and a close, with a margin for
-# a loaded machine. (Before: files closed reorder_window 0.5 + close_grace 0.5 s after the
-# summary and the open chunk was written every 1.0 s: a finished episode was lost.)
-FINISHED_BEFORE_KILL = 0.75     # s
-LOSS_BOUND = 1.0                # s, what the open episode may lose on this shared machine
+# s: the kill comes this long after the recorder closed an episode of the trial, drawn at
+# random (the episode running then is cut anywhere: its state, commands or summary)
+KILL_AFTER_CLOSE = (0.0, 1.5)
 TRIALS = 4
 
 
 def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test_node,
                                                                 tmp_path, isolation):
-    """Every episode finished FINISHED_BEFORE_KILL before the kill is closed and whole."""
+    """Every episode closed before the kill stays closed and whole; the open ones recover.
+
+    The kill waits for a close (metadata.yaml lists the file), not for a time: how soon a
+    finished episode closes is the recorder's own timing, checked on a fake clock
+    (test_recorder_durability.py) and measured by bench/recorder_sigkill.py.
+    """
     chance = random.Random(20261130)
-    losses = []
     for trial in range(TRIALS):
         isolation = type(isolation)()     # topics of the trial's own
         session_id = f'kill{trial}'
@@ -290,20 +292,19 @@ def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test
         session = SyntheticSession(test_node, session_id, case_id=1, seed=trial,
                                    prefix=isolation.prefix, history_depth=1000)
         assert session.wait_for_subscribers(), recorder.output
-        result = kill_trial(session, recorder.process.pid, tmp_path / session_id,
-                            chance.uniform(1.2, 3.0))
-        recorder.process.wait(timeout=10)
-        finished = result.finished(FINISHED_BEFORE_KILL)
-        assert finished, f'trial {trial}: no episode finished before the kill'
-        for episode in finished:
-            assert f'{session_id}_ep{episode:04d}.mcap' in result.closed, (trial, episode,
-                                                                           result.closed)
-            assert bag_reader.is_complete(tmp_path / session_id /
-                                          f'{session_id}_ep{episode:04d}.mcap')
+        folder = tmp_path / session_id
+        result = kill_trial(session, recorder.process.pid, folder,
+                            chance.uniform(*KILL_AFTER_CLOSE))
+        recorder.process.wait(timeout=30)
+        assert result.closed_before_kill, (trial, result.closed)
+        for episode in result.closed_before_kill:
+            name = f'{session_id}_ep{episode:04d}.mcap'
+            assert name in result.closed, (trial, episode, result.closed)
+            assert bag_reader.is_complete(folder / name)
+        # the files left open were finished by recovery
+        assert all(bag_reader.is_complete(path) for path in folder.glob('*.mcap')), trial
         assert result.misplaced == {} and result.undelivered == {}, (
             trial, result.misplaced, result.undelivered)
-        losses.append(result.loss)
-    assert max(losses) < LOSS_BOUND, losses
 
 
 def _stop(process):
