@@ -60,11 +60,12 @@ class SimClient:
         while time.monotonic() < deadline:
             self.spin_once()
 
-    def wait(self, condition, timeout: float = 10.0) -> bool:
+    # s: the default of every wait; generous, a loaded machine may take seconds per state
+    def wait(self, condition, timeout: float = 30.0) -> bool:
         """Spin until ``condition()`` holds; return whether it did."""
         return wait_for(condition, timeout, spin=self.spin_once)
 
-    def connect(self, timeout: float = 30.0):
+    def connect(self, timeout: float = 60.0):
         """Wait until the sim's service and subscriptions see this client."""
         ready = self.wait(lambda: self.reset_client.service_is_ready()
                           and all(publisher.get_subscription_count() > 0
@@ -81,7 +82,7 @@ class SimClient:
         """Call /hrc/sim/reset and return the response."""
         future = self.reset_client.call_async(ResetEpisode.Request(
             seed=seed, episode=episode, clock_mode=clock_mode, state_readers=state_readers))
-        assert self.wait(future.done, 10.0), 'no answer from /hrc/sim/reset'
+        assert self.wait(future.done, 30.0), 'no answer from /hrc/sim/reset'
         return future.result()
 
     def answer(self, actor: str, state, stamp=None, **components):
@@ -94,7 +95,7 @@ class SimClient:
             setattr(getattr(command.wrench, part), axis, float(value))
         self.publishers[actor].publish(command)
 
-    def next_state(self, count_before: int, timeout: float = 10.0):
+    def next_state(self, count_before: int, timeout: float = 30.0):
         """Wait for a state beyond the first ``count_before`` ones and return it."""
         assert self.wait(lambda: len(self.states) > count_before, timeout), \
             f'no new state after {count_before}'
