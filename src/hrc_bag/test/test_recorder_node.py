@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import time
 
 from hrc_common.testing import executable_path, wait_for
 from hrc_msgs.msg import SessionStatus
@@ -58,6 +57,18 @@ def wait_listed(folder, count, recorder, timeout=60.0):
     assert recorder.process.poll() is None, recorder.output
 
 
+def delivered(session, timeout: float = 60.0) -> bool:
+    """Wait until every reader acknowledged all that ``session`` published (reliable QoS).
+
+    A batched recorder (the default) stopped then still records it: at shutdown it takes
+    what waits in DDS. (One with a callback per message handles it in its next turn.)
+    """
+    from rclpy.duration import Duration
+
+    return all(publisher.wait_for_all_acked(Duration(seconds=timeout))
+               for publisher in session.publishers.values())
+
+
 def by_topic(messages) -> dict:
     result = {}
     for message in messages:
@@ -91,7 +102,7 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, is
                             step_period=0.01)
     wait_listed(folder, 3, recorder)
     session.publish_status(3, SessionStatus.PHASE_DONE, 1, True)
-    time.sleep(1.0)                                     # reliable delivery of the last status
+    assert delivered(session), recorder.output
     assert recorder.stop() == 0, recorder.output
 
     # recorded names carry the test's prefix (the recorder was remapped onto it)
@@ -188,7 +199,7 @@ def test_the_batched_recorder_records_what_a_callback_per_message_records(
         for recorder, folder in ((batched, 'batched'), (per_message, 'per_message')):
             wait_listed(tmp_path / folder / 'eq', episode + 1, recorder)
     session.publish_status(3, SessionStatus.PHASE_DONE, human_involved=True)
-    time.sleep(1.0)                                     # reliable delivery of the last status
+    assert delivered(session), batched.output + per_message.output
     assert batched.stop() == 0, batched.output
     assert per_message.stop() == 0, per_message.output
     assert 'drained every 0.05 s' in batched.output
@@ -234,12 +245,14 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
     before = session.published.count()
     session.publish_status(1)
     session.publish_episode(1, steps=6, final=False, step_period=0.01)  # running ...
-    time.sleep(1.5)                                     # ... several flush periods (0.2 s)
+    open_file = folder / 'kill_ep0001.mcap'
+    # ... written to disk by a flush (every 0.2 s here) ...
+    assert wait_for(lambda: open_file.exists() and len(bag_reader.scan_file(open_file).messages)
+                    == session.published.count() - before, 60.0), recorder.output
     os.killpg(recorder.process.pid, signal.SIGKILL)     # ... when the recorder is killed
-    recorder.process.wait(timeout=10)
+    recorder.process.wait(timeout=30)
 
     finished = folder / 'kill_ep0000.mcap'
-    open_file = folder / 'kill_ep0001.mcap'
     with Reader(finished) as reader:
         assert reader.message_count == before
     with Reader(folder) as reader:                      # metadata.yaml lists closed files only
