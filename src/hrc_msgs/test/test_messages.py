@@ -95,6 +95,7 @@ LATCHED_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
 PUBLISHER_SCRIPT = textwrap.dedent("""
     import sys, time, pickle, base64
     import rclpy
+    from rclpy.duration import Duration
     from rclpy.serialization import deserialize_message
     from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -106,20 +107,22 @@ PUBLISHER_SCRIPT = textwrap.dedent("""
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
     publishers = [node.create_publisher(type(m), '/hrc/test/' + type(m).__name__, qos)
                   for m in messages]
-    deadline = time.monotonic() + 20
+    deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         if all(p.get_subscription_count() > 0 for p in publishers):
             break
         rclpy.spin_once(node, timeout_sec=0.05)
     for publisher, message in zip(publishers, messages):
         publisher.publish(message)
-    time.sleep(3)
+    for publisher in publishers:     # the listener has each message before this process ends
+        publisher.wait_for_all_acked(Duration(seconds=60))
     rclpy.shutdown()
 """)
 
 
 def test_every_message_crosses_processes(rclpy_context, ros_env):
     import base64
+    import time
 
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -139,10 +142,11 @@ def test_every_message_crosses_processes(rclpy_context, ros_env):
     publisher = subprocess.Popen([sys.executable, '-c', script], env=ros_env,
                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
     try:
-        deadline_spins = 400
-        while len(received) < len(messages) and deadline_spins > 0:
+        # s: the publisher is a new Python process (rclpy's import, discovery) on a machine
+        # that may be busy
+        deadline = time.monotonic() + 120
+        while len(received) < len(messages) and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
-            deadline_spins -= 1
     finally:
         publisher.kill()
         output = publisher.communicate()[0].decode(errors='replace')
