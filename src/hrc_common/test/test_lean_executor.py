@@ -20,7 +20,7 @@ from hrc_common.nodes import (EXECUTOR_VARIABLE, executor_problem, LeanExecutor,
 QUEUE = 10
 
 
-def spin_until(executor, condition, seconds=5.0):
+def spin_until(executor, condition, seconds=30.0):
     """Spin until ``condition()``; fail after ``seconds``."""
     deadline = time.monotonic() + seconds
     while not condition():
@@ -35,6 +35,7 @@ def served_order(context, executor_name: str, tag: str) -> list:
     waiting, published state first: rclpy serves timers, then subscriptions in creation order.
     """
     import rclpy
+    from rclpy.executors import SingleThreadedExecutor
     node = rclpy.create_node(f'order_{tag}', context=context)
     calls = []
     session = node.create_subscription(Int32, f'/order_{tag}/session',
@@ -43,15 +44,27 @@ def served_order(context, executor_name: str, tag: str) -> list:
                                      lambda m: calls.append(('state', m.data)), QUEUE)
     state_pub = node.create_publisher(Int32, f'/order_{tag}/state', QUEUE)
     session_pub = node.create_publisher(Int32, f'/order_{tag}/session', QUEUE)
+    # A probe in the same context (the same DDS participant, which hands a received sample
+    # to each of its readers at once) tells when both messages have arrived.
+    probe = rclpy.create_node(f'order_probe_{tag}', context=context)
+    arrived = []
+    for topic in ('session', 'state'):
+        probe.create_subscription(Int32, f'/order_{tag}/{topic}', arrived.append, QUEUE)
+    probing = SingleThreadedExecutor(context=context)
+    probing.add_node(probe)
     executor = make_executor(executor_name, context=context)
     executor.add_node(node)
     spin_until(executor, lambda: (state.get_publisher_count() and
                                   session.get_publisher_count()))
+    spin_until(probing, lambda: (state_pub.get_subscription_count() == 2 and
+                                 session_pub.get_subscription_count() == 2))
     timer = node.create_timer(0.0, lambda: calls.append(('timer', 0)))
     state_pub.publish(Int32(data=1))
     session_pub.publish(Int32(data=2))
-    time.sleep(0.2)   # both delivered before the executor waits
+    spin_until(probing, lambda: len(arrived) == 2)   # both delivered before the executor waits
     spin_until(executor, lambda: len(calls) >= 3)
+    probing.shutdown()
+    probe.destroy_node()
     timer.cancel()
     executor.shutdown()
     node.destroy_node()
