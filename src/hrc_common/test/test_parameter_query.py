@@ -28,17 +28,21 @@ def test_a_request_never_answered_is_asked_again(rclpy_context):
 
     service = owner.create_service(GetParameters, '/fake_sim/get_parameters', answer)
     values = []
-    query = ParameterQuery(asker, 'fake_sim', ['control_period'], values.append)
-    query.answer_timeout = 1.0   # s (2 by default)
+    # The query's clock is the test's (s): "within the timeout" holds however slow the machine.
+    now = [0.0]
+    query = ParameterQuery(asker, 'fake_sim', ['control_period'], values.append,
+                           answer_timeout=1.0, clock=lambda: now[0])
     asking = LeanExecutor(context=rclpy_context)
     asking.add_node(asker)
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + 30
     while query.future is None:          # the service is seen: the request goes out
         assert time.monotonic() < deadline
         query.poll()
         asking.spin_once(timeout_sec=0.05)
     lost = query.future
     # The owner never serves that request: its service goes away with it, a new one comes.
+    # (The pause lets the request reach the old service; were it shorter, the new one could get
+    # the request and the test would prove less, but it would not fail.)
     time.sleep(0.3)
     owner.destroy_service(service)
     owner.create_service(GetParameters, '/fake_sim/get_parameters', answer)
@@ -46,7 +50,8 @@ def test_a_request_never_answered_is_asked_again(rclpy_context):
     answering.add_node(owner)
     query.poll()
     assert query.future is lost           # within the timeout: still waiting
-    deadline = time.monotonic() + 10
+    now[0] += 1.5                         # past the timeout
+    deadline = time.monotonic() + 30
     while not values:
         assert time.monotonic() < deadline, 'the query never asked again'
         query.poll()
