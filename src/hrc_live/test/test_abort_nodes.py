@@ -4,6 +4,8 @@ The test publishes ``/hrc/session`` with phase ``aborted`` as the agent does: th
 must stop stepping at once and hold, the human node must send zero at once and keep to zero.
 """
 
+import re
+
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.testing import serve_sim_parameters, wait_for
@@ -78,10 +80,15 @@ def test_the_realtime_sim_holds_at_once_on_an_abort(start_node, peer):
     peer.publish_session(SessionStatus.PHASE_ABORTED, 'by the operator in episode 0')
     assert wait_for(lambda: 'aborted' in sim.output, timeout=60), sim.output
     assert 'holding, nothing applied' in sim.output
+    # The states sent before the abort may still be on their way (this test's node did not
+    # spin meanwhile): take them in up to the step the sim says it stopped at.
+    stopped_at = int(re.search(r'stopped at step (\d+)', sim.output).group(1))
+    assert peer.wait(lambda: peer.states[-1].step >= stopped_at), sim.output
     # A sim that did not hold would publish five states a second.
     held_at = len(peer.states)
     peer.wait(lambda: False, timeout=1.5)
     assert len(peer.states) == held_at, [state.step for state in peer.states[held_at:]]
+    assert peer.states[-1].step == stopped_at
     assert not any(state.truncated for state in peer.states)
     # An explicit reset (a new episode) is still served.
     future = peer.reset.call_async(ResetEpisode.Request(seed=1, episode=1))
