@@ -285,7 +285,7 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     assert wait_for(lambda: 'pause requested (test agent)' in answer.text, 30, 0.2), answer.text
     assert agent.calls == ['pause']
     # The input goes quiet: the command's age grows and it is no longer healthy.
-    assert wait_for(lambda: float(status(port)['console']['input']['age_s']) > 1.0, 10, 0.2)
+    assert wait_for(lambda: float(status(port)['console']['input']['age_s']) > 1.0, 60, 0.2)
     assert status(port)['console']['input']['healthy'] is False
     # The session runner says the joystick is gone: both pages say so.
     from std_msgs.msg import String
@@ -317,7 +317,7 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     for scale, value in answer.items():
         assert not send.is_enabled(), scale
         browser.find_element('css selector', f'input[name="{scale}"][value="{value}"]').click()
-    assert wait_for(send.is_enabled, 5, 0.1)
+    assert wait_for(send.is_enabled, 30, 0.1)
     send.click()
     assert wait_for(lambda: not form.is_displayed(), 20, 0.2)
     stored = tmp_path / 'tlx.yaml'
@@ -452,7 +452,7 @@ def test_a_foreign_page_in_the_browser_changes_nothing(graph, tmp_path):
     def refusals():
         return re.findall(r"refused POST (/\S+) from 127\.0\.0\.1: foreign Origin "
                           r"'http://127\.0\.0\.1:\d+'", display.output)
-    assert wait_for(lambda: len(refusals()) >= 3 * 2 + 2, 10, 0.2), display.output
+    assert wait_for(lambda: len(refusals()) >= 3 * 2 + 2, 60, 0.2), display.output
     assert {'/control/pause', '/control/resume', '/control/abort', '/tlx'} <= set(refusals())
     # The own page still acts (its secret, its origin).
     code, text = post(port, '/control/pause', token=page_token(port))
