@@ -232,7 +232,11 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
         name: oct(mode) for name, mode in modes.items()}
 
     # Resume from the checkpoint, one more training episode: the counters continue.
-    watcher.wait(lambda: False, timeout=1.0)  # take in what is left of the first run
+    # Take in what is left of the first run: up to the last state its bags hold (one sim
+    # sends them in order, so the earlier ones are in too).
+    last = bag['/hrc/state'][-1]
+    assert watcher.wait(lambda: any((s.episode, s.step) == (last.episode, last.step)
+                                    for s in watcher.states), 60)
     first_state = len(watcher.states)
     code, text = run_to_the_end(watcher, [*session, *resume_args, '--episodes',
                                           str(finished + 1)], tmp_path / 'resumed.log')
