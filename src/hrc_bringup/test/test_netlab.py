@@ -62,12 +62,13 @@ def test_delay_is_added_and_order_kept_under_jitter(link_ends):
         payload = b'%03d' % index
         sent[payload] = time.monotonic()
         station.send(payload)
-    packets, times = receive_all(trainer, 30, timeout=5.0)
+    packets, times = receive_all(trainer, 30, timeout=30.0)
     assert packets == [b'%03d' % index for index in range(30)]   # all, in order
     latencies = [arrival - sent[packet] for packet, arrival in zip(packets, times)]
-    # Never earlier than delay - jitter (20 ms); the median near the 40 ms delay.
+    # Never earlier than delay - jitter (20 ms); the median above it. (The upper bound only
+    # catches a delay wrong by an order of magnitude: a busy machine adds its own.)
     assert min(latencies) >= 0.019, latencies
-    assert 0.025 < sorted(latencies)[15] < 0.2, latencies
+    assert 0.025 < sorted(latencies)[15] < 1.0, latencies
 
 
 def test_loss_is_seeded_and_near_the_probability(link_ends):
@@ -79,7 +80,7 @@ def test_loss_is_seeded_and_near_the_probability(link_ends):
             station.send(b'%04d' % (batch * 50 + index))
         time.sleep(0.05)
         # Wait until each packet of the batch arrived or was counted lost (not a fixed 0.3 s).
-        packets += receive_all(trainer, 50, timeout=0.3, accounted=lambda received, sent=(
+        packets += receive_all(trainer, 50, timeout=30.0, accounted=lambda received, sent=(
             batch + 1) * 50, before=len(packets): (
                 before + received + emulator.counts['lost'] >= sent))[0]
     lost = emulator.counts['lost']
@@ -91,15 +92,18 @@ def test_loss_is_seeded_and_near_the_probability(link_ends):
 def test_an_outage_drops_both_directions_then_the_link_returns(link_ends):
     station, trainer, make = link_ends
     emulator = make(LinkProfile())
-    emulator.outage(0.5)
+    # An outage longer than any test, ended by hand: the emulator's thread may see the packets
+    # late on a busy machine, and they must still fall inside it.
+    emulator.outage(600.0)
     station.send(b'during')
     trainer.send(b'during')
-    assert receive_all(trainer, 1, timeout=0.3)[0] == []
+    assert receive_all(trainer, 1, timeout=30.0,
+                       accounted=lambda received: emulator.counts['dropped_down'] == 2)[0] == []
     assert receive_all(station, 1, timeout=0.1)[0] == []
     assert emulator.counts['dropped_down'] == 2
-    time.sleep(0.3)
+    emulator.outage(0.0)                  # the cable is back
     station.send(b'after')
-    assert receive_all(trainer, 1, timeout=2.0)[0] == [b'after']
+    assert receive_all(trainer, 1, timeout=30.0)[0] == [b'after']
 
 
 def test_profile_describes_itself():
