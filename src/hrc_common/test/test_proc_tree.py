@@ -30,6 +30,12 @@ SPIN = ('import subprocess, sys, time\n'
         'time.sleep(30)\n')
 
 
+def scheduler_state(pid: int) -> str:
+    """Return the process's state letter in /proc (R running, S sleeping, ...)."""
+    with open(f'/proc/{pid}/stat') as stat:
+        return stat.read().rsplit(')', 1)[1].split()[0]
+
+
 def spin_here(seconds: float) -> None:
     end = time.process_time() + seconds
     while time.process_time() < end:
@@ -40,7 +46,7 @@ def test_a_busy_grandchild_counts_and_the_caller_does_not():
     child = subprocess.Popen([sys.executable, '-c', SPIN])
     grandchild = None
     try:
-        deadline = time.monotonic() + 20
+        deadline = time.monotonic() + 60       # s: two interpreters start on a busy machine
         while time.monotonic() < deadline and not descendants(child.pid):
             time.sleep(0.02)
         grandchildren = descendants(child.pid)
@@ -54,8 +60,11 @@ def test_a_busy_grandchild_counts_and_the_caller_does_not():
         assert tree_cpu_seconds(grandchild) == 0.0       # it has no descendants of its own
         # With the root: the child's own threads too; the window counts what was spent in it.
         assert cpu_between(start, thread_cpu_ns(child.pid)) > 0.2
-        # Now the tree sleeps: 0.5 s of this process's own CPU must not show.
-        time.sleep(0.3)
+        # Now the tree sleeps (the grandchild's spin is over: it sleeps, state S): 0.5 s of
+        # this process's own CPU must not show.
+        while time.monotonic() < deadline and scheduler_state(grandchild) != 'S':
+            time.sleep(0.02)
+        assert scheduler_state(grandchild) == 'S'
         before = tree_cpu_seconds(child.pid)
         spin_here(0.5)
         assert tree_cpu_seconds(child.pid) - before < 0.1
