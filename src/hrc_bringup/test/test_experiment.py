@@ -194,7 +194,9 @@ def test_a_signal_handed_to_another_thread_stops_the_sweep_at_once():
         started = time.monotonic()
         with pytest.raises(_Stop):
             pool.run([20.0], lambda outcome: None, function=time.sleep)
-        assert time.monotonic() - started < 1.0 + 3 * experiment.WAKE_PERIOD_S + 2.0
+        # within seconds (1 s, then a few wake periods), well before the 20 s task would end;
+        # half the task leaves a busy machine its slowness
+        assert time.monotonic() - started < 10.0
     finally:
         pool.close(abort=True)
         signal.signal(signal.SIGUSR1, previous)
