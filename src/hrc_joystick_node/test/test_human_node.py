@@ -24,7 +24,7 @@ from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 
 CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
-WAIT = 15.0  # s: generous bound for anything over DDS on a busy 2-core machine
+WAIT = 30.0  # s: generous bound for anything over DDS (node start-up too) on a busy machine
 SIM_LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)  # the sim's defaults
 PARAMS = params_dir()
 

@@ -25,7 +25,7 @@ def seconds(stamp) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
 
 
-def printed(process, text: str, timeout: float = 10.0) -> bool:
+def printed(process, text: str, timeout: float = 30.0) -> bool:
     """Wait until the node process has printed ``text``."""
     return wait_for(lambda: text in process.output, timeout, interval=0.05)
 
