@@ -29,23 +29,20 @@ episodes (judging episodes included); evaluation runs the frozen deterministic p
 Three kinds of episode (:class:`EpisodePlan`):
 
 * **training**: the stochastic policy explores; its samples go to the rollout buffer;
-* **judging** (``convergence_judged_on: evaluation``, the default): one deterministic episode of
-  the current policy after each PPO update (``judging_interval: 0``) or after every N training
-  episodes, in the current step's setting; the step's advance condition is judged on these
-  episodes only. They are not learned from, but they count in :attr:`total_episodes` and,
-  when the human acts in them, in :attr:`human_involved_episodes` (the person's time is the
-  burden the paper measures). ``convergence_judged_on: training`` judges the stochastic
-  training episodes instead (the earlier rule; no judging episodes);
+* **judging**: one deterministic episode of the current policy after each update
+  (``judging_interval: 0``) or after every N training episodes, in the current step's setting;
+  the step's advance condition is judged on these episodes only. They are not learned from,
+  but they count in :attr:`total_episodes` and, when the human acts in them, in
+  :attr:`human_involved_episodes` (the person's time is the burden the paper measures). A
+  judging episode that met the step's condition is followed by another one of the same policy
+  until the window is full (the floor of the rule: strategies.py);
 * **evaluation**: the frozen policy after training (Table II); not counted in the totals.
 
-When PPO updates is ``update_rule``: ``episode_end_after_horizon`` (the earlier rule) at the end
-of the episode that filled ``horizon`` samples; ``horizon_or_episode_end`` after ``horizon``
-samples or at an episode's end, whichever comes first. Inside an episode the update runs in
-:meth:`act` at a defined step boundary (see :meth:`_step_boundary`), so every loop gets it
-without a call of its own. The learner (``hrc_agent_node.learner``) runs it synchronously
-(deterministic) unless :meth:`set_learner_mode` chose ``background`` (the agent node's realtime
-episodes). ``judging_rule: in_a_row`` follows a judging episode that met the step's condition
-with another one of the same policy (the floors of the rules: strategies.py).
+PPO updates after ``horizon`` samples or at an episode's end, whichever comes first. Inside an
+episode the update runs in :meth:`act` at a defined step boundary (see :meth:`_step_boundary`),
+so every loop gets it without a call of its own. The learner (``hrc_agent_node.learner``) runs
+it synchronously (deterministic) unless :meth:`set_learner_mode` chose ``background`` (the agent
+node's realtime episodes). SAC learns inside :meth:`act` itself (``sac_update_at``).
 
 When a step advances to a step with another reward, the rollout buffer (samples of the old
 reward) and the reward scaler's statistics are reset, so the first update of the new step
@@ -187,16 +184,6 @@ class AgentCore:
         return self.params.seed
 
     @property
-    def convergence_rule(self) -> str:
-        """Return what step conditions are judged on: 'evaluation' or 'training' episodes."""
-        return self.params.convergence_judged_on
-
-    @property
-    def judged_on_evaluation(self) -> bool:
-        """Return True when step conditions are judged on deterministic judging episodes."""
-        return self.params.convergence_judged_on == 'evaluation'
-
-    @property
     def robot_dof(self) -> str:
         """Return the degree of freedom the robot drives."""
         return self.case.robot_dof
@@ -247,22 +234,14 @@ class AgentCore:
 
     @property
     def update_due(self) -> bool:
-        """Return True when an update is due at this episode end (by ``update_rule``).
+        """Return True when an update is due at this episode end.
 
-        ``episode_end_after_horizon``: the buffer holds a horizon of samples;
-        ``horizon_or_episode_end``: it holds any sample, or a background update started inside
-        the episode has not been swapped in yet.
+        PPO: the buffer holds any sample, or a background update started inside the episode has
+        not been swapped in yet.
         """
         if self.off_policy:
             return self.policy_learner.update_due    # SAC: see sac.py
-        if self.params.update_rule == 'episode_end_after_horizon':
-            return len(self.buffer) >= self.params.horizon
         return len(self.buffer) > 0 or self.learner.busy
-
-    @property
-    def updates_inside_episodes(self) -> bool:
-        """Return True when updates may run inside an episode (``horizon_or_episode_end``)."""
-        return self.params.update_rule == 'horizon_or_episode_end'
 
     @property
     def learner_mode(self) -> str:
@@ -463,7 +442,7 @@ class AgentCore:
     def _step_boundary(self, log: _EpisodeLog, observation) -> dict:
         """Before the action for a state of a training episode: the updates due inside it.
 
-        Only under ``update_rule: horizon_or_episode_end``. First a background update that has
+        First a background update that has
         finished is swapped in (its weights act from this state on). Then, when the buffer and
         the episode's samples not yet in it hold ``horizon`` samples, the rollout is cut here
         and the update starts: synchronously it runs now, so this state's action already comes
@@ -472,7 +451,7 @@ class AgentCore:
         terminated: it bootstraps from V(this state) of the weights that collected it. Returns
         the statistics of the update that took over at this step, or None.
         """
-        if not self.updates_inside_episodes or log.plan.deterministic:
+        if log.plan.deterministic:
             return None
         swapped = self.learner.poll()
         if swapped is not None:
@@ -514,7 +493,7 @@ class AgentCore:
     def _updated(self, stats: dict) -> None:
         """Note an update whose weights act from now on."""
         self.last_update = stats
-        if self.judged_on_evaluation and self.params.judging_interval == 0:
+        if self.params.judging_interval == 0:
             self.judging_due = True
 
     def _settle_learner(self):
@@ -582,7 +561,6 @@ class AgentCore:
         self.total_episodes += 1
         self.human_involved_episodes += int(plan.with_person)
         self.population_episodes += int(plan.human_involved and not plan.with_person)
-        judge = plan.judging or not self.judged_on_evaluation
         if plan.judging:
             self.judging_episodes += 1
             self.judging_due = False
@@ -590,12 +568,10 @@ class AgentCore:
         else:
             self.episodes_since_judging += 1
             interval = self.params.judging_interval
-            if self.judged_on_evaluation and interval > 0 \
-                    and self.episodes_since_judging >= interval:
+            if interval > 0 and self.episodes_since_judging >= interval:
                 self.judging_due = True
-        converged, event = self.progress.record(errors) if judge else (False, '')
-        if plan.judging and event == '' and self.params.judging_rule == 'in_a_row' \
-                and self.progress.last_episode_met():
+        converged, event = self.progress.record(errors) if plan.judging else (False, '')
+        if plan.judging and event == '' and self.progress.last_episode_met():
             # Judge the same frozen policy again on the next episode, until the window is full
             # (no training, no update in between) or an episode fails.
             self.judging_due = True
@@ -635,20 +611,19 @@ class AgentCore:
                 self.policy_learner.clear_replay()
         # judge_first: the policy the step starts with may already meet it (trained before the
         # person joined): judge it on the step's first episode instead of training first.
-        self.judging_due = self.progress.step.judge_first and self.judged_on_evaluation
+        self.judging_due = self.progress.step.judge_first
         self.episodes_since_judging = 0
 
     def _next_is_judging(self) -> bool:
         """Return True when the next episode of the training phase is a judging episode."""
-        return self.judged_on_evaluation and self.judging_due \
-            and self.activity_phase == Phase.TRAINING and not self.progress.finished
+        return self.judging_due and self.activity_phase == Phase.TRAINING \
+            and not self.progress.finished
 
     def update(self) -> dict:
         """Run the PPO update on the buffer (phase ``updating``), then go back to training.
 
-        Under ``convergence_judged_on: evaluation`` with ``judging_interval: 0`` the next
-        episode judges the updated policy. Under ``update_rule: horizon_or_episode_end`` this is
-        the update at the episode's end (of the samples since the last one inside it, after
+        With ``judging_interval: 0`` the next episode judges the updated policy. This is the
+        update at the episode's end (of the samples since the last one inside it, after
         swapping in a background update still running); returns the statistics of the last
         update run.
         """
@@ -657,7 +632,7 @@ class AgentCore:
         if self.off_policy:
             self.last_update = stats = self.policy_learner.update()
             self.phase = Phase.TRAINING
-            if self.judged_on_evaluation and self.params.judging_interval == 0:
+            if self.params.judging_interval == 0:
                 self.judging_due = True
             return stats
         # A background update started inside the episode first; then the samples since.

@@ -21,14 +21,13 @@ loop). The step protocol (docs/architecture.md):
 * the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
   computed from the state reached);
 * on the final state (truncated/terminated): ``/hrc/agent/step`` of the last action,
-  ``/hrc/episode``; the PPO update when one is due at the episode's end (``update_rule``; phase
+  ``/hrc/episode``; the PPO update when one is due at the episode's end (phase
   ``updating`` announced first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with
   any change; then the reset for the next episode. After training (last step converged or
   max_training_episodes) the evaluation phase runs the frozen deterministic policy; then phase
   ``done`` and the node exits with code 0. In realtime the next reset waits until
   ``episode_break`` wall seconds after the final state (the person rests; the update runs
-  within the break). Under ``update_rule:
-  horizon_or_episode_end`` updates also fall inside an episode, at the step where the horizon is
+  within the break). PPO updates also fall inside an episode, at the step where the horizon is
   reached: in lockstep episodes synchronously at that step (as the in-process engine and the
   offline loop: bit-identical), in realtime episodes in a learner thread while the old weights
   keep acting; the new ones take over at the first step boundary after it finished

@@ -58,7 +58,6 @@ def digests(tree_file: str, **overrides) -> dict:
         case=2, seed=0, training_episodes=8, evaluation_episodes=1, session_id='alone',
         record=False, overrides={'sim.episode_duration': 2.0, 'agent.horizon': 20,
                                  'agent.minibatch_size': 10, 'agent.convergence_window': 1,
-                                 'agent.judging_rule': 'in_a_row',
                                  'agent.task_tree_file': tree_file, **overrides}),
         checkpoints=False))
     result = session.run()
