@@ -1,5 +1,6 @@
-"""When PPO updates (after horizon samples or at an episode's end), the learner modes, and the
-floor of the judging rule.
+"""When PPO updates, the learner modes, and the floor of the judging rule.
+
+PPO updates after horizon samples or at an episode's end, whichever comes first.
 
 Deterministic: seeded cores driven with hand-made states (no physics).
 """
