@@ -40,7 +40,8 @@ from hrc_common.contract import InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import from_dict, param, ParameterError
 from hrc_joystick_node.human_model import ClonedHuman, load_human_model
-from hrc_joystick_node.human_profile import default_profiles_path, HumanProfile, load_profiles
+from hrc_joystick_node.human_profile import (default_profiles_path, HumanProfile, load_profiles,
+                                             RETIRED_PROFILES, unknown_profile_reason)
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
                                       MODEL, PAUSE, SCRIPT, SIM, stick_command, StickReading,
                                       ZERO)
@@ -161,6 +162,8 @@ def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile
                     where='profiles_file') -> HumanProfile:
     """Return the person the parameters name (profile, then the population draw)."""
     if params.profile not in profiles:
+        if params.profile in RETIRED_PROFILES:
+            raise ParameterError(f'profile: {unknown_profile_reason(params.profile, profiles)}')
         raise ParameterError(f'profile: {params.profile!r} is not in {where} '
                              f'(known: {sorted(profiles)})')
     return person_or_profile(profiles[params.profile], params.person)
