@@ -50,7 +50,7 @@ import time
 try:
     from hrc_common.contract import case_ids
     from hrc_common.session_plan import STUDY_LEARNING
-    from hrc_study.loading import load_sessions
+    from hrc_bag.report import load_records as load_sessions
 except ModuleNotFoundError as missing:   # started without the workspace's environment
     print(f'rerun_study: {missing}: run `make setup` once, then `source scripts/env.sh` in this '
           'shell', file=sys.stderr)

@@ -22,7 +22,7 @@ from hrc_bringup import cli, experiment
 from hrc_common.testing import executable_path
 import pytest
 
-from hrc_study.loading import load_sessions
+from hrc_bag.report import load_records as load_sessions
 
 # A private cluster on loopback: no usage reports, and no token authentication (Ray 2.60
 # enables it on a head that finds ~/.ray/auth_token, while clients default to 'disabled').

@@ -11,7 +11,7 @@ import yaml
 from hrc_bringup.experiment_task import run_task, SessionTask
 from hrc_common.session_plan import parse_overrides, SessionSettings
 from hrc_common.paths import params_dir
-from hrc_study.loading import load_sessions
+from hrc_bag.report import load_records as load_sessions
 
 
 @pytest.mark.slow
