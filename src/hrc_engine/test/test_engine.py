@@ -87,7 +87,7 @@ def test_the_bags_carry_the_graphs_qos_and_the_report_reads_them(tmp_path, read_
                              '--out', str(tmp_path / 'report')],
                             capture_output=True, text=True, timeout=120)
     assert report.returncode == 0, report.stdout + report.stderr
-    assert 'Case 1' in (tmp_path / 'report' / 'table2.md').read_text()
+    assert '| 1 | task first | translation | 1 |' in (tmp_path / 'report' / 'table2.md').read_text()
 
 
 def test_offered_qos_table_matches_the_contract():
