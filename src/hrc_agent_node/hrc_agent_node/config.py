@@ -1,7 +1,8 @@
 """The agent's parameters: one dataclass for the node, the offline loop and the checkpoints. Pure.
 
 Defaults are the paper's where it gives them (Table I: PPO; section IV: reward, 40 s episodes)
-and documented choices where it does not. Mirrored in ``params/agent.yaml``.
+and documented choices where it does not. ``params/agent.yaml`` is generated from it
+(``python -m hrc_bringup.params_files --write``).
 """
 
 from dataclasses import dataclass
