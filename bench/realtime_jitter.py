@@ -56,7 +56,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from hrc_common import qos, topics
 from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
                               REALTIME_PRIORITY_VARIABLE)
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 from hrc_msgs.msg import TaskState
 
 

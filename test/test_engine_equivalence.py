@@ -24,7 +24,7 @@ import subprocess
 import pytest
 
 from hrc_agent_node.checkpoint import read_checkpoint
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
         '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
@@ -172,7 +172,8 @@ def sessions(tmp_path_factory, rosbags_typestore):
     """
     from concurrent.futures import ThreadPoolExecutor
 
-    from hrc_common.testing import DomainReservation, read_bag_with_rosbags, ros_environment
+    from hrc_common.domains import DomainReservation
+    from hrc_testing.nodes import read_bag_with_rosbags, ros_environment
 
     def run(name):
         args, extra_env = SESSIONS[name]

@@ -7,7 +7,7 @@ import types
 
 from hrc_bag import report
 from hrc_bag.report.loading import kind_of
-from hrc_bag.synthetic import record_in_process
+from hrc_testing.bag_traffic import record_in_process
 from hrc_common.contract import EpisodeKind
 from hrc_msgs.msg import EpisodeSummary
 from hrc_study.loading import record_from_bag_session

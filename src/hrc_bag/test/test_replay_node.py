@@ -4,7 +4,7 @@ import pathlib
 import time
 
 from hrc_common.params import load_yaml, ParameterError
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -14,7 +14,7 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.recorder_node import message_class
 from hrc_bag.replay import bag_start, playlist, publisher_qos, ReplayParams, Timeline
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 

@@ -184,7 +184,7 @@ def test_changes_are_checked_and_other_parameters_left_alone(rclpy_context):
 
 
 def test_domain_reservations_are_exclusive():
-    from hrc_common.testing import DomainReservation
+    from hrc_common.domains import DomainReservation
 
     first, second = DomainReservation(), DomainReservation()
     try:

@@ -13,7 +13,7 @@ import hashlib
 import json
 
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import exact_plain
+from hrc_testing.sessions import exact_plain
 from hrc_engine.engine import EngineConfig, InProcessSession
 import pytest
 

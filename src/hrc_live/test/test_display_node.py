@@ -25,7 +25,7 @@ import urllib.request
 
 from hrc_common import qos, topics
 from hrc_common.contract import BODY_COLOURS, rgb8
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 from hrc_live.display_documents import COLORS
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState

@@ -5,7 +5,7 @@ import pathlib
 import re
 import statistics
 
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 from hrc_msgs.msg import SessionStatus
 from hrc_sim_node.body_geometry import body_poses
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
