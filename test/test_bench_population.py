@@ -1,4 +1,4 @@
-"""bench/population_training.py's simulated people act at the study's rate (issue 22's leftovers).
+"""bench/population.py's simulated people act at the study's rate (issue 22's leftovers).
 
 The offline loop calls a person every human_period (0.02 s by default); the bench's evaluation
 people were built for the control period (0.2 s), so their delays and integrator ran 10x fast.
@@ -17,7 +17,7 @@ from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams
 
-BENCH = pathlib.Path(__file__).resolve().parents[1] / 'bench' / 'population_training.py'
+BENCH = pathlib.Path(__file__).resolve().parents[1] / 'bench' / 'population.py'
 
 
 @pytest.fixture
