@@ -14,7 +14,7 @@ import subprocess
 import time
 
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
 STEPS = 40  # control steps per episode in these tests (episode_duration 8 s)
 SHORT = ['--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']

@@ -11,7 +11,7 @@ import sys
 import textwrap
 
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 from hrc_engine.engine import compose_parameters, EngineConfig, OFFERED_QOS, run_session
 from hrc_engine.inprocess_session import main, parse_args
 import pytest

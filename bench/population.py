@@ -1,6 +1,6 @@
 """What population training buys with partners the agent never met (offline loop, no ROS).
 
-    python src/hrc_agent_node/bench/population.py --case 2 --seeds 0 1 --episodes 300 \
+    python bench/population.py --case 2 --seeds 0 1 --episodes 300 \
         --held-out 3 --evaluation-episodes 3
 
 For each seed, trains two agents against hrc_joystick_node's simulated human (``--profile``):

@@ -1,6 +1,6 @@
 """Episodes to convergence per case against the scripted PD partner (offline loop, no ROS).
 
-    python src/hrc_agent_node/bench/convergence.py --presets paper tuned --cases 1 2 3 4 5 6 \
+    python bench/convergence.py --presets paper tuned --cases 1 2 3 4 5 6 \
         --seed 0 --episodes 300
 
 Prints one row per (preset, case): training episodes when each training step ended (its
