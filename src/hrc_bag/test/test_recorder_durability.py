@@ -17,7 +17,7 @@ from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, EpisodeRecorder
-from hrc_bag.synthetic import type_name_of
+from hrc_testing.bag_traffic import type_name_of
 
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
            'durability': 'volatile'}
