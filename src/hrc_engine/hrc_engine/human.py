@@ -8,21 +8,8 @@ is the command times the sim's ``max_force``/``max_torque``, and the simulated h
 sim's control period (``SimLimits``, given by the session as the node reads them from the sim).
 """
 
-from dataclasses import dataclass
-
+from hrc_engine.loop import HumanAnswer
 from hrc_joystick_node.human_core import core_from_parameters
-
-
-@dataclass(frozen=True)
-class HumanAnswer:
-    """The human's answer to one state."""
-
-    command: float          # normalized, [-1, 1]
-    wrench: float           # N or N*m on ``dof``
-    dof: str
-    source: int             # HumanAction.SOURCE_*
-    detail: str
-    engaged: bool
 
 
 class SimulatedHumanSide:
@@ -35,6 +22,16 @@ class SimulatedHumanSide:
                              f"'script'), got "
                              f"{parameters.get('input')!r}")
         self.core = core_from_parameters(parameters, limits)
+
+    @classmethod
+    def of_core(cls, core) -> 'SimulatedHumanSide':
+        """Return the side answering with ``core`` (a HumanCore with the sim's limits set)."""
+        side = cls.__new__(cls)
+        side.core = core
+        return side
+
+    def start_episode(self, episode: int) -> None:
+        """Nothing to do: the core resets the simulated human at each new episode itself."""
 
     def on_session(self, dof: str, involved: bool, subtasks) -> None:
         """Take the roles a SessionStatus announces."""

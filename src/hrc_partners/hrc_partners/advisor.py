@@ -16,7 +16,7 @@ seconds plus the rests between them (the simulated human's ``rest_between_episod
 
 The robot is a trained agent (a checkpoint per assignment: a robot on rotation for "person on
 translation", e.g. case 2; on translation for "person on rotation", e.g. case 1) or, only when
-asked for, the deterministic scripted PD controller of hrc_agent_node.partners standing in
+asked for, the deterministic scripted PD controller of hrc_engine.partners standing in
 for the robot (the fast tests use it and say so).
 """
 
@@ -25,9 +25,10 @@ from dataclasses import dataclass
 import math
 import typing
 
-from hrc_agent_node.partners import ScriptedPartner
 from hrc_common.contract import other_dof, SimLimits
 from hrc_common.params import with_overrides
+from hrc_engine.offline import evaluation_core
+from hrc_engine.partners import ScriptedPartner
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.sim_human import SimulatedHuman
@@ -38,7 +39,6 @@ import numpy
 from scipy import stats
 
 from hrc_partners.crossplay import format_cell
-from hrc_partners.partners import evaluation_core
 
 DOFS = ('translation', 'rotation')
 OWN_SUBTASK = {'translation': 'slider', 'rotation': 'pendulum'}
