@@ -23,16 +23,15 @@ import torch
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import run_episode
-from hrc_agent_node.partners import PERSON_PERIODS, SimulatedHumanPartner
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import compose, parse_overrides, SessionSettings, STUDY_LEARNING
+from hrc_engine.offline import run_episode
+from hrc_engine.partners import MixturePartner, parse_specs, SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners import partners_first
-from hrc_partners.partners import MixturePartner, parse_specs
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
@@ -42,9 +41,6 @@ def main(argv=None) -> int:
     parser.add_argument('--case', type=int, default=7)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.PARAM=VALUE')
-    parser.add_argument('--person-period', choices=PERSON_PERIODS, default=None,
-                        help="how often the training people act (default: the cases file's "
-                        'population block, person_period)')
     parser.add_argument('--person-episodes', type=int, default=12,
                         help="episodes of the person's step at most")
     args = parser.parse_args(argv)
@@ -61,7 +57,7 @@ def main(argv=None) -> int:
         if hasattr(core, 'tree') else {}
     settings = partners_first.population_settings(agent.cases_file)
     mixture = MixturePartner(parse_specs(settings.population()), core.human_dof, core.seed,
-                             limits, 1, period=args.person_period or settings.person_period)
+                             limits, 1)
     person = sample_person(load_profile('paper'), args.seed)
     own = SimulatedHumanPartner(person, core.human_dof, args.seed, limits.human_step)
     person_step = core.case.first_person_step

@@ -2,8 +2,9 @@
 
 The ``partners_first`` strategy (``params/cases.yaml``) has three steps: the robot alone, the
 team task with a population of simulated people, the team task with the person. The first
-two need no person, so they run here, in one process (``hrc_engine.offline``: the engine's loop with
-a partner as the human, the same cores as the engine and the nodes), in minutes; :func:`pretrain` returns the checkpoint in which the strategy stands at
+two need no person, so they run here, in one process (``hrc_engine.offline``: the engine's
+loop with a partner as the human, the same cores as the engine and the nodes), in minutes;
+:func:`pretrain` returns the checkpoint in which the strategy stands at
 the person's step. The session with the person (the in-process engine, the experiment runner
 or the graph session) then starts from that checkpoint (agent ``resume_from``): its first
 episode judges the pre-trained policy with the person (the step's ``judge_first``), and with
