@@ -1,6 +1,6 @@
 """Episodes to convergence per case against the scripted PD partner (offline loop, no ROS).
 
-    python src/hrc_agent_node/bench/convergence.py --presets paper tuned --cases 1 2 3 4 5 6 \
+    python bench/convergence.py --presets paper tuned --cases 1 2 3 4 5 6 \
         --seed 0 --episodes 300
 
 Prints one row per (preset, case): training episodes when each training step ended (its
@@ -18,9 +18,9 @@ import yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_session
 from hrc_common.contract import paper_case_ids
 from hrc_common.params import with_overrides
+from hrc_engine.offline import make_partner, run_session
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 
