@@ -70,7 +70,7 @@ def bare_rate(case: int, episodes: int, seed: int) -> float:
     parameters['agent']['checkpoint_dir'] = ''
     limits = SimLimits.of(from_dict(SimParams, parameters['sim']))
     core = AgentCore(from_dict(AgentParams, parameters['agent']), limits=limits)
-    human = SimulatedHumanSide(parameters['human'], limits)
+    human = SimulatedHumanSide.from_parameters(parameters['human'], limits)
     rates = []
     sim_params = from_dict(SimParams, dict(parameters['sim'], mode='lockstep'))
     with SliderPendulumBall(physics_params_of(sim_params)) as sim:

@@ -172,7 +172,7 @@ class InProcessSession:
                 f'checkpoint (python -m hrc_partners.partners_first --case {case.case_id}, '
                 'then --resume-from), or use hrc experiment / hrc session (graph), which '
                 'pre-train')
-        self.human = SimulatedHumanSide(self.parameters['human'], self.limits)
+        self.human = SimulatedHumanSide.from_parameters(self.parameters['human'], self.limits)
         self.loop = EpisodeLoop(self.stepper, self.human, on_slice=self._slice_answered)
         self.clock = WallClock()
         self.run_dir = pathlib.Path(self.settings.runs_dir) / self.session_id

@@ -15,20 +15,18 @@ from hrc_joystick_node.human_core import core_from_parameters
 class SimulatedHumanSide:
     """The human node's core (``input: sim``), driven by calls instead of messages."""
 
-    def __init__(self, parameters: dict, limits):
+    def __init__(self, core):
+        self.core = core            # a HumanCore with the sim's limits set
+
+    @classmethod
+    def from_parameters(cls, parameters: dict, limits) -> 'SimulatedHumanSide':
+        """Return the side of the human node's parameters (a dict) and the sim's limits."""
         if parameters.get('input', 'sim') not in ('sim', 'model', 'script'):
             raise ValueError(f"the in-process engine runs the simulated human, a cloned model "
                              f"or a scripted stick only (human.input 'sim', 'model' or "
                              f"'script'), got "
                              f"{parameters.get('input')!r}")
-        self.core = core_from_parameters(parameters, limits)
-
-    @classmethod
-    def of_core(cls, core) -> 'SimulatedHumanSide':
-        """Return the side answering with ``core`` (a HumanCore with the sim's limits set)."""
-        side = cls.__new__(cls)
-        side.core = core
-        return side
+        return cls(core_from_parameters(parameters, limits))
 
     def start_episode(self, episode: int) -> None:
         """Nothing to do: the core resets the simulated human at each new episode itself."""
