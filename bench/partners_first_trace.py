@@ -4,7 +4,7 @@
 Runs case 7 or 8 as the experiment runner does (the study's settings, ``--set`` more): the
 pre-training of ``hrc_partners.partners_first.pretrain`` (robot alone, then the population),
 then the person's step with the session's person (person ``seed`` of the ``paper``
-population, ``hrc_agent_node.partners.SimulatedHumanPartner`` acting at the sim's
+population, ``hrc_engine.partners.SimulatedHumanPartner`` acting at the sim's
 ``human_period`` as the engine's person does) in the offline loop, and prints
 one line per episode: step, partner, kind (train / judge), the mean |error| of each subtask
 (m or rad) with a ``*`` where it exceeds its tolerance (``params/task_tree.yaml``), and the

@@ -241,39 +241,3 @@ def test_in_a_row_restarts_training_after_a_failed_judging_episode():
         if core.phase == 'updating':
             core.update()
     assert ''.join(kinds) == 'TJJTJJJ'
-
-
-# ---------------------------------------------------------------- the earlier rule, exactly
-
-# Case 6, seed 3, tuned preset, horizon 256, scripted partner (noise 0.05, seed 3), 8 training
-# episodes and 1 evaluation episode, on the physics with the partner acting once a control
-# period (human_period 0.2 s, as everything did then): the returns and a digest of every raw
-# action and value, measured on main at 0aecc4c (before update_rule and judging_rule existed).
-GOLDEN_RETURNS = [905.972582109467, 826.5114943380063, 876.8542206849231, 830.7165912245127,
-                  833.1656254694283, 839.7803672788934, 810.0753736667668, 811.811225113671,
-                  832.2181677384818]
-GOLDEN_DIGEST = 'f56437939a2577be719a98e586d153ebb52bd441c46a2fcfd83eab9c5b82ef34'
-
-
-def test_the_earlier_rules_reproduce_the_numbers_of_main_exactly():
-    from hrc_agent_node.offline import make_partner, run_episode
-    from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
-    physics = PhysicsParams(human_period=0.2)
-    core = make_core(case=6, seed=3, horizon=256, minibatch_size=64, max_training_episodes=8,
-                     evaluation_episodes=1, update_rule=OLD_RULE, judging_rule='spaced')
-    partner = make_partner(core, 0.05, 3, 'scripted')
-    digest = hashlib.sha256()
-    returns = []
-
-    def on_step(state, decision, human_action):
-        digest.update(struct.pack('<dd', decision.record.raw_action, decision.record.value))
-
-    with SliderPendulumBall(physics) as sim:
-        while core.phase != 'done':
-            returns.append(run_episode(core, sim, partner, on_step).episode_return)
-            if core.phase == 'updating':
-                core.update()
-    assert (returns, digest.hexdigest(), core.ppo.updates) == \
-        (GOLDEN_RETURNS, GOLDEN_DIGEST, 2)
-    assert AgentParams().update_rule == OLD_RULE and AgentParams().judging_rule == 'spaced'

@@ -1,11 +1,9 @@
-"""The offline runner and the Gymnasium environment step through the engine's loop.
+"""The offline runner steps through the engine's loop: for a seed it gives the engine's episodes.
 
-The engine (``hrc_engine.engine``), the offline runner (``hrc_engine.offline``) and the
-environment (``hrc_gym``) all run ``hrc_engine.loop``: for the same seed and the same human the
-offline runner's episodes are the engine's, and the environment's step is the loop's step.
+The engine (``hrc_engine.engine``) and the offline runner (``hrc_engine.offline``) both run
+``hrc_engine.loop``; with the same seed and the same simulated person the offline runner's
+episode records are the engine's (src/hrc_gym/test/test_gym_loop.py: the environment's step).
 """
-
-import numpy as np
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
@@ -13,15 +11,11 @@ from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session as engine_session
-from hrc_engine.loop import EpisodeLoop
 from hrc_engine.offline import run_session as offline_session
 from hrc_engine.partners import SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
-from hrc_sim_node.commands import wrench_on
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
-from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
 from hrc_sim_node.sim_params import SimParams
-from hrc_sim_node.stepper import SimStepper
 
 RECORD = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
           'episode_return', 'slider_error', 'pendulum_error', 'ball_error', 'total_error',
@@ -71,39 +65,3 @@ def test_the_offline_runner_gives_the_engines_episode_with_the_simulated_person(
     engine, offline = engine_and_offline(5, 1, 0)
     assert engine[0]['human_involved'] and engine[0]['human_effort'] > 0
     assert engine == offline
-
-
-def test_the_gym_environments_step_is_the_loops_step():
-    from hrc_gym.env import SliderPendulumBallEnv, derived_seed
-    from hrc_gym.task import make_human
-    env = SliderPendulumBallEnv(case=4, training_step=-1, human='paper')
-    commands = np.random.default_rng(1).uniform(-1.0, 1.0, 25)
-    try:
-        env.reset(seed=7)
-        task = env.task
-        episode_seed = int(np.random.default_rng(7).integers(2 ** 31 - 1))
-        gym = [env.step([command])[4]['human_action'] for command in commands]
-        gym_states = [env.state]
-        params = task.physics.params
-    finally:
-        env.close()
-    # the same episode on a loop of its own: the same physics, protocol and human
-    human = make_human('paper', task.dofs['human'], derived_seed(7, 1), task.limits, True,
-                       task.subtasks['human'])
-    protocol = StepProtocol(ProtocolSettings(
-        control_period=params.control_period, max_force=params.max_force,
-        max_torque=params.max_torque, robot_dof=task.dofs['robot'],
-        human_period=params.human_period))
-    with SliderPendulumBall(params) as physics:
-        loop = EpisodeLoop(SimStepper(physics, protocol), human)
-        loop.set_roles(task.dofs['robot'], task.dofs['human'], True, task.subtasks['human'])
-        loop.start(0, episode_seed)
-        own = []
-        for command in commands:
-            answer = loop.answer()
-            own.append(answer.command)
-            advanced = loop.step(wrench_on(task.dofs['robot'],
-                                           command * task.limits.full_scale(task.dofs['robot'])),
-                                 answer)
-    assert gym == own and any(gym)
-    assert vars(gym_states[0]) == vars(advanced.state)
