@@ -27,7 +27,7 @@ from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import compose, parse_overrides, SessionSettings, STUDY_LEARNING
-from hrc_engine.offline import run_episode
+from hrc_engine.offline import partner_loop, run_episode
 from hrc_engine.partners import MixturePartner, parse_specs, SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
@@ -66,12 +66,16 @@ def main(argv=None) -> int:
     met = collections.Counter()
     with SliderPendulumBall(physics) as sim:
         core.set_limits(limits)
+        # each partner on its own loop, so each person's clock runs on (fatigue, rest)
+        loops = {name: partner_loop(core, sim, partner)
+                 for name, partner in (('mixture', mixture), ('own', own))}
         while core.phase not in (Phase.DONE, Phase.EVALUATION):
             step = core.progress.step_index
             population_step = core.training_step.partner == 'population'
             core.population_partner = population_step
             partner = mixture if population_step else own
-            result = run_episode(core, sim, partner)
+            result = run_episode(core, sim, partner,
+                                 loop=loops['mixture' if population_step else 'own'])
             if core.phase == 'updating':
                 core.update()
             who = mixture.spec.text if population_step else 'the person' \

@@ -16,14 +16,16 @@ and the partner tools and benchmarks, through those.
 A human side answers states: ``answers_states`` (False while it sits out: it sends nothing,
 the sim awaits nothing), ``on_session(dof, involved, subtasks)``, ``start_episode(episode)``
 and ``answer(episode, state, stamp_ns, slice_index) -> HumanAnswer``; the human node's core
-(``hrc_engine.human.SimulatedHumanSide``) and an offline partner (:class:`PartnerSide`) are
-the two.
+(``hrc_engine.human.SimulatedHumanSide``) and an offline partner (:class:`PartnerSide`), for
+example.
 """
 
 from dataclasses import dataclass
 
 from hrc_common.contract import InputSource
 from hrc_sim_node.commands import wrench_on
+from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
+from hrc_sim_node.stepper import SimStepper
 
 SOURCE_SIMULATED = int(InputSource.SIMULATED)
 
@@ -45,8 +47,10 @@ class PartnerSide:
 
     ``partner(state, subtasks) -> command in [-1, 1]`` on the human's degree of freedom
     (``hrc_engine.partners``; an object with a ``start_episode(episode)`` method is told each
-    episode before it starts). ``limits``: the sim's (``SimLimits``): a command's wrench is
-    the command times the full scale of the human's degree of freedom. The partner is asked
+    episode before it starts; one with ``takes_time`` true is also given ``now``, the state's
+    stamp in s, as the human node's core gives the simulated person its clock). ``limits``:
+    the sim's (``SimLimits``): a command's wrench is the command times the full scale of the
+    human's degree of freedom; ``partner`` None answers zero. The partner is asked
     at every state the human answers (the period's state and, at the human's rate, each slice
     state) unless ``hold_over_slices``: then it acts on the period's state and its command
     holds over the period's slices (a model that acts once a control period).
@@ -57,6 +61,7 @@ class PartnerSide:
         self.limits = limits
         self.hold_over_slices = bool(hold_over_slices)
         self.detail = detail
+        self.takes_time = bool(getattr(partner, 'takes_time', False))
         self.dof, self.involved, self.subtasks = 'rotation', False, []
         self._held = 0.0
 
@@ -80,6 +85,8 @@ class PartnerSide:
             command = 0.0
         elif slice_index and self.hold_over_slices:
             command = self._held
+        elif self.takes_time:
+            command = float(self.partner(state, self.subtasks, now=stamp_ns * 1e-9))
         else:
             command = float(self.partner(state, self.subtasks))
         self._held = command
@@ -102,6 +109,19 @@ class EpisodeLoop:
         self.episode = 0
         self.human_dof = 'rotation'
         self.advanced = None          # the newest Advanced (the period's state to answer)
+
+    @classmethod
+    def on_physics(cls, physics, human, robot_dof: str = 'rotation') -> 'EpisodeLoop':
+        """Return the loop on ``physics`` (a SliderPendulumBall) in lockstep with both actors.
+
+        The step protocol takes the physics' control period, limits and human period, as the
+        sim node's own protocol in lockstep; ``robot_dof`` until :meth:`set_roles` says.
+        """
+        params = physics.params
+        protocol = StepProtocol(ProtocolSettings(
+            control_period=params.control_period, max_force=params.max_force,
+            max_torque=params.max_torque, robot_dof=robot_dof, human_period=params.human_period))
+        return cls(SimStepper(physics, protocol), human)
 
     @property
     def protocol(self):

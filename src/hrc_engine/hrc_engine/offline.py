@@ -36,8 +36,6 @@ from hrc_engine.partners import make_partner as partner_of_spec, ScriptedPartner
     SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
-from hrc_sim_node.stepper import SimStepper
 
 
 def partner_loop(core: AgentCore, sim, partner) -> EpisodeLoop:
@@ -46,12 +44,8 @@ def partner_loop(core: AgentCore, sim, partner) -> EpisodeLoop:
     The sim's step protocol in lockstep with both actors, as the engine runs it; ``partner``
     None: a human who answers zero.
     """
-    params = sim.params
-    protocol = StepProtocol(ProtocolSettings(
-        control_period=params.control_period, max_force=params.max_force,
-        max_torque=params.max_torque, robot_dof=core.robot_dof,
-        human_period=params.human_period))
-    return EpisodeLoop(SimStepper(sim, protocol), PartnerSide(partner, SimLimits.of(params)))
+    return EpisodeLoop.on_physics(sim, PartnerSide(partner, SimLimits.of(sim.params)),
+                                  core.robot_dof)
 
 
 class _StepObserver(LoopObserver):

@@ -3,7 +3,9 @@
 A partner is a callable ``partner(state, subtasks) -> command in [-1, 1]`` on the human's
 degree of freedom, where ``state`` has the PhysicsState attributes and ``subtasks`` are the
 ids the session assigns to the partner; one with ``start_episode(episode)`` is told each
-episode before it starts. The in-process loop asks it as the human side
+episode before it starts, and one with ``takes_time`` true is also given ``now``, the state's
+time on the session clock (s, its stamp), as the human node's core gives it to the simulated
+person (fatigue and rest run on it). The in-process loop asks it as the human side
 (``hrc_engine.loop.PartnerSide``) at the human's rate: the period's state and each slice state.
 
 * :class:`ScriptedPartner`: not a model of a person but a deterministic, reproducible PD
@@ -150,11 +152,13 @@ class SimulatedHumanPartner:
                                         control_period=self.control_period)
         self.human.reset(int(episode))
 
-    def __call__(self, state, subtasks) -> float:
-        """Return the person's stick command in [-1, 1] for ``state``."""
+    takes_time = True
+
+    def __call__(self, state, subtasks, now=None) -> float:
+        """Return the person's stick command in [-1, 1] for ``state`` (``now``: its time, s)."""
         if self.human is None:
             raise RuntimeError('call start_episode() before the first command')
-        return float(self.human.act(state, list(subtasks)))
+        return float(self.human.act(state, list(subtasks), now=now))
 
 
 KINDS = ('profile', 'person', 'population', 'model', 'mixture')
@@ -314,8 +318,12 @@ class MixturePartner:
             self.drawn.append((draw, self.spec.text))
         self.partner.start_episode(int(episode))
 
-    def __call__(self, state, subtasks) -> float:
-        """Return the current partner's command."""
+    takes_time = True
+
+    def __call__(self, state, subtasks, now=None) -> float:
+        """Return the current partner's command (``now``: the state's time, s)."""
         if self.partner is None:
             raise RuntimeError('call start_episode() before the first command')
+        if getattr(self.partner, 'takes_time', False):
+            return self.partner(state, subtasks, now=now)
         return self.partner(state, subtasks)

@@ -60,8 +60,9 @@ def test_the_offline_runner_gives_the_engines_episodes_robot_alone_with_updates(
     assert len(engine) == 5 and engine == offline
 
 
-def test_the_offline_runner_gives_the_engines_episode_with_the_simulated_person():
-    # case 5: the person acts from the first episode, at the human's rate (ten slices)
-    engine, offline = engine_and_offline(5, 1, 0)
-    assert engine[0]['human_involved'] and engine[0]['human_effort'] > 0
-    assert engine == offline
+def test_the_offline_runner_gives_the_engines_episodes_with_the_simulated_person():
+    # case 5: the person acts from the first episode, at the human's rate (ten slices); their
+    # practice, fatigue and rest carry over the episodes on the session's clock
+    engine, offline = engine_and_offline(5, 3, 1)
+    assert all(episode['human_involved'] and episode['human_effort'] > 0 for episode in engine)
+    assert len(engine) == 4 and engine == offline

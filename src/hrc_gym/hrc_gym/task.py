@@ -33,8 +33,7 @@ from hrc_joystick_node.human_core import HumanCore, HumanParams
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.commands import wrench_on
-from hrc_sim_node.protocol import HUMAN, ProtocolSettings, roles, ROBOT, StepProtocol
-from hrc_sim_node.stepper import SimStepper
+from hrc_sim_node.protocol import HUMAN, roles, ROBOT
 
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
@@ -171,12 +170,7 @@ class TaskRun:
 
         The states' stamps (the human's clock: fatigue and rest run on them) start at 0.
         """
-        params = self.physics.params
-        protocol = StepProtocol(ProtocolSettings(
-            control_period=params.control_period, max_force=params.max_force,
-            max_torque=params.max_torque, robot_dof=self.dofs[ROBOT],
-            human_period=params.human_period))
-        self.loop = EpisodeLoop(SimStepper(self.physics, protocol), human)
+        self.loop = EpisodeLoop.on_physics(self.physics, human, self.dofs[ROBOT])
         self.loop.set_roles(self.dofs[ROBOT], self.dofs[HUMAN], self.human_involved,
                             self.subtasks[HUMAN])
 

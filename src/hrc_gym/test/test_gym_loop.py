@@ -11,8 +11,6 @@ from hrc_gym.env import derived_seed, SliderPendulumBallEnv
 from hrc_gym.task import make_human
 from hrc_sim_node.commands import wrench_on
 from hrc_sim_node.physics import SliderPendulumBall
-from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
-from hrc_sim_node.stepper import SimStepper
 
 
 def test_the_gym_environments_step_is_the_loops_step():
@@ -30,12 +28,8 @@ def test_the_gym_environments_step_is_the_loops_step():
     # the same episode on a loop of its own: the same physics, protocol and human
     human = make_human('paper', task.dofs['human'], derived_seed(7, 1), task.limits, True,
                        task.subtasks['human'])
-    protocol = StepProtocol(ProtocolSettings(
-        control_period=params.control_period, max_force=params.max_force,
-        max_torque=params.max_torque, robot_dof=task.dofs['robot'],
-        human_period=params.human_period))
     with SliderPendulumBall(params) as physics:
-        loop = EpisodeLoop(SimStepper(physics, protocol), human)
+        loop = EpisodeLoop.on_physics(physics, human, task.dofs['robot'])
         loop.set_roles(task.dofs['robot'], task.dofs['human'], True, task.subtasks['human'])
         loop.start(0, episode_seed)
         own = []

@@ -48,7 +48,8 @@ from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_plan import compose, new_session_id, parse_overrides, SessionSettings
-from hrc_engine.offline import run_session
+from hrc_engine.loop import run_agent_session
+from hrc_engine.offline import partner_loop
 from hrc_engine.partners import MixturePartner, parse_specs
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
@@ -215,11 +216,12 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     population_met = True
     in_step = 0                     # episodes of the current population step
     with SliderPendulumBall(physics) as sim:
+        loop = partner_loop(core, sim, partner)     # one session clock for the people
         while core.phase not in (Phase.DONE, Phase.EVALUATION) \
                 and core.progress.step_index < person_step:
             step = core.progress.step_index
             population_step = core.training_step.partner == 'population'
-            run_session(core, sim, partner, max_episodes=1)
+            run_agent_session(core, loop, max_episodes=1)
             if population_step:
                 met.append(partner.spec.text)
                 in_step = in_step + 1 if core.progress.step_index == step else 0
