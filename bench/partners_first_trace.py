@@ -26,7 +26,8 @@ from hrc_agent_node.config import AgentParams
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
-from hrc_common.session_plan import compose, parse_overrides, SessionSettings, STUDY_LEARNING
+from hrc_common.session_plan import (add_learning_option, compose, parse_overrides,
+                                     SessionSettings)
 from hrc_engine.offline import partner_loop, run_episode
 from hrc_engine.partners import MixturePartner, parse_specs, SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
@@ -41,13 +42,13 @@ def main(argv=None) -> int:
     parser.add_argument('--case', type=int, default=7)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.PARAM=VALUE')
+    add_learning_option(parser)
     parser.add_argument('--person-episodes', type=int, default=12,
                         help="episodes of the person's step at most")
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    texts = [f'{key}={value}' for key, value in STUDY_LEARNING.items()] + args.set
     settings = SessionSettings(case=args.case, seed=args.seed, session_id='trace',
-                               overrides=parse_overrides(texts))
+                               learning=args.learning, overrides=parse_overrides(args.set))
     parameters = compose(settings, params_dir())
     agent = from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='', resume_from=''))
     physics = physics_params_of(from_dict(SimParams, parameters['sim']))

@@ -184,6 +184,7 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
                       for seed_index in range(seeds)))
     return [SessionTask(
         SessionSettings(case=case, seed=options.first_seed + seed_index, human_profile=profile,
+                        learning=options.learning,
                         session_id=(session_id := session_id_of(
                             case, options.first_seed + seed_index, profile, order)),
                         bags_dir=str(bags_dir.resolve()),

@@ -138,7 +138,7 @@ def run_session(settings: SessionSettings, options) -> int:
                 print("[session] the pre-training ran out of episodes before the person's "
                       'step (the robot alone did not converge): the person joins only for '
                       'the evaluation; give more --episodes', flush=True)
-    params_path, _ = write_session_files(settings, parameters, run_dir)
+    params_path, _ = write_session_files(settings, parameters, run_dir, params_dir)
 
     env = dict(os.environ)
     if options.domain_id is not None:

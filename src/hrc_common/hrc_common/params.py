@@ -159,7 +159,11 @@ def from_dict(params_cls, values: dict):
     names = {dataclass_field.name for dataclass_field in fields(params_cls)}
     unknown = sorted(set(values) - names)
     if unknown:
-        reasons = [f'unknown parameter {name!r}{closest_hint(name, names)}' for name in unknown]
+        # a parameter that once chose an earlier behaviour says where that behaviour lives
+        retired = getattr(params_cls, 'RETIRED_PARAMETERS', {})
+        reasons = [f'parameter {name!r} was retired: {retired[name]}' if name in retired
+                   else f'unknown parameter {name!r}{closest_hint(name, names)}'
+                   for name in unknown]
         raise ParameterError(f'{params_cls.__name__}: ' + '; '.join(reasons), reasons)
     converted = {}
     for dataclass_field in fields(params_cls):

@@ -1,7 +1,8 @@
-"""When PPO updates (update_rule), the learner modes, and the floor of the judging rules.
+"""When PPO updates, the learner modes, and the floor of the judging rule.
 
-Deterministic: seeded cores driven with hand-made states (no physics) unless noted; the
-golden numbers of the earlier rule come from the physics and the scripted partner.
+PPO updates after horizon samples or at an episode's end, whichever comes first.
+
+Deterministic: seeded cores driven with hand-made states (no physics).
 """
 
 import copy
@@ -21,8 +22,6 @@ from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 
 LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)
-NEW_RULE = 'horizon_or_episode_end'
-OLD_RULE = 'episode_end_after_horizon'
 
 
 def state(step, final=False, angle=0.0, slider=0.0, ball=0.0):
@@ -35,7 +34,7 @@ def state(step, final=False, angle=0.0, slider=0.0, ball=0.0):
 
 def make_core(**overrides):
     values = dict(case=1, seed=5, preset='tuned', checkpoint_dir='', horizon=3,
-                  minibatch_size=2, update_rule=NEW_RULE, max_training_episodes=100,
+                  minibatch_size=2, max_training_episodes=100,
                   evaluation_episodes=0)
     values.update(overrides)
     return AgentCore(with_overrides(AgentParams(), **values), limits=LIMITS)
@@ -66,14 +65,6 @@ def test_update_runs_inside_the_episode_when_the_horizon_is_reached():
     plan = core.start_episode()
     assert plan.judging
     assert all(core.act(state(step)).update is None for step in range(8))
-
-
-def test_the_earlier_rule_never_updates_inside_an_episode():
-    core = make_core(update_rule=OLD_RULE)
-    core.start_episode()
-    assert all(core.act(state(step, angle=angle_of(step))).update is None for step in range(8))
-    core.end_episode(state(8, final=True))
-    assert core.phase == 'updating' and core.buffered_samples == 8 and core.ppo.updates == 0
 
 
 class RecordingLearner(SynchronousLearner):
@@ -188,29 +179,21 @@ def test_background_update_keeps_the_old_weights_acting_until_it_finished():
 # ---------------------------------------------------------------- the floor of the judging rule
 
 
-@pytest.mark.parametrize('update_rule, judging_rule, interval, floor', [
-    (OLD_RULE, 'spaced', 0, 12),       # the earlier rules: 3 x (3 training + 1 judging)
-    (NEW_RULE, 'spaced', 0, 6),
-    (OLD_RULE, 'in_a_row', 0, 6),
-    (NEW_RULE, 'in_a_row', 0, 4),      # 1 training episode, then 3 judging in a row
-    (NEW_RULE, 'in_a_row', 2, 5),      # judging after every 2nd training episode
+@pytest.mark.parametrize('interval, floor', [
+    (0, 4),      # 1 training episode (an update at its end), then 3 judging in a row
+    (2, 5),      # judging after every 2nd training episode
 ])
-def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_rule, interval,
-                                                           floor):
+def test_floor_of_human_involved_episodes_in_the_last_step(interval, floor):
     """A policy that satisfies every subtask from the start: the rule alone sets the count.
 
-    Case 6 (learn together): one step, the human in every episode, window 3. The paper's
-    200-step episodes and horizon 512 scaled down by 4 (50 steps, horizon 128: the same
-    episodes per update, asserted below), and one PPO epoch: the count does not depend on
-    what the policy learns (every state is at the target), only on when updates and judging
-    episodes come.
+    Case 6 (learn together): one step, the human in every episode, window 3. 50-step episodes
+    and horizon 128 (an update at every episode's end, as with the paper's 200 steps and 512),
+    and one PPO epoch: the count does not depend on what the policy learns (every state is at
+    the target), only on when updates and judging episodes come.
     """
     steps, horizon = 50, 128
-    assert training_episodes_per_trigger(update_rule, horizon, steps, interval) == \
-        training_episodes_per_trigger(update_rule, 512, 200, interval)
     core = make_core(case=6, horizon=horizon, minibatch_size=64, epochs=1,
-                     convergence_window=3, update_rule=update_rule, judging_rule=judging_rule,
-                     judging_interval=interval)
+                     convergence_window=3, judging_interval=interval)
     while core.phase == 'training' or core.phase == 'updating':
         if core.phase == 'updating':
             core.update()
@@ -221,12 +204,11 @@ def test_floor_of_human_involved_episodes_in_the_last_step(update_rule, judging_
         core.end_episode(state(steps, final=True))
     assert core.converged
     assert core.human_involved_episodes == core.total_episodes == floor
-    per_trigger = training_episodes_per_trigger(update_rule, horizon, steps, interval)
-    assert episode_floor(judging_rule, 3, per_trigger) == floor
+    assert episode_floor(3, training_episodes_per_trigger(interval)) == floor
 
 
 def test_in_a_row_restarts_training_after_a_failed_judging_episode():
-    core = make_core(horizon=4, judging_rule='in_a_row', convergence_window=3)
+    core = make_core(horizon=4, convergence_window=3)
     kinds = []
     good, bad = dict(angle=0.0, slider=0.0), dict(angle=1.0, slider=0.09)
     # judging episodes: good, bad (window broken), then good, good, good
