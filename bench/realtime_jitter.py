@@ -57,9 +57,9 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from hrc_common import qos, topics
 from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
                               REALTIME_PRIORITY_VARIABLE)
+from hrc_common.executables import executable_path
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import add_learning_option, load_learning
-from hrc_common.testing import executable_path
 from hrc_msgs.msg import TaskState
 
 

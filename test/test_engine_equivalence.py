@@ -24,7 +24,7 @@ import subprocess
 import pytest
 
 from hrc_agent_node.checkpoint import read_checkpoint
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
 # The main session: the default learning configuration (SAC), learning from its 10th
 # transition on (every step after that runs its gradient steps inside the step).
@@ -174,7 +174,8 @@ def sessions(tmp_path_factory, rosbags_typestore):
     """
     from concurrent.futures import ThreadPoolExecutor
 
-    from hrc_common.testing import DomainReservation, read_bag_with_rosbags, ros_environment
+    from hrc_common.domains import DomainReservation
+    from hrc_testing.nodes import read_bag_with_rosbags, ros_environment
 
     def run(name):
         args, extra_env = SESSIONS[name]

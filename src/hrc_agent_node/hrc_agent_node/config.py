@@ -3,7 +3,8 @@
 Defaults are the paper's where it gives them (Table I: PPO; section IV: reward, 40 s episodes)
 and documented choices where it does not: the learning configuration ``paper``. A session
 applies a named learning configuration over them (``params/learning/<name>.yaml``; the
-default, ``sac``, is what the study measured best for the person's time).
+default, ``sac``, is what the study measured best for the person's time). ``params/agent.yaml``
+is generated from this dataclass (``python -m hrc_bringup.params_files --write``).
 """
 
 from dataclasses import dataclass
@@ -29,7 +30,7 @@ RETIRED_PARAMETERS = {
 
 @dataclass
 class AgentParams:
-    """Parameters of the agent (node ``agent``)."""
+    """The agent's parameters (node ``agent``): Table I; a session applies params/learning/."""
 
     # --- session
     session_id: str = param('', 'Session id stamped on every message and checkpoint; empty = '

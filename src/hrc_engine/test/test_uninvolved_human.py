@@ -12,7 +12,7 @@ import json
 import pytest
 
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import easy_task_tree, exact_plain
+from hrc_testing.sessions import easy_task_tree, exact_plain
 from hrc_engine.engine import EngineConfig, InProcessSession
 
 HUMAN_TOPICS = ('/hrc/human/action', '/hrc/human/cmd_wrench')

@@ -19,7 +19,7 @@ from hrc_common.contract import EpisodeKind, SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import easy_task_tree
+from hrc_testing.sessions import easy_task_tree
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_engine.partners import (make_partner, MixturePartner, parse_specs, person_seed,
                                  SimulatedHumanPartner)

@@ -1,6 +1,6 @@
 """PPO update time per iteration on this machine (horizon 512, 3 epochs, minibatch 64).
 
-    python src/hrc_agent_node/bench/ppo_update.py [--iterations 20] [--threads 1 2]
+    python bench/ppo_update_time.py [--iterations 20] [--threads 1 2]
 
 Fills a rollout buffer with 512 samples of 200-step episodes (random observations, actions
 from the policy, Gaussian rewards: the update's cost does not depend on their values), then

@@ -7,7 +7,7 @@ import pathlib
 import numpy
 import pytest
 
-BENCH = pathlib.Path(__file__).resolve().parents[3] / 'bench' / 'crossover.py'
+BENCH = pathlib.Path(__file__).resolve().parents[1] / 'bench' / 'crossover.py'
 
 
 @pytest.fixture(scope='module')

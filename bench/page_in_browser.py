@@ -1,6 +1,6 @@
 """Measure the person's page in a real browser during a running session; take its screenshots.
 
-    python src/hrc_live/bench/page_in_browser.py --port 8765 --out shots/ --seconds 30
+    python bench/page_in_browser.py --port 8765 --out shots/ --seconds 30
 
 Opens the page (and the console) of a running session (``session ... --display``) in Debian's
 headless Chromium through Selenium, at 1920x1080. While the person acts (banner tone "act") it
@@ -19,7 +19,7 @@ import pathlib
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test'))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'src' / 'hrc_live' / 'test'))
 from browser import open_browser, screenshot, set_viewport  # noqa: E402
 
 

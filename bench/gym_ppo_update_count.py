@@ -1,6 +1,6 @@
 """Why SB3 reached the whole-task criterion sooner: PPO updates per episode (an experiment).
 
-    python -m hrc_gym.bench.update_count --data docs/gym/ppo_comparison.json --seeds 0 1 2 3 4
+    python bench/gym_ppo_update_count.py --data docs/gym/ppo_comparison.json --seeds 0 1 2 3 4
 
 With Table I's horizon of 512 steps, SB3 updates every 512 steps (2.56 episodes), ours at the
 first episode end with at least 512 samples (every 3 episodes). With the small clip (0.05)

@@ -14,19 +14,24 @@ recovery. Printed per trial and as a summary:
 * whether every closed episode holds all its messages.
 
     source scripts/env.sh
-    python src/hrc_bag/bench/recorder_sigkill.py --trials 20
+    python bench/recorder_sigkill.py --trials 20
 """
 
 import argparse
 import os
+import pathlib
 import random
 import statistics
 import sys
 import tempfile
 
 import rclpy
-from hrc_bag.synthetic import kill_trial, SyntheticSession
-from hrc_common.testing import NodeProcess, ros_environment
+
+# The test support (test/support/hrc_testing) is not installed: found from the checkout.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test' / 'support'))
+from hrc_testing.bag_traffic import SyntheticSession  # noqa: E402 (after the path)
+from hrc_testing.recorder_kill import kill_trial  # noqa: E402 (after the path)
+from hrc_testing.nodes import NodeProcess, ros_environment  # noqa: E402 (after the path)
 
 
 def main(argv=None) -> int:

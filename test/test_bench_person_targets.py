@@ -25,7 +25,7 @@ import pytest
 
 from hrc_joystick_node.human_profile import load_profiles
 
-BENCH = pathlib.Path(__file__).resolve().parents[3] / 'bench'
+BENCH = pathlib.Path(__file__).resolve().parents[1] / 'bench'
 REPO_PROFILES = BENCH.parent / 'params' / 'sim_human.yaml'
 PROFILES = load_profiles(REPO_PROFILES)
 HUMAN_PERIOD = 0.02  # s: the default sim.human_period

@@ -10,7 +10,7 @@ before the kill is checked: its file closed before the kill (listed in metadata.
 whole (every state, command, human action and agent step of the episode, and its summary).
 
     source scripts/env.sh
-    python src/hrc_bag/bench/recorder_sigkill_session.py --trials 5
+    python bench/recorder_sigkill_session.py --trials 5
 """
 
 import argparse

@@ -11,7 +11,7 @@ steps/s are an upper bound of the message path; the whole graph is measured by t
 benchmark.
 
     source scripts/env.sh
-    python src/hrc_bag/bench/recorder_overhead.py --episodes 5 --steps 200
+    python bench/recorder_overhead.py --episodes 5 --steps 200
 """
 
 import argparse
@@ -27,7 +27,7 @@ import time
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from rclpy.executors import SingleThreadedExecutor
 

@@ -1,4 +1,4 @@
-"""Seeded synthetic SessionRecords (no bags): the study's tests and a dry run of the report."""
+"""Seeded synthetic SessionRecords (no bags) for the tests of the study's findings and chooser."""
 
 import numpy
 

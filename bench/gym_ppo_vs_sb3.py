@@ -1,6 +1,6 @@
 """Cross-check: this project's PPO beside Stable-Baselines3's PPO, Table I, same env and seeds.
 
-    python -m hrc_gym.bench.compare_ppo --seeds 0 1 2 3 4 --episodes 200 --out docs/gym
+    python bench/gym_ppo_vs_sb3.py --seeds 0 1 2 3 4 --episodes 200 --out docs/gym
 
 For each setting of ``hrc_gym.compare.SETTINGS`` (case 2's first step, the robot alone; the
 whole task with the simulated human) and each seed, trains both learners for ``--episodes``

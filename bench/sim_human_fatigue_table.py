@@ -7,7 +7,7 @@ episodes, through :class:`~hrc_joystick_node.sim_human.SimulatedHuman` itself (s
 clock). Next to it, what the earlier unbounded model gave (``1 + fatigue_per_minute *
 minutes`` with 0.03 / 0.01 / 0.02 per minute for novice / skilled / paper).
 
-Usage: ``python src/hrc_joystick_node/bench/fatigue_table.py [--episodes 300]``
+Usage: ``python bench/sim_human_fatigue_table.py [--episodes 300]``
 (inside the workspace environment: ``source scripts/env.sh``).
 """
 

@@ -7,11 +7,12 @@ stamp (zero wrench), from one rclpy node, and counts the states over whole episo
 steps the pure physics core in-process for the same number of steps and prints both rates and
 their ratio. Not a test: numbers depend on the machine.
 
-    source scripts/env.sh && python src/hrc_sim_node/bench/lockstep_rate.py [--episodes 5]
+    source scripts/env.sh && python bench/sim_lockstep_rate.py [--episodes 5]
 """
 
 import argparse
 import os
+import pathlib
 import random
 import sys
 import time
@@ -19,12 +20,15 @@ import time
 import rclpy
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
-from hrc_common.testing import NodeProcess, ros_environment
 from hrc_msgs.msg import TaskState
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.physics import SliderPendulumBall
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
+
+# The test support (test/support/hrc_testing) is not installed: found from the checkout.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test' / 'support'))
+from hrc_testing.nodes import NodeProcess, ros_environment  # noqa: E402 (after the path)
 
 
 def in_process_rate(steps: int) -> float:

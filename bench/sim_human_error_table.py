@@ -9,7 +9,7 @@ practice. Errors are mean |S_x| (m), |P_z| (rad), |B_y| (m) over each episode, a
 the episodes; effort is the variance of the normalized command in the first episode (the
 paper's Table II measure).
 
-Usage: ``python src/hrc_joystick_node/bench/sim_human_table.py [--episodes 20] [--seed 0]``
+Usage: ``python bench/sim_human_error_table.py [--episodes 20] [--seed 0]``
 (run inside the workspace environment: ``source scripts/env.sh``).
 """
 
