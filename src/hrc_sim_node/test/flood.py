@@ -1,7 +1,7 @@
 """A hostile second publisher for the tests.
 
 It floods a command topic with wrongly stamped commands (or giant ones) at up to
-``rate`` messages per second (the hardening report's flood: about 10k/s), until killed.
+``rate`` messages per second (never faster, also after a stall), until killed.
 
     python flood.py <topic> <frame_id_bytes> <rate>
 """
@@ -25,13 +25,15 @@ def main() -> None:
     message.header.frame_id = 'x' * size
     message.wrench.torque.x = 0.4
     message.wrench.force.z = 1.5
-    sent = 0
-    started = time.monotonic()
+    period = 1.0 / rate
+    due = time.monotonic()
     try:
         while rclpy.ok():
             publisher.publish(message)
-            sent += 1
-            ahead = sent / rate - (time.monotonic() - started)
+            # Never faster than ``rate``: after a stall (a busy machine) the schedule restarts
+            # instead of catching up in a burst that no bounded queue would hold.
+            due = max(due + period, time.monotonic() - 0.001)
+            ahead = due - time.monotonic()
             if ahead > 0.001:
                 time.sleep(ahead)
     except KeyboardInterrupt:

@@ -357,10 +357,14 @@ def test_the_last_uint32_episode_index_holds_instead_of_wrapping(start_node, sim
 
 
 FLOOD = pathlib.Path(__file__).with_name('flood.py')
-# Commands per second of the hostile publisher: the flood of the hardening report (about 10k/s).
-# (A flood faster than the sim drains its queue, about 25k/s on a loaded 2-core machine, still
-# pushes commands out of any bounded queue.)
-FLOOD_RATE = 10000
+# Commands per second of the hostile publisher. The sim's queue (COMMAND_SUBSCRIPTION_DEPTH,
+# 1000) holds depth / rate seconds of flood: a sim kept from the CPU longer loses the matching
+# command to any flood. At the hardening report's 10k/s that was 0.1 s, which a busy machine
+# exceeded (a held step); at 2k/s it is 0.5 s, and the sim without its fix (depth 1, one
+# command per executor turn) still loses commands within a few steps. (A flood faster than the
+# sim drains its queue, about 25k/s on a loaded 2-core machine, pushes commands out of any
+# bounded queue.)
+FLOOD_RATE = 2000
 
 
 def stale_commands_reported(output: str, actor: str) -> int:
