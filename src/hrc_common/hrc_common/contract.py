@@ -285,11 +285,9 @@ class SimLimits:
     max_torque: float       # N*m, full-scale torque on the pendulum's hinge
     human_period: float = 0.0   # s: the human's command is applied this often; 0 = unknown
     #                             (the reset response does not carry it: the robot needs none)
-    await_absent_human: bool = False   # the sim awaits the human's (zero) answers also while
-    #                             they sit out a training step (SimParams.await_absent_human)
 
     NAMES = ('control_period', 'max_force', 'max_torque')   # as the sim's parameters
-    OPTIONAL_NAMES = ('human_period', 'await_absent_human')  # the sim's, not in every source
+    OPTIONAL_NAMES = ('human_period',)   # the sim's, not in every source
 
     @classmethod
     def of(cls, source) -> 'SimLimits':
@@ -331,9 +329,7 @@ class SimLimits:
     def describe(self) -> str:
         """Return one line for logs."""
         return (f'control period {self.control_period:g} s, max_force {self.max_force:g} N, '
-                f'max_torque {self.max_torque:g} N*m'
-                + (', the human answers while sitting out (await_absent_human)'
-                   if self.await_absent_human else ''))
+                f'max_torque {self.max_torque:g} N*m')
 
 
 # --------------------------------------------------------------------------- message types

@@ -2,15 +2,13 @@
 
 Case 2 (task first): the robot learns alone, then the person joins. While the human is not
 involved the sim applies nothing of theirs, so answering every state with a zero HumanAction
-and a zero wrench (two of a lockstep step's five messages) carried nothing; since issue 24 the
-sim does not await the human then and the human does not answer. The digests below were taken
+and a zero wrench (two of a lockstep step's five messages) carried nothing; now the sim does
+not await the human then and the human does not answer. The digests below were taken
 at commit 75dedd9 (before the change) with this file's ``digests``: every state, robot command,
 agent step and episode summary of the session (``others``), and the human's messages of the
 episodes where the human is involved (``involved``). Both must stay the same; what goes is the
 human's messages of the robot-alone episodes (``alone``: 60 then, one HumanAction and one wrench
-for each of the 30 steps of episodes 0-2, none now). The sim's ``await_absent_human`` keeps the
-protocol before the change: with it the session writes every message of 75dedd9 (``all``, the
-robot-alone zeros included), bit for bit.
+for each of the 30 steps of episodes 0-2, none now).
 """
 
 import hashlib
@@ -26,7 +24,6 @@ HUMAN_TOPICS = ('/hrc/human/action', '/hrc/human/cmd_wrench')
 BEFORE = {
     'others': ('bb0c930c66f3bda9481fea5d43782467be7b5c920410231dc23eb9ac8372d94b', 224),
     'involved': ('f081928b9bbeddd7571d2856b959db352b9e5565f2b714b2a078cb668ad3e2b9', 440),
-    'all': ('6f57231cdc8b79c470b3cd098000d1845972afd8fa10ff67613051ace4f01926', 724),
 }
 
 
@@ -52,14 +49,14 @@ def digest(items) -> tuple:
     return hashlib.sha256(text.encode()).hexdigest(), len(items)
 
 
-def digests(tree_file: str, **overrides) -> dict:
+def digests(tree_file: str) -> dict:
     """Run the short case-2 session; return the digests of its parts (see the docstring)."""
     session = _Capturing(EngineConfig(SessionSettings(
         case=2, seed=0, training_episodes=8, evaluation_episodes=1, session_id='alone',
         record=False, overrides={'sim.episode_duration': 2.0, 'agent.horizon': 20,
                                  'agent.minibatch_size': 10, 'agent.convergence_window': 1,
                                  'agent.judging_rule': 'in_a_row',
-                                 'agent.task_tree_file': tree_file, **overrides}),
+                                 'agent.task_tree_file': tree_file}),
         checkpoints=False))
     result = session.run()
     involved = {summary['episode'] for summary in result.episodes
@@ -69,7 +66,6 @@ def digests(tree_file: str, **overrides) -> dict:
         'others': digest(item for item in captured if item[0] not in HUMAN_TOPICS),
         'involved': digest(item for item in captured
                            if item[0] in HUMAN_TOPICS and item[1] in involved),
-        'all': digest(captured),
         'alone': len([item for item in captured
                       if item[0] in HUMAN_TOPICS and item[1] not in involved]),
         'episodes': [(summary['episode'], summary['human_involved'])
@@ -92,7 +88,3 @@ def test_a_human_who_sits_out_sends_nothing_and_the_session_is_the_same(easy_tre
     assert got['alone'] == 0
 
 
-def test_await_absent_human_writes_every_message_of_the_protocol_before(easy_tree):
-    got = digests(easy_tree, **{'sim.await_absent_human': True})
-    assert got['all'] == BEFORE['all']
-    assert got['alone'] == 60

@@ -16,8 +16,7 @@ timers. The rules (docs/architecture.md, "The step protocol"):
   and are reported); with no expected actor the sim runs free (:meth:`StepProtocol.free_run`).
   A command with another stamp is stale: ignored, counted, reported.
 * The human counts only while involved (:attr:`StepProtocol.awaits_human`): a human who sits
-  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing
-  (``await_absent_human``: awaited and expected always, as before issue 24).
+  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing.
 * ``realtime``: a wall timer calls :meth:`StepProtocol.on_tick` every control period; each
   actor's kept command is applied unless older than ``command_timeout`` (wall s). The kept
   command is the one answering the newest state of the running episode, not the latest
@@ -149,7 +148,6 @@ class ProtocolSettings:
     robot_dof: str = TRANSLATION
     human_period: typing.Optional[float] = None   # s: the human's command is applied this
     #                                         often; None: once a period (the sim passes its own)
-    await_absent_human: bool = False   # await the human also while they sit out (SimParams)
 
     @classmethod
     def of(cls, params) -> 'ProtocolSettings':
@@ -157,8 +155,7 @@ class ProtocolSettings:
         return cls(params.mode, tuple(params.expected_actors), params.lockstep_timeout,
                    params.command_timeout, params.control_period, params.max_force,
                    params.max_torque, params.robot_dof,
-                   getattr(params, 'human_period', params.control_period),
-                   bool(getattr(params, 'await_absent_human', False)))
+                   getattr(params, 'human_period', params.control_period))
 
     @property
     def human_slices(self) -> int:
@@ -389,11 +386,9 @@ class StepProtocol:
 
         Only while the human is involved: a human who sits out a training step has nothing
         applied, so their answers would carry nothing; the human node does not send them then
-        (issue 24: two of a lockstep step's five messages in the robot-alone episodes).
-        ``await_absent_human`` keeps the protocol before that: the human always counts.
+        (they were two of a lockstep step's five messages in the robot-alone episodes).
         """
-        return ((self.human_involved or self.settings.await_absent_human)
-                and HUMAN in self.expected)
+        return self.human_involved and HUMAN in self.expected
 
     def expected_now(self) -> tuple:
         """Return the expected actors whose commands count now (the human: awaits_human)."""

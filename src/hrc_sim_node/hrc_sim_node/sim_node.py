@@ -8,8 +8,7 @@ Step protocol (docs/architecture.md): a command answers a state by carrying the 
 In ``lockstep`` the sim advances as soon as every actor in ``expected_actors`` has answered the
 current state (or after ``lockstep_timeout`` wall seconds: the missing command counts as zero
 and the next state's ``*_command_missing`` flag says so); the human only while the session says
-they are involved (one who sits out sends nothing; ``await_absent_human``: always, as before
-issue 24); with no actor to await it runs free, as
+they are involved (one who sits out sends nothing); with no actor to await it runs free, as
 fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
 actor's command answering the newest state; one older than ``command_timeout`` counts as zero
 and is reported. The rules are the pure core ``hrc_sim_node.protocol`` (shared with the
