@@ -26,8 +26,8 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    update's learner thread, are left out in both runs; also split by process, and what each
    process spends more with the recorder), and the recorder process's own CPU (its
    last log line), for each recorder variant named
-   (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
-   ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
+   (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s; the
+   recorder with a callback per message is commit 8c1b998's ``per-message``).
 5. with ``--compose sim,human ...``: the graph with those nodes in one process
    (``HRC_COMPOSE``, hrc_bringup.compose_nodes) against the same graph with a process per node:
    a composition with the recorder runs with the (batched) recorder and is compared with the
@@ -58,7 +58,7 @@ PING = '/bench/ping'
 PONG = '/bench/pong'
 CONTROL_PERIOD_S = 0.2
 # recorder variant -> its `hrc session --set` overrides
-RECORDERS = {'batched': (), 'per-message': ('recorder.batch_period=0.0',)}
+RECORDERS = {'batched': ()}
 
 
 def echo(domain_id: int, executor_name: str) -> int:

@@ -43,12 +43,12 @@ Episode boundaries (the rule; the node turns messages into the events used here)
 
 Messages are handled in the order DDS received them (their log time), after ``reorder_window``
 seconds: the node takes its subscriptions' messages topic after topic (in batches,
-:meth:`EpisodeRecorder.record_batch`; or rclpy's executor one message per subscription in turn),
-so a recorder that lags behind gets a topic's messages later than another topic's received
-after them. A file due to close closes before the next message is handled, so the files do not
-depend on how many messages are handled together. When it lags more than that (a loaded
-machine), the wait follows the lag (1.5 times the largest of the last second), so an episode
-file is not closed before its messages queued in DDS are in.
+:meth:`EpisodeRecorder.record_batch`), so a recorder that lags behind gets a topic's messages
+later than another topic's received after them. A file due to close closes before the next
+message is handled, so the files do not depend on how many messages are handled together.
+When it lags more than that (a loaded machine), the wait follows the lag (1.5 times the
+largest of the last second), so an episode file is not closed before its messages queued in
+DDS are in.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
 exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus the
