@@ -30,7 +30,7 @@ thread), and prints both and their ratio::
 as it was before it yielded to the control thread (same priority, Python's switch interval).
 
 ``--realtime-priority N`` (issue 24) runs the session's nodes on SCHED_FIFO at priority N
-(``HRC_REALTIME_PRIORITY``, hrc_common.nodes) and this listener's threads at the same priority,
+(``HRC_REALTIME_PRIORITY``, hrc_common.realtime) and this listener's threads at the same priority,
 so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
 
 Each run prints the settings it ran with (case, executor, human period, realtime priority, the
@@ -54,8 +54,8 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_common import qos, topics
-from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
-                              REALTIME_PRIORITY_VARIABLE)
+from hrc_common.executors import EXECUTOR_VARIABLE
+from hrc_common.realtime import apply_realtime_priority, REALTIME_PRIORITY_VARIABLE
 from hrc_common.testing import executable_path
 from hrc_msgs.msg import TaskState
 

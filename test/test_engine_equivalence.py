@@ -151,7 +151,7 @@ SESSIONS = {
     'main': (ARGS, {}),
     **{f'case{case}': (['--case', str(case), *SHORT], {}) for case in OTHER_CASES},
     'update_inside': (UPDATE_INSIDE_ARGS, {}),
-    # the graph's nodes on rclpy's own SingleThreadedExecutor (as before issue 24)
+    # the graph's nodes on rclpy's own SingleThreadedExecutor (HRC_EXECUTOR's escape hatch)
     'scripted_stick': (['--case', '5', *SHORT, '--human', 'script', '--set',
                         'human.script_file={script}', '--set', 'human.enable_button=0'],
                        {'HRC_EXECUTOR': 'rclpy'}),
@@ -248,9 +248,8 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(ses
     (every 0.06 s), so the slices of a period carry different commands.
 
     The graph's nodes run here on rclpy's own SingleThreadedExecutor (``HRC_EXECUTOR=rclpy``,
-    as before issue 24), bit for bit as the engine; the default, ``lean``
-    (hrc_common.nodes.LeanExecutor), is every other test of this file. ``events`` cannot run
-    the graph: the human node has a guard condition, which rclpy's EventsExecutor refuses.
+    the escape hatch), bit for bit as the engine; the default, ``lean``
+    (hrc_common.executors.LeanExecutor), is every other test of this file.
     """
     graph_bag, engine_bag, _ = outcome_of(sessions, 'scripted_stick')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))

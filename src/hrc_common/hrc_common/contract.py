@@ -265,7 +265,7 @@ def off_axis_components(wrench, dof: str) -> dict:
 # The interpreter's thread switch interval (s) for realtime control: a thread that holds the GIL
 # (the agent's learner thread in a PPO update) is asked to hand it over after this long instead
 # of Python's default 5 ms, which the control thread would otherwise wait for. Used by the
-# realtime-priority option of every node (hrc_common.nodes) and as the default of the agent's
+# realtime-priority option of every node (hrc_common.realtime) and as the default of the agent's
 # learner_switch_interval (hrc_agent_node.config).
 REALTIME_SWITCH_INTERVAL_S = 0.0005
 

@@ -135,7 +135,6 @@ class SimNode(Node):
         self._timeout_timer.cancel()
         # Free run: a timer that is due at once, re-armed after each state, makes one step
         # per turn of the executor, so services and other timers are served in between.
-        # (A timer, not a guard condition: rclpy's EventsExecutor has no guard conditions.)
         self._free_run = self.create_timer(FREE_RUN_PERIOD_S, self._on_free_run)
         self._free_run.cancel()
         # Realtime: one tick per human slice (human_period), so the physics advances with
