@@ -36,7 +36,7 @@ import typing
 
 from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, SimLimits, TRANSLATION
 from hrc_sim_node.commands import ACTORS, Command, HUMAN, read_command, ROBOT
-from hrc_sim_node.physics import PhysicsParams
+from hrc_sim_node.physics_params import PhysicsParams
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME
 
 _PHYSICS_DEFAULTS = PhysicsParams()

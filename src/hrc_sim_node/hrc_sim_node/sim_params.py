@@ -5,7 +5,7 @@ from dataclasses import dataclass
 from hrc_common.dof import DOFS, TRANSLATION
 from hrc_common.params import param
 from hrc_sim_node.commands import ACTORS, HUMAN, ROBOT
-from hrc_sim_node.physics import PhysicsParams
+from hrc_sim_node.physics_params import PhysicsParams
 
 LOCKSTEP = 'lockstep'
 REALTIME = 'realtime'
