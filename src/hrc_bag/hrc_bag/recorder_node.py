@@ -33,7 +33,8 @@ import yaml
 from hrc_bag.qos_yaml import profile_to_dict
 from hrc_bag.format import RawMessage, RecordingError, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event_of_cdr, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event_of_cdr
+from hrc_bag.recording import EpisodeRecorder
 
 EXECUTABLE = 'recorder_node'
 SUMMARY = ('Record the hrc topics into one rosbag2-compatible MCAP file per episode under '

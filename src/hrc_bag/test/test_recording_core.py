@@ -16,7 +16,8 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, boundary_event_of_cdr, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event, boundary_event_of_cdr
+from hrc_bag.recording import EpisodeRecorder
 from hrc_bag.synthetic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
                                SyntheticSession, type_name_of)
 
