@@ -50,7 +50,7 @@ import time
 try:
     from hrc_common.contract import case_ids
     from hrc_common.session_plan import STUDY_LEARNING
-    from hrc_study.loading import load_sessions
+    from hrc_bag.report import load_records
 except ModuleNotFoundError as missing:   # started without the workspace's environment
     print(f'rerun_study: {missing}: run `make setup` once, then `source scripts/env.sh` in this '
           'shell', file=sys.stderr)
@@ -154,7 +154,7 @@ def experiment(options, name: str, learner: str, extra: list) -> int:
 def episode_rows(folder: pathlib.Path) -> dict:
     """Return {(case, seed): [episode record as a dict]} of the paper sessions of a run."""
     rows = {}
-    for record in load_sessions([str(folder)], log=lambda text: None):
+    for record in load_records([str(folder)], log=lambda text: None):
         if record.profile == 'paper':
             rows[(record.case_id, record.seed)] = [dataclasses.asdict(episode)
                                                    for episode in record.episodes]

@@ -23,7 +23,7 @@ def test_the_runner_prints_the_reports_notices(tmp_path, capsys):
     settings = SessionSettings(case=5, session_id='cut', bags_dir=str(tmp_path / 'bags'))
     report(settings, tmp_path / 'run')
     printed = capsys.readouterr()
-    assert '| Learn together (baseline) | Case 5 |' in printed.out
+    assert '| 5 | together | translation | 1 |' in printed.out
     assert '[session] hrc bag report:' in printed.err
     assert 'a file was not closed (recorder killed?)' in printed.err
     assert 'using the MCAP files of the folder' in printed.err

@@ -367,8 +367,8 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
         action = answer()
         assert action.command == pytest.approx(16384 / 32767)
         assert action.dof == HumanAction.DOF_TRANSLATION
-        # the 3 bytes of garbage are reported as they are read (forward_stick reads the device
-        # as bytes arrive, so possibly in two reports): 3 in total
+        # the 3 bytes of garbage are reported as they are read (the stick is forwarded as it
+        # moves, so the device is read as bytes arrive, possibly in two reports): 3 in total
         assert harness.spin_until(lambda: '(resynchronized; 3 in total)' in process.output), \
             process.output
 

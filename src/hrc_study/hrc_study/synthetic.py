@@ -4,7 +4,7 @@ import numpy
 
 from hrc_common.contract import paper_case_ids
 
-from hrc_study.sessions import case_roles, EpisodeRecord, SessionRecord, strategy_step_counts
+from hrc_bag.report.records import case_roles, EpisodeRecord, SessionRecord, strategy_step_counts
 
 
 def make_session(case_id: int, seed: int, total_error: float, episodes: int, converged: bool,

@@ -1,11 +1,12 @@
-"""What the study uses of one session, and the per-session measures (pure, no ROS).
+"""What the report uses of one session, and the per-session measures (pure, no ROS).
 
 A :class:`SessionRecord` is the list of a session's episode summaries plus what identifies it
-(case, strategy, roles, seed, simulated-human profile). :func:`measures` turns it into the values
-of Table II and the three factors. :func:`load_sessions` (in :mod:`hrc_study.loading`) fills
-records from bags; tests build them directly.
+(case, strategy, roles, seed, simulated-human profile, learning configuration). :func:`measures`
+turns it into the values of Table II and the three factors. :func:`load_records` fills records
+from bags (through :mod:`hrc_bag.report.loading`); tests may build them directly. The report
+(``hrc bag report``) and the study (``hrc results``) both compute from these.
 
-Definitions (the issue #13 rules, see docs/results.md):
+Definitions (the study's rules, see docs/results.md):
 
 * The final evaluation block: the evaluation episodes after training ended (the frozen policy
   evaluated for Table II's performance and effort). The deterministic episodes run *during*
@@ -27,9 +28,12 @@ from dataclasses import dataclass, field
 import functools
 import math
 
-from hrc_common.contract import case_table, cases_file_path
-from hrc_sim_node.physics import PhysicsParams
+from hrc_common.contract import case_table, cases_file_path, EpisodeKind
 import yaml
+
+from hrc_bag.report.loading import load_sessions
+from hrc_bag.report.session_config import (episode_limit_of, episode_seconds_of, learning_of,
+                                           limits_of, person_of, profile_of, UNRECORDED)
 
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
@@ -82,7 +86,7 @@ class EpisodeRecord:
 KINDS = ('training', 'judging', 'evaluation', 'practice')
 
 
-def kind_of(episode: EpisodeRecord) -> str:
+def record_kind(episode: EpisodeRecord) -> str:
     """Return the episode's kind: its own when known, else evaluation or training (old bags)."""
     if episode.kind in KINDS:
         return episode.kind
@@ -109,6 +113,8 @@ class SessionRecord:
     episode_limit: int = 0          # the agent's max_training_episodes (0: unknown)
     path: str = ''
     extra: dict = field(default_factory=dict)
+    learning: str = UNRECORDED      # the learning configuration's name (session.yaml)
+    learning_settings: dict = field(default_factory=dict)
 
     @property
     def steps(self) -> int:
@@ -119,6 +125,7 @@ class SessionRecord:
 @functools.lru_cache(maxsize=1)
 def default_limits() -> dict:
     """Return the sim's default command limits {dof: N or N*m} (hrc_sim_node's PhysicsParams)."""
+    from hrc_sim_node.physics import PhysicsParams  # lazy: only for sessions without limits
     params = PhysicsParams()
     return {'translation': float(params.max_force), 'rotation': float(params.max_torque)}
 
@@ -142,7 +149,7 @@ def final_block_start(session: SessionRecord) -> int:
     """
     episodes = session.episodes
     if kinds_known(session):
-        kinds = [kind_of(episode) for episode in episodes]
+        kinds = [record_kind(episode) for episode in episodes]
         return kinds.index('evaluation') if 'evaluation' in kinds else len(episodes)
     if any(episode.final_evaluation is not None for episode in episodes):
         flags = [bool(episode.final_evaluation) for episode in episodes]
@@ -168,8 +175,8 @@ def measures(session: SessionRecord) -> dict:
     """
     start = final_block_start(session)
     before, final = session.episodes[:start], session.episodes[start:]
-    training = [episode for episode in before if kind_of(episode) != 'practice']
-    final = [episode for episode in final if kind_of(episode) != 'practice']
+    training = [episode for episode in before if record_kind(episode) != 'practice']
+    final = [episode for episode in final if record_kind(episode) != 'practice']
     involved = sum(1 for episode in training if episode.human_involved)
     last_step = session.steps - 1
     converged = any(episode.converged and episode.training_step == last_step
@@ -199,3 +206,69 @@ def measures(session: SessionRecord) -> dict:
 def case_label(case_id: int, profile: str = '') -> str:
     """Return e.g. 'case 2' or 'case 2 (symmetric)'."""
     return f'case {case_id}' + (f' ({profile})' if profile and profile != 'paper' else '')
+
+
+def record_from_bag_session(session) -> SessionRecord:
+    """Convert a loaded bag :class:`hrc_bag.report.loading.Session` into a SessionRecord."""
+    episodes = [EpisodeRecord(
+        episode=int(summary.episode), training_step=int(summary.training_step),
+        human_involved=bool(summary.human_involved), evaluation=bool(summary.evaluation),
+        converged=bool(summary.converged), episode_return=float(summary.episode_return),
+        slider_error=float(summary.slider_error), pendulum_error=float(summary.pendulum_error),
+        ball_error=float(summary.ball_error), total_error=float(summary.total_error),
+        human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
+        final_evaluation=_final_flag(summary), kind=_kind_label(summary))
+        for summary in session.summaries]
+    strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
+    try:
+        seed = int(session.seed)
+    except ValueError:
+        seed = -1
+    step_count = max((int(status.training_step_count) for status in session.statuses),
+                     default=0)
+    learning, settings = learning_of(session.config)
+    return SessionRecord(session_id=session.session_id, case_id=session.case_id,
+                         strategy=session.strategy or strategy,
+                         robot_dof=session.robot_dof or robot_dof, seed=seed,
+                         profile=profile_of(session.config), episodes=episodes,
+                         step_count=step_count,
+                         episode_limit=episode_limit_of(session.config),
+                         path=str(session.path),
+                         extra={'bag_session': session, 'person': person_of(session.config),
+                                'limits': limits_of(session.config),
+                                'episode_seconds': episode_seconds_of(session.config)},
+                         learning=learning, learning_settings=settings)
+
+
+def _kind_label(summary) -> str:
+    """Return the summary's kind label, '' when it does not say (bags before the field)."""
+    try:
+        kind = EpisodeKind(int(getattr(summary, 'kind', 0)))
+    except ValueError:
+        return ''
+    return '' if kind is EpisodeKind.UNKNOWN else kind.label
+
+
+def _final_flag(summary):
+    """Return the summary's own final-evaluation flag if the message has one, else None."""
+    for name in ('final_evaluation', 'final'):
+        if hasattr(summary, name):
+            return bool(getattr(summary, name))
+    return None
+
+
+def session_order(record) -> tuple:
+    """Return the key sessions are listed by: profile, case, seed, session id."""
+    return (record.profile, record.case_id, record.seed, record.session_id)
+
+
+def load_records(paths, log=print) -> list:
+    """Return a SessionRecord per session under ``paths`` (sorted by :func:`session_order`).
+
+    The sessions are read by :func:`hrc_bag.report.loading.load_sessions` (its notices and
+    skipped sessions go to ``log``; a path without sessions raises FileNotFoundError, files
+    that are not MCAP raise ``hrc_bag.bag_reader.BagError`` with every reason).
+    """
+    records = [record_from_bag_session(session) for session in load_sessions(paths, log)]
+    records.sort(key=session_order)
+    return records
