@@ -48,7 +48,7 @@ import sys
 import time
 
 try:
-    from hrc_common.contract import case_ids
+    from hrc_common.cases import case_ids
     from hrc_common.session_plan import STUDY_LEARNING
     from hrc_bag.report import load_records
 except ModuleNotFoundError as missing:   # started without the workspace's environment

@@ -19,8 +19,8 @@ import subprocess
 
 import yaml
 
-from hrc_common.contract import (atomic_write, case_problem, case_table, id_problem,
-                                 make_session_id, PERSONAL_FILE_MODE)
+from hrc_common.cases import case_problem, case_table
+from hrc_common.contract import atomic_write, id_problem, make_session_id, PERSONAL_FILE_MODE
 from hrc_common.params import field_problems, param
 
 # Node name -> (package, executable, parameter file). The node name is the section of the file.
