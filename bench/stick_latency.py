@@ -33,9 +33,12 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_common import qos, topics
-from hrc_common.testing import NodeProcess, ros_environment
 from hrc_joystick_node.js_event import device_axis, JS_EVENT_AXIS, pack_event
 from hrc_msgs.msg import TaskState
+
+# The test support (test/support/hrc_testing) is not installed: found from the checkout.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test' / 'support'))
+from hrc_testing.nodes import NodeProcess, ros_environment  # noqa: E402 (after the path)
 
 AXIS = 1
 MAX_TORQUE = 0.5      # N*m: the sim's default, the human drives the rotation here

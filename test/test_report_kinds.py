@@ -6,7 +6,7 @@ from hrc_bag import report
 from hrc_bag.report.curves import training_returns
 from hrc_bag.report.loading import kind_of
 from hrc_bag.report.records import measures, record_from_bag_session
-from hrc_bag.synthetic import record_in_process
+from hrc_testing.bag_traffic import record_in_process
 from hrc_common.contract import EpisodeKind
 from hrc_msgs.msg import EpisodeSummary
 

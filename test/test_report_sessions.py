@@ -14,8 +14,8 @@ import subprocess
 from hrc_bag import report_cli
 from hrc_bag.report import load_records
 from hrc_bag.report.records import measures
-from hrc_bag.synthetic import record_in_process, strategy_plan
-from hrc_common.testing import executable_path
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
+from hrc_common.executables import executable_path
 import pytest
 
 from hrc_study import results_cli

@@ -4,7 +4,7 @@ A killed recorder leaves an episode file open; the report says so on stderr, and
 used to print the report's stderr only when it failed.
 """
 
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 from hrc_bringup.session_report import report
 from hrc_common.session_plan import SessionSettings
 import pytest

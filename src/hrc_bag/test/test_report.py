@@ -6,12 +6,12 @@ import math
 import struct
 import subprocess
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 import numpy
 import pytest
 
 from hrc_bag import report
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 
 CASES = {1: 'responsibility_guided', 2: 'responsibility_guided', 4: 'level_guided',
          5: 'learn_together'}

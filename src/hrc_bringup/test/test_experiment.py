@@ -19,7 +19,7 @@ import threading
 import time
 
 from hrc_bringup import cli, experiment
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 import pytest
 
 from hrc_bag.report import load_records

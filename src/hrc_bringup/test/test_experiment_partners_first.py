@@ -27,7 +27,6 @@ def test_a_case_8_task_pretrains_then_runs_the_person_from_the_checkpoint(tmp_pa
         evaluation_episodes=1,
         overrides=parse_overrides(('sim.episode_duration=2.0', 'agent.horizon=20',
                                    'agent.minibatch_size=10', 'agent.convergence_window=1',
-                                   'agent.judging_rule=in_a_row',
                                    f'agent.task_tree_file={easy}', 'human.person=0')))
     task = SessionTask(settings, engine='inprocess', params_dir=str(params_dir()),
                        pull_bags=False)

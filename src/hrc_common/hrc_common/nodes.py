@@ -16,8 +16,9 @@ from rclpy.subscription import Subscription
 
 from hrc_common.executors import EXECUTOR_VARIABLE, executor_problem, spin_nodes
 from hrc_common.qos import NO_SUBSCRIPTION_EVENTS
-from hrc_common.params import (describe, node_parameter_problems, ParameterError,
-                               parse_ros_arguments, RosArguments, set_process_arguments)
+from hrc_common.params import describe, ParameterError
+from hrc_common.params_arguments import (node_parameter_problems, parse_ros_arguments,
+                                         RosArguments, set_process_arguments)
 from hrc_common.realtime import apply_realtime_priority, realtime_priority_of
 
 # Exit code of a node whose parameters were rejected (distinct from a crash, for the supervisor).

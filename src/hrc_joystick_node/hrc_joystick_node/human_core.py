@@ -58,7 +58,7 @@ SOURCE_CODE = {name: int(source) for name, source in (
 
 @dataclass
 class HumanParams:
-    """Parameters of the human node (mirrored in params/human.yaml)."""
+    """Parameters of the human node (node ``human``, params/human.yaml)."""
 
     input: str = param('auto', 'where the command comes from: auto = the device if it opens, '
                        'else /joy if a publisher is seen; sim = the simulated human; model = '

@@ -15,7 +15,7 @@ from sensor_msgs.msg import Joy
 from hrc_common.paths import params_dir
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
-from hrc_common.testing import serve_sim_parameters
+from hrc_testing.nodes import serve_sim_parameters
 from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
 from hrc_joystick_node.human_profile import load_profile

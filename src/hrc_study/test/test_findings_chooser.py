@@ -11,7 +11,7 @@ from hrc_study.findings import evaluate_findings
 from hrc_bag.report.records import final_block_start, measures
 from hrc_study.statistics import holm
 
-from hrc_study.synthetic import make_session, paper_like
+from hrc_testing.study_records import make_session, paper_like
 
 
 def test_measures_count_judging_evaluations_as_training():

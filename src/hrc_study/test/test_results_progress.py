@@ -8,7 +8,7 @@ terminal, as when the output is piped.
 import functools
 import pathlib
 
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 from hrc_common.time_left import TimeLeft
 
 from hrc_bag.report import figures
