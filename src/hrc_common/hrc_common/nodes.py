@@ -169,6 +169,8 @@ def run_nodes(node_factories, executable: str, summary: str, params_cls=None,
         if scheduling:
             logger = nodes[0].get_logger()
             (logger.info if 'SCHED_FIFO priority' in scheduling else logger.warning)(scheduling)
+        # HRC_EXECUTOR: 'lean' unless set; 'rclpy' is the escape hatch kept while the lean
+        # executor leans on rclpy's internals (hrc_common.executors)
         spin_nodes(nodes, os.environ.get(EXECUTOR_VARIABLE, 'lean'))
     except ParameterError as error:
         code = report_bad_parameters(executable, error.reasons)
