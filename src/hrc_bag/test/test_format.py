@@ -18,7 +18,8 @@ from hrc_bag.format import (bag_metadata, contract_description, dump_bag_metadat
                             SESSION_RECORD)
 from hrc_bag.qos_yaml import dump_yaml
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event
+from hrc_bag.recording import EpisodeRecorder
 from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
 from hrc_testing.bag_traffic import SyntheticSession, type_name_of
 
