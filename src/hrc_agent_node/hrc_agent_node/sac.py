@@ -49,6 +49,8 @@ import numpy as np
 import torch
 from torch import nn
 
+from hrc_agent_node.sac_background import BackgroundSACLearning
+
 LOG_STD_MIN = -5.0
 LOG_STD_MAX = 2.0
 ACTION_SIZE = 1
@@ -258,6 +260,9 @@ class SAC:
         # Held by every use of the networks, the optimizers and the replay buffer: a learner
         # thread (sac_background) takes it per gradient step, the control thread to act.
         self.lock = threading.RLock()
+        # Held while one owed transition is learned, by the thread or update(): update() waits
+        # on it so that no claimed transition is still being learned when it reports.
+        self._transition = threading.Lock()
         self.background = None       # a BackgroundSACLearning while realtime episodes run
 
     def _make_critic(self) -> CriticEnsemble:
@@ -361,7 +366,6 @@ class SAC:
         off, the thread stops after its current step; the steps it still owed run in the next
         :meth:`update`.
         """
-        from hrc_agent_node.sac_background import BackgroundSACLearning
         if on and self.background is None and self.update_schedule == 'step':
             self.background = BackgroundSACLearning(self, niceness, switch_interval)
         elif not on and self.background is not None:
@@ -371,8 +375,10 @@ class SAC:
     # ------------------------------------------------------------------ learning
 
     def _learn_pending(self) -> None:
-        """Take the owed gradient steps (all of them) in the calling thread."""
+        """Take the owed gradient steps (all of them), the learner thread's in flight included."""
         while self.learn_one_owed():
+            pass
+        with self._transition:     # a transition the learner thread claimed is learned now
             pass
 
     def learn_one_owed(self) -> bool:
@@ -381,19 +387,20 @@ class SAC:
         Claims one owed transition and learns from it, holding :attr:`lock` one gradient step
         at a time (so an ``act`` waits at most one step); returns False when none was owed.
         """
-        with self.lock:
-            if not self.ready or self.pending_updates == 0:
-                return False
-            self.pending_updates -= 1
-        start = time.perf_counter()
-        for _ in range(self.config.sac_updates_per_step):
+        with self._transition:
             with self.lock:
-                self._critic_step(self.replay.sample(self.config.sac_batch_size,
-                                                     self.update_generator))
-        with self.lock:
-            self._actor_step(self.replay.sample(self.config.sac_batch_size,
-                                                self.update_generator)['observations'])
-            self._since_report.seconds += time.perf_counter() - start
+                if not self.ready or self.pending_updates == 0:
+                    return False
+                self.pending_updates -= 1
+            start = time.perf_counter()
+            for _ in range(self.config.sac_updates_per_step):
+                with self.lock:
+                    self._critic_step(self.replay.sample(self.config.sac_batch_size,
+                                                         self.update_generator))
+            with self.lock:
+                self._actor_step(self.replay.sample(self.config.sac_batch_size,
+                                                    self.update_generator)['observations'])
+                self._since_report.seconds += time.perf_counter() - start
         return True
 
     def _critic_step(self, batch: dict) -> None:
