@@ -4,9 +4,10 @@ The nodes publish with rclpy. Everything else that writes messages (the in-proce
 through :class:`hrc_bag.session_writer.SessionWriter`, the bag tools, the tests' synthetic
 sessions) encodes them here, with rosbags' typestore: ROS 2 Jazzy's types plus the
 ``hrc_msgs`` definitions of the installed ``.msg`` files (and any other installed type on
-first use). ``typestore().serialize_cdr`` writes XCDR1 little endian with zero padding,
-byte for byte what ``rclpy.serialization.serialize_message`` returns (a test compares every
-type the bags carry with seeded random values).
+first use). ``typestore().serialize_cdr`` writes XCDR1 little endian, byte for byte what
+``rclpy.serialization.serialize_message`` returns but for the alignment padding: rclpy (Fast
+CDR) leaves those bytes as it finds its buffer, rosbags writes zeros (test_serializer.py
+compares every type the bags carry, seeded random values, and reads the bytes back with rclpy).
 
 ``encode(type_name, message)`` takes a mapping (``{'header': {'stamp': {'sec': 1,
 'nanosec': 0}, 'frame_id': 'world'}, 'episode': 3, ...}``), a dataclass, an rclpy message or
@@ -18,6 +19,7 @@ hand-written ``struct`` encoder it replaced, alternating in one run.
 """
 
 import functools
+import operator
 import typing
 
 from hrc_bag import msgdefs
@@ -65,19 +67,19 @@ def known_type(type_name: str) -> str:
 
 
 def _field_converter(description) -> typing.Callable:
-    """Return convert(value) -> what rosbags serializes, for one field's description."""
+    """Return convert(value) -> what rosbags serializes, for a message or sequence field."""
     node, detail = description
     if node == Nodetype.NAME:
         return _message_converter(detail)
-    if node == Nodetype.BASE:
-        zero = ZERO.get(detail[0], 0)
-        return lambda value: zero if value is None else value
     element, _ = detail
     if element[0] == Nodetype.BASE and element[1][0] in ELEMENT_TYPES:
         dtype = ELEMENT_TYPES[element[1][0]]
         return lambda values: numpy.asarray(() if values is None else values, dtype=dtype)
+    if element[0] == Nodetype.BASE:
+        zero = ZERO.get(element[1][0], 0)
+        return lambda values: [zero if value is None else value for value in values or ()]
     convert = _field_converter(element)
-    return lambda values: [convert(value) for value in (values or ())]
+    return lambda values: [convert(value) for value in values or ()]
 
 
 @functools.lru_cache(maxsize=None)
@@ -85,35 +87,37 @@ def _message_converter(type_name: str) -> typing.Callable:
     """Return convert(message) -> the typestore's message object, compiled once per type."""
     store = typestore()
     message_class = store.types[type_name]
-    names = [name for name, _ in store.fielddefs[type_name][1]]
+    fields = store.fielddefs[type_name][1]
+    names = [name for name, _ in fields]
     field_names = frozenset(names)
-    # built on first use: a type's fields may name types compiled later
-    converters = []
+    primitives = [index for index, (_, (node, _)) in enumerate(fields) if node == Nodetype.BASE]
+    zeros = [(index, ZERO.get(fields[index][1][1][0], 0)) for index in primitives]
+    composites = [(index, _field_converter(fields[index][1]))
+                  for index in range(len(names)) if index not in primitives]
+    # the primitive fields' values as a tuple (itemgetter of one index returns the value)
+    primitive_values = (operator.itemgetter(*primitives, *primitives[:1])
+                        if primitives else lambda _: ())
 
     def convert(message):
-        if isinstance(message, message_class):
-            return message
-        if message is None:
-            message = {}
-        elif not isinstance(message, dict):
-            message = plain_values(message)
+        if message.__class__ is not dict:
+            if isinstance(message, message_class):
+                return message
+            message = {} if message is None else plain_values(message)
         if not field_names.issuperset(message):
             raise UnknownFields(type_name, sorted(set(message) - field_names), names)
-        if not converters:
-            converters.extend(_field_converter(description)
-                              for _, description in store.fielddefs[type_name][1])
-        get = message.get
+        values = list(map(message.get, names))
+        if None in primitive_values(values):
+            for index, zero in zeros:
+                if values[index] is None:
+                    values[index] = zero
         try:
-            return message_class(*[field(get(name)) for name, field in zip(names, converters)])
+            for index, field in composites:
+                values[index] = field(values[index])
         except UnknownFields as error:
-            # a nested mapping's typo: name the field it is in (the error path only)
-            for name, field in zip(names, converters):
-                try:
-                    field(get(name))
-                except UnknownFields:
-                    error.prefix = f'{name}.{error.prefix}'
-                    raise error from None
+            # a nested mapping's typo: name the field it is in
+            error.prefix = f'{names[index]}.{error.prefix}'
             raise
+        return message_class(*values)
     return convert
 
 
@@ -130,9 +134,20 @@ class UnknownFields(ValueError):
         return f'{self.type_name}: no field {unknown} (fields: {", ".join(self.fields)})'
 
 
+_ENCODERS = {}              # type name as given -> encode(message) of that type
+
+
 def encode(type_name: str, message) -> bytes:
     """Return the CDR bytes of ``message`` of ``type_name`` (see the module doc)."""
     if isinstance(message, (bytes, bytearray, memoryview)):
         return bytes(message)
-    name = known_type(type_name)
-    return bytes(typestore().serialize_cdr(_message_converter(name)(message), name))
+    encoder = _ENCODERS.get(type_name)
+    if encoder is None:
+        encoder = _ENCODERS[type_name] = _encoder(known_type(type_name))
+    return encoder(message)
+
+
+def _encoder(type_name: str) -> typing.Callable:
+    """Return encode(message) of one type: its converter, then the typestore's CDR writer."""
+    convert, serialize = _message_converter(type_name), typestore().serialize_cdr
+    return lambda message: bytes(serialize(convert(message), type_name))
