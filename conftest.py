@@ -1,9 +1,15 @@
 """Fixtures shared by every test: a private ROS domain per test and node processes."""
 
+import pathlib
+import sys
+
 import pytest
 
-from hrc_common.testing import (DomainReservation, NodeProcess, read_bag_with_rosbags,
-                                ros_environment)
+from hrc_common.domains import DomainReservation
+
+# The test support (test/support/hrc_testing) lives with the tests, not in an installed package.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent / 'test' / 'support'))
+from hrc_testing.nodes import NodeProcess, read_bag_with_rosbags, ros_environment  # noqa: E402
 
 
 @pytest.fixture

@@ -2,7 +2,7 @@
 """Diagnosis: how well a simulated-human profile holds the ball, and its effort on each role.
 
     python bench/ball_holding.py            # paper, paper_symmetric, skilled at 0.2 s
-    python bench/ball_holding.py --profiles paper paper_v1 --seeds 10 --human-period 0.2 0.02
+    python bench/ball_holding.py --profiles paper skilled --seeds 10 --human-period 0.2 0.02
     python bench/ball_holding.py --profiles paper --ablations
     python bench/ball_holding.py --profiles paper --practiced 15   # after 15 episodes
 

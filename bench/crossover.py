@@ -2,7 +2,7 @@
 """Validate the simulated person as manual-control research would: the crossover model.
 
     python bench/crossover.py                     # paper, at 0.2 s and 0.02 s, both DOFs
-    python bench/crossover.py --profiles paper paper_v1 skilled --person-period 0.02
+    python bench/crossover.py --profiles paper skilled novice --person-period 0.02
 
 The person holds its own level-2 subtask (``slider`` on the translation, ``pendulum`` on the
 rotation) on the project's physics (``hrc_sim_node.physics``, PyBullet) while a sum-of-sines

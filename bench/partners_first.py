@@ -3,8 +3,7 @@
 
 Reads the final checkpoints of an experiment run with ``--checkpoints`` (in-process engine)::
 
-    hrc experiment --cases 2 8 1 7 --seeds 3 --episodes 300 \
-        --set agent.preset=tuned --set agent.judging_rule=in_a_row --checkpoints \
+    hrc experiment --cases 2 8 1 7 --seeds 3 --checkpoints \
         --name pf-3seeds --bags-dir /tmp/pf/bags --runs-dir /tmp/pf/runs --no-report
     python bench/partners_first.py /tmp/pf/runs/pf-3seeds [more runs] --episodes 3
 

@@ -28,7 +28,8 @@ from hrc_agent_node.partners import PERSON_PERIODS, SimulatedHumanPartner
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
-from hrc_common.session_plan import compose, parse_overrides, SessionSettings, STUDY_LEARNING
+from hrc_common.session_plan import (add_learning_option, compose, parse_overrides,
+                                     SessionSettings)
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners import partners_first
@@ -42,6 +43,7 @@ def main(argv=None) -> int:
     parser.add_argument('--case', type=int, default=7)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.PARAM=VALUE')
+    add_learning_option(parser)
     parser.add_argument('--person-period', choices=PERSON_PERIODS, default=None,
                         help="how often the training people act (default: the cases file's "
                         'population block, person_period)')
@@ -49,9 +51,8 @@ def main(argv=None) -> int:
                         help="episodes of the person's step at most")
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
-    texts = [f'{key}={value}' for key, value in STUDY_LEARNING.items()] + args.set
     settings = SessionSettings(case=args.case, seed=args.seed, session_id='trace',
-                               overrides=parse_overrides(texts))
+                               learning=args.learning, overrides=parse_overrides(args.set))
     parameters = compose(settings, params_dir())
     agent = from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='', resume_from=''))
     physics = physics_params_of(from_dict(SimParams, parameters['sim']))

@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
-"""Issue 24: how long a person waits in task first while the robot learns alone, through the graph.
+"""How long a person waits in task first while the robot learns alone, through the graph.
 
-    python bench/person_wait.py                                   # the issue's settings, 3 runs
-    python bench/person_wait.py --study --repeats 2               # the study's (make run's)
-    python bench/person_wait.py --repeats 1 -- --set agent.preset=graded   # more session options
+    python bench/person_wait.py                                   # the default learning, 3 runs
+    python bench/person_wait.py --repeats 2 -- --learning ppo     # more session options
 
 Runs ``hrc session --case 2 --mode realtime`` (the graph: sim, agent, simulated human, recorder
 as processes over DDS; the robot-alone episodes of a realtime session run in lockstep, as fast
@@ -13,10 +12,8 @@ Then the session is stopped (SIGINT). Prints per run: that time, the start-up (t
 episode's line, which comes when episode 0 ends), the robot-alone episodes, and at the end the
 median [min, max] over the runs.
 
-Settings: by default the issue's ("today's learning settings" when issue 24 was filed: the
-earlier update and judging rules, Table I's PPO, the ``tuned`` preset, a 300-episode cap; 92
-robot-alone episodes for seed 0); ``--study`` adds the study's settings
-(``hrc_common.session_plan.STUDY_LEARNING``, what ``make run`` uses).
+Settings: the session's defaults (the default learning configuration, what ``make run``
+uses); anything after ``--`` is passed to ``hrc session``.
 """
 
 import argparse
@@ -30,10 +27,6 @@ import sys
 import tempfile
 import threading
 import time
-
-from hrc_common.session_plan import study_learning_arguments
-
-ISSUE_SETTINGS = ['--episodes', '300', '--set', 'agent.preset=tuned']
 
 
 def one_run(arguments: list, timeout: float) -> dict:
@@ -80,8 +73,6 @@ def main(argv=None) -> int:
     """Run the sessions and print the times; return 0 (1 when a run never converged)."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--repeats', type=int, default=3, help='sessions run in turn (default 3)')
-    parser.add_argument('--study', action='store_true',
-                        help="the study's learning settings (make run's) instead of the issue's")
     parser.add_argument('--timeout', type=float, default=600.0,
                         help='give up on a run after this many seconds (default 600)')
     parser.add_argument('session_options', nargs='*',
@@ -94,10 +85,9 @@ def main(argv=None) -> int:
         print('person_wait: `hrc` is not on the PATH: run `source scripts/env.sh` first',
               file=sys.stderr)
         return 2
-    settings = study_learning_arguments() if args.study else ISSUE_SETTINGS
     with tempfile.TemporaryDirectory(prefix='person-wait-') as scratch:
         arguments = ['--runs-dir', f'{scratch}/runs', '--bags-dir', f'{scratch}/bags',
-                     *settings, *args.session_options]
+                     *args.session_options]
         print(f'person_wait: hrc session --case 2 --mode realtime {" ".join(arguments)}',
               flush=True)
         waits = []

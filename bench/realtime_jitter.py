@@ -16,20 +16,21 @@ than half the control period ran in lockstep (in case 2 the robot's episodes alo
 left out, and the count of such episodes is printed; with none left the bench says so and exits
 with 1 (use a case whose human acts from the start, 3-6, or more episodes).
 
-``--compare-learning`` (issue 22: "with updates inside episodes, the control period's p99
-jitter no worse than without learning, measured in one run") runs the same session twice per
-round, alternately: without learning inside episodes (``agent.horizon`` larger than an
-episode, so the only update comes after the episode's last state, outside the measurement) and
-with PPO updates inside them (``agent.update_rule=horizon_or_episode_end``,
-``agent.horizon=--inside-horizon``: an update every that many steps, run by the agent's learner
-thread), and prints both and their ratio::
+``--learning NAME`` chooses the session's learning configuration (params/learning/; default
+the sessions' default, ``sac``).
+
+``--compare-learning`` (target: with learning inside episodes, the control period's p99 jitter
+no worse than 1.2x without, measured in one run) runs the same session twice per round,
+alternately: with the learning moved out of the episodes (SAC: ``sac_update_at=episode_end``,
+the episode's gradient steps after its last state; PPO: ``horizon`` larger than an episode) and
+with the configuration's learning inside them (SAC: its gradient steps at every step from the
+first one, ``sac_learning_starts=1``, as in every episode after a session's first; PPO: an
+update every ``--inside-horizon`` steps, run by the learner thread), and prints both and their
+ratio::
 
     python bench/realtime_jitter.py --compare-learning --rounds 2
 
-``--learner-before`` adds a third arm to each round: the same updates with the learner thread
-as it was before it yielded to the control thread (same priority, Python's switch interval).
-
-``--realtime-priority N`` (issue 24) runs the session's nodes on SCHED_FIFO at priority N
+``--realtime-priority N`` runs the session's nodes on SCHED_FIFO at priority N
 (``HRC_REALTIME_PRIORITY``, hrc_common.nodes) and this listener's threads at the same priority,
 so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
 
@@ -56,7 +57,9 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from hrc_common import qos, topics
 from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
                               REALTIME_PRIORITY_VARIABLE)
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
+from hrc_common.paths import params_dir
+from hrc_common.session_plan import add_learning_option, load_learning
 from hrc_msgs.msg import TaskState
 
 
@@ -97,7 +100,8 @@ def machine_line(before: tuple, after: tuple) -> str:
     return line
 
 
-def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0) -> dict:
+def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0,
+            learning: str = 'sac') -> dict:
     """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}.
 
     ``priority`` > 0: the session's nodes and this listener on SCHED_FIFO at that priority.
@@ -142,7 +146,8 @@ def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int
     command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--case', str(case),
                '--mode', 'realtime', '--episodes', str(episodes), '--eval-episodes', '0',
                '--domain-id', str(domain_id), '--no-record', '--no-report',
-               '--runs-dir', str(work / 'runs'), '--session-id', 'bench-realtime']
+               '--runs-dir', str(work / 'runs'), '--session-id', 'bench-realtime',
+               '--learning', learning]
     for setting in settings:
         command += ['--set', setting]
     ticks_before = cpu_ticks()
@@ -204,10 +209,13 @@ def report(figures: dict, label: str = '') -> None:
                   f'p50 {p50:.2f} ms, p99 {p99:.2f} ms ({count} commands)')
 
 
-# The two arms of --compare-learning: the agent's settings of each.
-NO_UPDATE_INSIDE = ('agent.update_rule=horizon_or_episode_end', 'agent.horizon=1000000')
-# The learner thread before it yielded to the control thread (--learner-before).
-LEARNER_BEFORE = ('agent.learner_niceness=0', 'agent.learner_switch_interval=0')
+def comparison_arms(algorithm: str, inside_horizon: int) -> dict:
+    """Return {label: agent settings} of --compare-learning's two arms for ``algorithm``."""
+    if algorithm == 'sac':
+        return {'learning between episodes': ['agent.sac_update_at=episode_end'],
+                'learning inside episodes (every step)': ['agent.sac_learning_starts=1']}
+    return {'learning between episodes': ['agent.horizon=1000000'],
+            f'updates every {inside_horizon} steps': [f'agent.horizon={inside_horizon}']}
 
 
 def settings_line(args) -> str:
@@ -216,7 +224,8 @@ def settings_line(args) -> str:
                          if setting.startswith('sim.human_period=')), '0.02 (default)')
     priority = (f'SCHED_FIFO {args.realtime_priority}' if args.realtime_priority
                 else 'off (ordinary scheduler)')
-    return (f'settings: case {args.case}, {args.episodes} episode(s), '
+    return (f'settings: case {args.case}, {args.episodes} episode(s), learning '
+            f'configuration {args.learning}, '
             f'{EXECUTOR_VARIABLE}={os.environ.get(EXECUTOR_VARIABLE, "lean")}, human_period '
             f'{human_period} s, realtime priority {priority}, sets: '
             f'{" ".join(args.settings) or "none"}')
@@ -235,17 +244,14 @@ def main() -> int:
     parser.add_argument('--realtime-priority', type=int, default=0, metavar='N',
                         help='run the nodes and this listener on SCHED_FIFO at priority N '
                              '(1..99; HRC_REALTIME_PRIORITY); default 0: off')
+    add_learning_option(parser)
     parser.add_argument('--compare-learning', action='store_true',
-                        help='run without and with PPO updates inside episodes, alternately')
+                        help='run with the learning between and inside episodes, alternately')
     parser.add_argument('--rounds', type=int, default=1,
                         help='rounds of the comparison (each: one session of each arm)')
-    parser.add_argument('--learner-before', action='store_true',
-                        help='a third arm: the updates inside episodes with the learner thread '
-                             "as before issue 22's priority fix (agent.learner_niceness=0, "
-                             'agent.learner_switch_interval=0)')
     parser.add_argument('--inside-horizon', type=int, default=64,
-                        help='steps between updates inside an episode in the learning arm '
-                             '(default 64: 3 updates in a 200-step episode)')
+                        help='PPO: steps between updates inside an episode in the learning '
+                             'arm (default 64: 3 updates in a 200-step episode)')
     args = parser.parse_args()
     if args.episodes < 1 or args.rounds < 1 or args.inside_horizon < 2:
         parser.error('--episodes and --rounds must be >= 1, --inside-horizon >= 2')
@@ -257,26 +263,26 @@ def main() -> int:
         print(f'running a realtime session of {args.episodes} episode(s) of 40 s ...',
               flush=True)
         figures = measure(args.case, args.episodes, args.domain_id, args.settings,
-                          args.realtime_priority)
+                          args.realtime_priority, args.learning)
         if 'error' in figures:
             print(figures['error'], file=sys.stderr)
             return 1
         report(figures)
         return 0
 
-    inside = ['agent.update_rule=horizon_or_episode_end', f'agent.horizon={args.inside_horizon}']
-    arms = {'no updates inside episodes': list(args.settings) + list(NO_UPDATE_INSIDE),
-            f'updates every {args.inside_horizon} steps': list(args.settings) + inside}
-    if args.learner_before:
-        arms[f'updates every {args.inside_horizon} steps, learner as before'] = (
-            list(args.settings) + inside + list(LEARNER_BEFORE))
+    try:
+        algorithm = load_learning(params_dir(), args.learning)['algorithm']
+    except (ValueError, KeyError) as error:
+        parser.error(f'--learning {args.learning}: {error}')
+    arms = {label: list(args.settings) + settings
+            for label, settings in comparison_arms(algorithm, args.inside_horizon).items()}
     results = {label: [] for label in arms}
     for round_index in range(args.rounds):
         for label, settings in arms.items():
             print(f'round {round_index + 1}/{args.rounds}: {label} '
                   f'({args.episodes} episode(s) of 40 s) ...', flush=True)
             figures = measure(args.case, args.episodes, args.domain_id, settings,
-                              args.realtime_priority)
+                              args.realtime_priority, args.learning)
             if 'error' in figures:
                 print(figures['error'], file=sys.stderr)
                 return 1
@@ -294,7 +300,7 @@ def main() -> int:
                                           for actor, value in latency.items()))
     without, *with_updates = p99.values()
     for label, value in zip(list(p99)[1:], with_updates):
-        print(f'jitter p99 {label} / no updates inside episodes: {value / without:.2f}x')
+        print(f'jitter p99 {label} / learning between episodes: {value / without:.2f}x')
     return 0
 
 

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Benchmark: realtime stick-to-physics latency, a scripted joystick on a FIFO.
 
-    python bench/stick_latency.py                 # the human's rate and the old rate, one run
-    python bench/stick_latency.py --moves 300
+    python bench/stick_latency.py                 # the sim's default human period (0.02 s)
+    python bench/stick_latency.py --moves 300 --human-period 0.02 0.2
 
 Starts a realtime sim (``start_on_launch``, the human alone: ``expected_actors [human]``) and a
 human node reading a joystick device, a FIFO written by this process (Linux js_event records).
@@ -14,12 +14,9 @@ state (or the next period's state). Latency of a move = that tick's receive time
 time the event was written, both taken in this process. Moves overwritten before any tick
 applied them are counted as never applied.
 
-Two configurations, run one after the other in one invocation:
-
-* ``before``: ``human_period = control_period`` (0.2 s) and ``forward_stick: false``: the stick
-  is read when a state arrives and held for a whole period (the behaviour before issue 21);
-* ``after``: the sim's default ``human_period`` (0.02 s) and ``forward_stick: true``: the human
-  node sends each move at once, the sim applies the newest command at each 20 ms slice.
+The human node sends each move at once (answering the newest state) and the sim applies the
+newest command at each slice of ``--human-period`` s (default 0.02 s, the sim's; several values
+run one after the other in one invocation).
 """
 
 import argparse
@@ -36,16 +33,13 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_common import qos, topics
-from hrc_common.testing import NodeProcess, ros_environment
 from hrc_joystick_node.js_event import device_axis, JS_EVENT_AXIS, pack_event
 from hrc_msgs.msg import TaskState
 
-CONFIGURATIONS = {
-    'before (human_period 0.2 s, stick read per state)': {'human_period': 0.2,
-                                                          'forward_stick': False},
-    'after (human_period 0.02 s, stick forwarded)': {'human_period': 0.02,
-                                                     'forward_stick': True},
-}
+# The test support (test/support/hrc_testing) is not installed: found from the checkout.
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test' / 'support'))
+from hrc_testing.nodes import NodeProcess, ros_environment  # noqa: E402 (after the path)
+
 AXIS = 1
 MAX_TORQUE = 0.5      # N*m: the sim's default, the human drives the rotation here
 
@@ -62,8 +56,8 @@ def raw_of(index: int) -> int:
     return magnitude if index % 2 else -magnitude
 
 
-def measure(name: str, settings: dict, args, domain_id: int) -> dict:
-    """Run one configuration; return its latencies (ms) and the count of lost moves."""
+def measure(name: str, human_period: float, args, domain_id: int) -> dict:
+    """Run at ``human_period`` (s); return the latencies (ms) and the count of lost moves."""
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-stick-'))
     fifo = work / 'js0'
     os.mkfifo(fifo)
@@ -71,11 +65,10 @@ def measure(name: str, settings: dict, args, domain_id: int) -> dict:
     sim = NodeProcess('hrc_sim_node', 'sim_node', env=env, parameters={
         'mode': 'realtime', 'start_on_launch': True, 'auto_reset': True,
         'expected_actors': ['human'], 'robot_dof': 'translation', 'marker_rate': 0.0,
-        'human_period': settings['human_period']})
+        'human_period': human_period})
     human = NodeProcess('hrc_joystick_node', 'human_node', env=env, parameters={
         'input': 'device', 'device': str(fifo), 'axis': AXIS, 'deadzone': 0.0,
-        'on_input_lost': 'zero', 'dof': 'rotation', 'forward_stick': settings['forward_stick'],
-        'input_check_period': 0.1})
+        'on_input_lost': 'zero', 'dof': 'rotation', 'input_check_period': 0.1})
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
     node = rclpy.create_node('bench_stick_latency', context=context)
@@ -147,15 +140,18 @@ def measure(name: str, settings: dict, args, domain_id: int) -> dict:
 
 
 def main() -> int:
-    """Run both configurations and print p50/p99 stick-to-physics latency."""
+    """Run each human period and print p50/p99 stick-to-physics latency."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--moves', type=int, default=150, help='stick moves per configuration')
+    parser.add_argument('--moves', type=int, default=150, help='stick moves per human period')
+    parser.add_argument('--human-period', type=float, nargs='+', default=[0.02],
+                        help="the sim's human_period (s) to run at (default 0.02)")
     parser.add_argument('--interval', type=float, default=0.037,
                         help='wall seconds between two moves (default 37 ms)')
     parser.add_argument('--domain-id', type=int, default=93)
     args = parser.parse_args()
-    for offset, (name, settings) in enumerate(CONFIGURATIONS.items()):
-        result = measure(name, settings, args, args.domain_id + offset)
+    for offset, human_period in enumerate(args.human_period):
+        name = f'human_period {human_period} s, stick forwarded'
+        result = measure(name, human_period, args, args.domain_id + offset)
         latencies = result['latencies']
         if not latencies:
             print(f'{name}: no move was applied ({result["moves"]} written)')

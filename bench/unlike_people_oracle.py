@@ -6,7 +6,7 @@ population (``hrc_partners.partners_first.unlike_people``: slower, heavier-hande
 timid) to its error with the person it trained for. This bench asks what that ratio would be
 for a robot that *did* train with the unlike person: each session of the paper's task-first
 strategy (case 2: the robot rotates, case 1: it translates) is run offline, in one process,
-with the study's learning settings (``hrc_common.session_plan.STUDY_LEARNING``) and the unlike
+with the default learning configuration (params/learning/sac.yaml) and the unlike
 person as the session's person, then its frozen policy is evaluated with that same person twice:
 in the session's own final evaluation (the person as the session left them: practised, maybe
 tired) and offline with the person met afresh, as ``bench/partners_first.py`` evaluates the
@@ -41,7 +41,8 @@ from hrc_agent_node.partners import person_period, SimulatedHumanPartner
 from hrc_agent_node.strategies import session_case
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
-from hrc_common.session_plan import STUDY_LEARNING
+from hrc_common.paths import params_dir
+from hrc_common.session_plan import DEFAULT_LEARNING, load_learning
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
@@ -54,8 +55,10 @@ PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
 
 
 def study_settings() -> dict:
-    """Return the study's learning settings as AgentParams fields (without ``agent.``)."""
-    return {key.split('.', 1)[1]: value for key, value in STUDY_LEARNING.items()}
+    """Return the default learning configuration's AgentParams fields (the episode cap apart)."""
+    settings = load_learning(params_dir(), DEFAULT_LEARNING)
+    settings.pop('max_training_episodes', None)    # each task gives its own
+    return settings
 
 
 def run_one(task: dict) -> dict:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-r"""Rerun the study (issue 23): cases x seeds in the engine, a graph spot check, the results.
+r"""Rerun the study: cases x seeds in the engine, a graph spot check, the results.
 
 The paper's cases x seeds run through the in-process engine, a graph spot check must match the
 engine's rows exactly, then docs/results.md is written from the run.
@@ -8,7 +8,9 @@ Steps, each printed as it starts:
 
 1. refuse a work tree with uncommitted source changes (the results must come from a commit;
    ``--allow-dirty`` runs anyway and says so in the results' note);
-2. for each learner (PPO, the paper's; SAC, the off-policy one of issue 22): ``experiment``
+2. for each learning configuration (``--learnings``: params/learning/<name>.yaml; default the
+   session default ``sac`` and ``ppo``, the paper's algorithm with the study's rules):
+   ``experiment``
    of every case of params/cases.yaml (the paper's six and the two partners-first cases) with
    the ``paper`` profile (``--seeds`` seeds, person N of its population for seed N) and the
    ``paper_symmetric`` control (``--control-seeds``), in-process, ``--parallel`` at once;
@@ -16,14 +18,10 @@ Steps, each printed as it starts:
    seed 1 and the partners-first case 8 seed 0) rerun through the ROS graph (the nodes over
    DDS), and every episode of each compared with the engine's: the same returns, errors,
    efforts and kinds, or the rerun fails (exit 1);
-4. once every learner has run: ``hrc_results`` on the PPO run into ``--out`` (docs/results.md),
-   SAC into ``--out``/sac.
+4. once every configuration has run: ``hrc_results`` on the default configuration's run into
+   ``--out`` (docs/results.md), each other one into ``--out``/<name>.
 
-The learning settings of the study (``hrc_common.session_plan.STUDY_LEARNING``) are the ones
-issue 22 measured to need the fewest episodes with PPO; the paper's own Table I settings stay
-the agent's defaults.
-
-Example (the whole study: 8 cases x (10 + 5) seeds x 2 learners, ~3 h on 2 cores)::
+Example (the whole study: 8 cases x (10 + 5) seeds x 2 configurations, ~3 h on 2 cores)::
 
     python scripts/rerun_study.py --parallel 2
 
@@ -34,7 +32,7 @@ same commit ran it). The results then list the runs and sum their wall time.
 
 A small run to try it (two cases, two seeds, no control, PPO only, no spot check)::
 
-    python scripts/rerun_study.py --cases 2 4 --seeds 2 --control-seeds 0 --learners ppo \
+    python scripts/rerun_study.py --cases 2 4 --seeds 2 --control-seeds 0 --learnings ppo \
         --spot-check --name try --out /tmp/try-results --allow-dirty
 
 Exit codes: 0 done, 1 a session failed or the spot check differs, 2 bad arguments.
@@ -49,18 +47,15 @@ import time
 
 try:
     from hrc_common.contract import case_ids
-    from hrc_common.session_plan import STUDY_LEARNING
-    from hrc_study.loading import load_sessions
+    from hrc_bag.report import load_records
+    from hrc_common.paths import params_dir
+    from hrc_common.session_plan import DEFAULT_LEARNING, learning_names
 except ModuleNotFoundError as missing:   # started without the workspace's environment
     print(f'rerun_study: {missing}: run `make setup` once, then `source scripts/env.sh` in this '
           'shell', file=sys.stderr)
     sys.exit(2)
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-# The study's learning settings: hrc_common.session_plan.STUDY_LEARNING (issue 22; why there).
-STUDY_SETTINGS = tuple(f'{key}={value}' for key, value in STUDY_LEARNING.items())
-LEARNER_SETTINGS = {'ppo': ('agent.algorithm=ppo',),
-                    'sac': ('agent.algorithm=sac', 'agent.preset=tuned')}
 
 
 def parse_arguments(argv):
@@ -73,15 +68,17 @@ def parse_arguments(argv):
     parser.add_argument('--seeds', type=int, default=10, help='seeds of the paper profile')
     parser.add_argument('--control-seeds', type=int, default=5,
                         help='seeds of the paper_symmetric control (0: none)')
-    parser.add_argument('--learners', nargs='+', default=['ppo', 'sac'],
-                        choices=sorted(LEARNER_SETTINGS))
+    parser.add_argument('--learnings', nargs='+', default=[DEFAULT_LEARNING, 'ppo'],
+                        choices=learning_names(params_dir()), metavar='NAME',
+                        help='learning configurations (params/learning/<name>.yaml; default '
+                        f'{DEFAULT_LEARNING} ppo)')
     parser.add_argument('--episodes', type=int, default=300, help='episode limit per session')
     parser.add_argument('--spot-check', nargs='*', default=['2:0', '4:1', '8:0'],
                         metavar='CASE:SEED',
                         help='sessions rerun through the graph and compared (none: no check)')
     parser.add_argument('--parallel', type=int, default=2, help='sessions at once')
     parser.add_argument('--stop-after', type=float, default=0.0, metavar='MINUTES',
-                        help="each learner's experiment starts no session after this many "
+                        help="each configuration's experiment starts no session after this many "
                         'minutes; a cut run holds whole seeds (every case) of each profile '
                         '(default 0 = none)')
     parser.add_argument('--name', default='study-rerun', help='experiment name (bags/<name>)')
@@ -134,14 +131,12 @@ def commit() -> str:
     return result.stdout.strip() or 'unknown'
 
 
-def experiment(options, name: str, learner: str, extra: list) -> int:
+def experiment(options, name: str, learning: str, extra: list) -> int:
     """Run one ``experiment`` (in-process unless ``extra`` says otherwise); return its code."""
-    settings = list(STUDY_SETTINGS) + list(LEARNER_SETTINGS[learner])
     command = [sys.executable, '-m', 'hrc_bringup.experiment', '--episodes',
                str(options.episodes), '--parallel', str(options.parallel), '--name', name,
-               '--bags-dir', options.bags_dir, '--runs-dir', options.runs_dir, '--no-report']
-    for setting in settings:
-        command += ['--set', setting]
+               '--bags-dir', options.bags_dir, '--runs-dir', options.runs_dir, '--no-report',
+               '--learning', learning]
     if options.cases and '--cases' not in extra:
         command += ['--cases'] + [str(case) for case in options.cases]
     if options.resume:
@@ -154,20 +149,20 @@ def experiment(options, name: str, learner: str, extra: list) -> int:
 def episode_rows(folder: pathlib.Path) -> dict:
     """Return {(case, seed): [episode record as a dict]} of the paper sessions of a run."""
     rows = {}
-    for record in load_sessions([str(folder)], log=lambda text: None):
+    for record in load_records([str(folder)], log=lambda text: None):
         if record.profile == 'paper':
             rows[(record.case_id, record.seed)] = [dataclasses.asdict(episode)
                                                    for episode in record.episodes]
     return rows
 
 
-def spot_check(options, learner: str, engine_folder: pathlib.Path) -> list:
+def spot_check(options, learning: str, engine_folder: pathlib.Path) -> list:
     """Rerun the spot-check sessions through the graph; return every difference found."""
     engine = episode_rows(engine_folder)
     problems = []
     for case, seed in options.spots:
-        name = f'{options.name}-{learner}-graph-case{case}-seed{seed}'
-        code = experiment(options, name, learner,
+        name = f'{options.name}-{learning}-graph-case{case}-seed{seed}'
+        code = experiment(options, name, learning,
                           ['--engine', 'graph', '--cases', str(case), '--first-seed', str(seed),
                            '--seeds', '1', '--profiles', 'paper', '--parallel', '1'])
         if code != 0:
@@ -184,7 +179,7 @@ def spot_check(options, learner: str, engine_folder: pathlib.Path) -> list:
             problems.append(f'case {case} seed {seed}: graph and engine differ from episode '
                             f'{first} ({len(mine)} vs {len(theirs)} episodes)')
         else:
-            print(f'[rerun] spot check case {case} seed {seed} ({learner}): graph == engine, '
+            print(f'[rerun] spot check case {case} seed {seed} ({learning}): graph == engine, '
                   f'{len(mine)} episodes identical', flush=True)
     return problems
 
@@ -201,36 +196,36 @@ def main(argv=None) -> int:
     profiles = ['--profiles', f'paper:{options.seeds}'] + (
         [f'paper_symmetric:{options.control_seeds}'] if options.control_seeds else [])
     failures = []
-    finished = []     # (learner, its bags folder, minutes of this run when it was done)
-    for learner in options.learners:
-        name = f'{options.name}-{learner}'
-        code = experiment(options, name, learner, ['--seeds', str(options.seeds),
+    finished = []     # (learning, its bags folder, minutes of this run when it was done)
+    for learning in options.learnings:
+        name = f'{options.name}-{learning}'
+        code = experiment(options, name, learning, ['--seeds', str(options.seeds),
                                                    '--stop-after', str(options.stop_after)]
                           + profiles)
         if code != 0:
-            failures.append(f'{learner}: the experiment exited {code}')
+            failures.append(f'{learning}: the experiment exited {code}')
             continue
         folder = pathlib.Path(options.bags_dir) / name
-        failures += [f'{learner}: {problem}'
-                     for problem in spot_check(options, learner, folder)]
-        finished.append((learner, folder, (time.monotonic() - started) / 60.0))
-    # The pages are written once every learner's sessions have run: pages written into the work
-    # tree between two learners made the next learner's sessions record a "-dirty" version,
-    # which a --resume of that learner then refused to keep.
-    for learner, folder, minutes in finished:
-        out = pathlib.Path(options.out) / ('' if learner == 'ppo' else learner)
+        failures += [f'{learning}: {problem}'
+                     for problem in spot_check(options, learning, folder)]
+        finished.append((learning, folder, (time.monotonic() - started) / 60.0))
+    # The pages are written once every configuration's sessions have run: pages written into
+    # the work tree between two configurations made the next one's sessions record a "-dirty"
+    # version, which a --resume of that configuration then refused to keep.
+    for learning, folder, minutes in finished:
+        out = pathlib.Path(options.out) / ('' if learning == DEFAULT_LEARNING else learning)
         note = (f'Rerun by scripts/rerun_study.py at git {version}'
-                f'{" (resumed: see the runs above)" if options.resume else ""}, learner '
-                f'{learner}, settings {", ".join(STUDY_SETTINGS + LEARNER_SETTINGS[learner])}; '
+                f'{" (resumed: see the runs above)" if options.resume else ""}, learning '
+                f'configuration {learning} (params/learning/{learning}.yaml); '
                 f'{minutes:.1f} min wall in this run so far on this machine; graph spot check '
                 f'{" ".join(options.spot_check) or "none"}.')
         command = [sys.executable, '-m', 'hrc_study.results_cli', str(folder), '--out',
                    str(out), '--note', note]
         print('[rerun] ' + ' '.join(command[2:4]) + ' --out ' + str(out), flush=True)
         if subprocess.run(command, check=False).returncode != 0:
-            failures.append(f'{learner}: hrc_results failed')
+            failures.append(f'{learning}: hrc_results failed')
     minutes = (time.monotonic() - started) / 60.0
-    print(f'[rerun] {len(options.learners)} learner(s) in {minutes:.1f} min wall at git '
+    print(f'[rerun] {len(options.learnings)} configuration(s) in {minutes:.1f} min wall at git '
           f'{version}' + (': ' + '; '.join(failures) if failures else ': done'), flush=True)
     return 1 if failures else 0
 

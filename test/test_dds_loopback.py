@@ -12,7 +12,7 @@ import pathlib
 import subprocess
 import time
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 

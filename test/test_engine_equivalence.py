@@ -24,10 +24,12 @@ import subprocess
 import pytest
 
 from hrc_agent_node.checkpoint import read_checkpoint
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
+# The main session: the default learning configuration (SAC), learning from its 10th
+# transition on (every step after that runs its gradient steps inside the step).
 ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id', 'same',
-        '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
+        '--set', 'sim.episode_duration=8.0', '--set', 'agent.sac_learning_starts=10']
 # Every test here reads a session of the shared `sessions` fixture, which talks DDS (the domains
 # are reserved inside it, so conftest.py cannot tell from the tests' fixtures).
 pytestmark = pytest.mark.dds
@@ -132,13 +134,13 @@ def test_the_engine_and_the_lockstep_graph_give_the_same_session(sessions):
 
 
 OTHER_CASES = (1, 2, 3, 4, 6)
-SHORT = ['--episodes', '2', '--eval-episodes', '1', '--session-id', 'same', '--set',
-         'sim.episode_duration=2.0', '--set', 'agent.horizon=16', '--set',
+# The other cases with the paper's learner (PPO: an update after each episode)
+SHORT = ['--episodes', '2', '--eval-episodes', '1', '--session-id', 'same', '--learning', 'ppo',
+         '--set', 'sim.episode_duration=2.0', '--set', 'agent.horizon=16', '--set',
          'agent.minibatch_size=8']   # 10 steps an episode
 UPDATE_INSIDE_ARGS = ['--case', '5', '--episodes', '2', '--eval-episodes', '1', '--session-id',
                       'same', '--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=30',
-                      '--set', 'agent.minibatch_size=16',
-                      '--set', 'agent.update_rule=horizon_or_episode_end']
+                      '--set', 'agent.minibatch_size=16', '--learning', 'ppo']
 # The scripted stick: its position changes every 0.06 s (inside control periods), the enable
 # button let go on every ninth change.
 STICK_SCRIPT = '\n'.join(['time,axis,enable'] + [
@@ -172,7 +174,8 @@ def sessions(tmp_path_factory, rosbags_typestore):
     """
     from concurrent.futures import ThreadPoolExecutor
 
-    from hrc_common.testing import DomainReservation, read_bag_with_rosbags, ros_environment
+    from hrc_common.domains import DomainReservation
+    from hrc_testing.nodes import read_bag_with_rosbags, ros_environment
 
     def run(name):
         args, extra_env = SESSIONS[name]
@@ -239,7 +242,7 @@ def test_await_absent_human_keeps_the_graph_and_the_engine_identical(sessions):
 
 @pytest.mark.slow
 def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(sessions):
-    """Under ``update_rule: horizon_or_episode_end`` with horizon 30 (issue 22).
+    """PPO with horizon 30: an update inside the first episode.
 
     The first episode's rollout is cut at step 30, the update runs before the action for that
     state (in the agent node and in the engine alike), the rest of the episode acts with the

@@ -22,7 +22,8 @@ import urllib.request
 from hrc_bringup import cli
 from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
-from hrc_common.testing import executable_path, wait_for
+from hrc_common.executables import executable_path
+from hrc_testing.nodes import wait_for
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_INIT, pack_event
 from hrc_live.study import assign_orders, load_index, register, save_registry
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState

@@ -10,7 +10,7 @@ import subprocess
 
 import pytest
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 
 # package, executable, node name, a parameter of the node, the same name misspelt
 NODES = [

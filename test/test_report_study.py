@@ -7,7 +7,7 @@ import os
 import subprocess
 import sys
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 from hrc_common.tlx import TLX_SCALES
 from hrc_live import study
 import pytest

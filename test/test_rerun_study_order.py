@@ -1,4 +1,4 @@
-"""scripts/rerun_study.py writes the results pages only after every learner's sessions ran.
+"""scripts/rerun_study.py writes the results pages only after every configuration's sessions ran.
 
 Pages written into the work tree between the PPO and the SAC arm made the SAC sessions record
 a "-dirty" version, so `--resume` of the SAC arm refused to keep them (found on 2026-12-02: 91
@@ -20,7 +20,7 @@ def load_script():
     return module
 
 
-def test_every_learner_runs_before_any_page_is_written(tmp_path, monkeypatch):
+def test_every_configuration_runs_before_any_page_is_written(tmp_path, monkeypatch):
     script = load_script()
     calls = []
     monkeypatch.setattr(script, 'uncommitted', lambda: [])
@@ -40,13 +40,14 @@ def test_every_learner_runs_before_any_page_is_written(tmp_path, monkeypatch):
         return Finished()
 
     monkeypatch.setattr(script.subprocess, 'run', fake_run)
-    code = script.main(['--learners', 'ppo', 'sac', '--cases', '2', '--seeds', '1',
+    code = script.main(['--learnings', 'ppo', 'sac', '--cases', '2', '--seeds', '1',
                         '--control-seeds', '0', '--spot-check', '--out', str(tmp_path),
                         '--bags-dir', str(tmp_path / 'bags'), '--runs-dir',
                         str(tmp_path / 'runs')])
     assert code == 0
     assert [kind for kind, _ in calls] == ['run', 'check', 'run', 'check', 'pages', 'pages'], calls
-    assert calls[-2:] == [('pages', str(tmp_path)), ('pages', str(tmp_path / 'sac'))]
+    # the default configuration (sac) writes --out itself, every other one --out/<name>
+    assert calls[-2:] == [('pages', str(tmp_path / 'ppo')), ('pages', str(tmp_path))]
 
 
 def test_started_without_the_workspace_it_says_what_to_run_and_exits_2():

@@ -1,4 +1,4 @@
-"""docs/results.md says what docs/results/sessions.csv holds (issue 23: one run, recomputable).
+"""docs/results.md says what docs/results/sessions.csv holds (one run, recomputable).
 
 A few numbers of the page recomputed from the per-session CSV written with it: each case's mean
 human-involved and total episodes (Table II), converged sessions (the convergence table) and the

@@ -4,7 +4,7 @@ A killed recorder leaves an episode file open; the report says so on stderr, and
 used to print the report's stderr only when it failed.
 """
 
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 from hrc_bringup.session_report import report
 from hrc_common.session_plan import SessionSettings
 import pytest
@@ -23,7 +23,7 @@ def test_the_runner_prints_the_reports_notices(tmp_path, capsys):
     settings = SessionSettings(case=5, session_id='cut', bags_dir=str(tmp_path / 'bags'))
     report(settings, tmp_path / 'run')
     printed = capsys.readouterr()
-    assert '| Learn together (baseline) | Case 5 |' in printed.out
+    assert '| 5 | together | translation | 1 |' in printed.out
     assert '[session] hrc bag report:' in printed.err
     assert 'a file was not closed (recorder killed?)' in printed.err
     assert 'using the MCAP files of the folder' in printed.err

@@ -29,7 +29,7 @@ import time
 
 from hrc_bringup import netlab
 from hrc_common.session_plan import compose, SessionSettings, write_session_files
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 import pytest
 
 STEPS = 20                       # control steps per episode (episode_duration 4 s)

@@ -15,6 +15,9 @@ setup(
         # Every node's parameter file, for `hrc session` outside a checkout.
         ('share/' + package_name + '/params',
          glob.glob(os.path.join('..', '..', 'params', '*.yaml'))),
+        # the learning configurations (hrc session --learning NAME)
+        ('share/' + package_name + '/params/learning',
+         glob.glob(os.path.join('..', '..', 'params', 'learning', '*.yaml'))),
     ],
     install_requires=['setuptools'],
     zip_safe=True,

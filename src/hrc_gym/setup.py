@@ -16,6 +16,6 @@ setup(
     maintainer_email='hrc@example.org',
     description='The slider-pendulum-ball task as a Gymnasium and a PettingZoo environment.',
     license='Apache-2.0',
-    # no console script: the PPO comparison is a benchmark (python -m hrc_gym.bench.compare_ppo)
+    # no console script: the PPO comparison is a benchmark (python bench/gym_ppo_vs_sb3.py)
     entry_points={'console_scripts': []},
 )

@@ -29,23 +29,23 @@ episodes (judging episodes included); evaluation runs the frozen deterministic p
 Three kinds of episode (:class:`EpisodePlan`):
 
 * **training**: the stochastic policy explores; its samples go to the rollout buffer;
-* **judging** (``convergence_judged_on: evaluation``, the default): one deterministic episode of
-  the current policy after each PPO update (``judging_interval: 0``) or after every N training
-  episodes, in the current step's setting; the step's advance condition is judged on these
-  episodes only. They are not learned from, but they count in :attr:`total_episodes` and,
-  when the human acts in them, in :attr:`human_involved_episodes` (the person's time is the
-  burden the paper measures). ``convergence_judged_on: training`` judges the stochastic
-  training episodes instead (the earlier rule; no judging episodes);
+* **judging**: one deterministic episode of the current policy after each update
+  (``judging_interval: 0``) or after every N training episodes, in the current step's setting;
+  the step's advance condition is judged on these episodes only. They are not learned from,
+  but they count in :attr:`total_episodes` and, when the human acts in them, in
+  :attr:`human_involved_episodes` (the person's time is the burden the paper measures). A
+  judging episode that met the step's condition is followed by another one of the same policy
+  until the window is full (the floor of the rule: strategies.py);
 * **evaluation**: the frozen policy after training (Table II); not counted in the totals.
 
-When PPO updates is ``update_rule``: ``episode_end_after_horizon`` (the earlier rule) at the end
-of the episode that filled ``horizon`` samples; ``horizon_or_episode_end`` after ``horizon``
-samples or at an episode's end, whichever comes first. Inside an episode the update runs in
-:meth:`act` at a defined step boundary (see :meth:`_step_boundary`), so every loop gets it
-without a call of its own. The learner (``hrc_agent_node.learner``) runs it synchronously
-(deterministic) unless :meth:`set_learner_mode` chose ``background`` (the agent node's realtime
-episodes). ``judging_rule: in_a_row`` follows a judging episode that met the step's condition
-with another one of the same policy (the floors of the rules: strategies.py).
+PPO updates after ``horizon`` samples or at an episode's end, whichever comes first, inside an
+episode at a defined step boundary of :meth:`act` (``agent_updates``: the update schedule and
+the learner modes). SAC learns inside :meth:`act` itself (``sac_update_at``).
+
+The class is split by job: this module the episode loop and the strategy's judging;
+``agent_observation`` what the robot observes of the human; ``agent_updates`` when the learner
+updates; ``agent_operator`` pause, resume, abort and the status and summary;
+``agent_state`` the checkpoint state.
 
 When a step advances to a step with another reward, the rollout buffer (samples of the old
 reward) and the reward scaler's statistics are reset, so the first update of the new step
@@ -66,14 +66,17 @@ episodes' seeds) in ``observation``.
 """
 
 from dataclasses import dataclass, field
-import math
 
 import numpy as np
 
+from hrc_agent_node.agent_observation import HumanObservation
+from hrc_agent_node.agent_operator import OperatorControls
+from hrc_agent_node.agent_state import CheckpointState
+from hrc_agent_node.agent_updates import UpdateSchedule
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.episode_records import Decision, EpisodePlan, EpisodeResult, StepRecord
 from hrc_agent_node.learner import make_learner
-from hrc_agent_node.observation import applied_command, derive_seed, observation_of
+from hrc_agent_node.observation import derive_seed
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import session_case, StrategyProgress
@@ -107,7 +110,7 @@ class _EpisodeLog:
     segment_start: int = 0   # first sample not handed to the buffer yet (a rollout cut inside)
 
 
-class AgentCore:
+class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointState):
     """Task tree, reward, strategy progress, PPO learner and counters of one session."""
 
     def __init__(self, params: AgentParams = None, tree: TaskTree = None, cases: dict = None,
@@ -187,16 +190,6 @@ class AgentCore:
         return self.params.seed
 
     @property
-    def convergence_rule(self) -> str:
-        """Return what step conditions are judged on: 'evaluation' or 'training' episodes."""
-        return self.params.convergence_judged_on
-
-    @property
-    def judged_on_evaluation(self) -> bool:
-        """Return True when step conditions are judged on deterministic judging episodes."""
-        return self.params.convergence_judged_on == 'evaluation'
-
-    @property
     def robot_dof(self) -> str:
         """Return the degree of freedom the robot drives."""
         return self.case.robot_dof
@@ -246,45 +239,6 @@ class AgentCore:
         return self._log is not None
 
     @property
-    def update_due(self) -> bool:
-        """Return True when an update is due at this episode end (by ``update_rule``).
-
-        ``episode_end_after_horizon``: the buffer holds a horizon of samples;
-        ``horizon_or_episode_end``: it holds any sample, or a background update started inside
-        the episode has not been swapped in yet.
-        """
-        if self.off_policy:
-            return self.policy_learner.update_due    # SAC: see sac.py
-        if self.params.update_rule == 'episode_end_after_horizon':
-            return len(self.buffer) >= self.params.horizon
-        return len(self.buffer) > 0 or self.learner.busy
-
-    @property
-    def updates_inside_episodes(self) -> bool:
-        """Return True when updates may run inside an episode (``horizon_or_episode_end``)."""
-        return self.params.update_rule == 'horizon_or_episode_end'
-
-    @property
-    def learner_mode(self) -> str:
-        """Return 'synchronous' (update at once, deterministic) or 'background' (realtime)."""
-        return self.learner.mode
-
-    def set_learner_mode(self, mode: str) -> None:
-        """Run the next updates synchronously or in the background (between episodes only).
-
-        The agent node runs its realtime episodes with ``background`` so an update inside an
-        episode never delays a control step; everything else is ``synchronous``.
-        """
-        if self._log is not None:
-            raise RuntimeError(f'episode {self.episode} is running: change the learner between '
-                               'episodes')
-        if mode == self.learner.mode or self.off_policy:
-            return       # SAC learns inside act() itself (sac_update_at), never in a thread
-        self._settle_learner()
-        self.learner = make_learner(mode, self.ppo, self.params.learner_niceness,
-                                    self.params.learner_switch_interval)
-
-    @property
     def limits(self) -> SimLimits:
         """The sim's control period and force/torque limits (raises until they are known)."""
         if self._limits is None:
@@ -313,34 +267,7 @@ class AgentCore:
         """Return the force (N) or torque (N*m) of a normalized robot action."""
         return float(action) * self.limits.full_scale(self.robot_dof)
 
-    def status_line(self) -> str:
-        """Return one line saying where the session is (for logs and SessionStatus)."""
-        step = self.training_step
-        return (f'case {self.case.case_id} ({self.case.strategy}), phase {self.phase}, '
-                f'step {step.index + 1}/{len(self.case.steps)} "{step.name}": robot '
-                f'{self.robot_dof} rewarded on {list(step.robot_subtasks)}, human '
-                f'{"involved on " + str(list(step.human_subtasks)) if step.human_involved else "not involved"}; '  # noqa: E501
-                f'episode {self.episode}{" (judging)" if self._next_is_judging() else ""}, '
-                f'{self.total_episodes} episodes ({self.human_involved_episodes} with the '
-                f'human, {self.judging_episodes} judging)')
-
     # ------------------------------------------------------------------ episode
-
-    def population_step_problem(self) -> str:
-        """Return why the next episode cannot run here ('' if it can).
-
-        A strategy's population step (partners first) is run only by a caller that supplies
-        the simulated population (``population_partner``); any other runner must start the
-        session from the pre-trained checkpoint, which stands at the person's step.
-        """
-        step = self.training_step
-        if step.partner != 'population' or self.population_partner \
-                or self.phase not in (Phase.TRAINING, Phase.EVALUATION):
-            return ''
-        return (f'case {self.case_id} step {step.index + 1} "{step.name}" trains with a '
-                'simulated population before the person joins: pre-train it first (hrc '
-                'session does; by hand: python -m hrc_partners.partners_first --case '
-                f'{self.case_id}) and start this session from its checkpoint (resume_from)')
 
     def start_episode(self) -> EpisodePlan:
         """Begin the next episode and return its plan."""
@@ -359,50 +286,6 @@ class AgentCore:
                                                   for subtask_id in self.tree.subtasks})
         self.reward_scaler.start_episode()
         return plan
-
-    def observation(self, state, human_action: float) -> np.ndarray:
-        """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates)."""
-        return observation_of(self.params, state, human_action)
-
-    @property
-    def needs_human_action(self) -> bool:
-        """Return True when act() needs the human's answer to the same state."""
-        return self.params.human_action_source == 'same_step' and self.human_involved
-
-    def applied_human_action(self, state) -> float:
-        """Return the human's normalized command the sim applied in the last control period.
-
-        Each degree of freedom has one actor, so the state's applied force (torque) on the
-        human's degree of freedom is the human's command, after the sim's clamping and with a
-        missing command as 0.
-        """
-        return applied_command(state, self.human_dof, self.limits)
-
-    def observed_human_action(self, state, human_action=None) -> float:
-        """Return the human action a_h the robot observes in ``state`` (normalized, [-1, 1]).
-
-        By ``human_action_source``: ``applied``, the human's command the sim applied in the
-        last period, read from ``state`` (then ``human_action`` must be None: it would not be
-        used); ``same_step``, ``human_action``, the human's answer to this same state (required
-        while the human is involved). 0 while the human is not involved (then ``human_action``
-        must be None); a non-finite answer is observed as 0. Raises ValueError otherwise.
-        """
-        involved = self._require_episode().plan.human_involved
-        if human_action is not None and not (involved and
-                                             self.params.human_action_source == 'same_step'):
-            why = ('the human is not involved in this episode' if not involved else
-                   'human_action_source is applied: the observed action comes from the state')
-            raise ValueError(f'a human action was given but would not be used: {why}')
-        if not involved:
-            return 0.0
-        if self.params.human_action_source == 'applied':
-            human_action = self.applied_human_action(state)
-        elif human_action is None:
-            raise ValueError("human_action_source is same_step: act() needs the human's answer "
-                             'to this state')
-        if not math.isfinite(human_action):
-            return 0.0
-        return min(1.0, max(-1.0, float(human_action)))
 
     def act(self, state, human_action=None) -> Decision:
         """Return the robot's action for a non-final state of the running episode.
@@ -445,84 +328,6 @@ class AgentCore:
         self._collect_human_slices(log, state)
         log.next_step = int(state.step) + 1
         return Decision(action, record.wrench, record, previous, update)
-
-    def _collect_human_slices(self, log: _EpisodeLog, state) -> None:
-        """Keep the human's commands the sim applied within the period that led to ``state``.
-
-        At the human's own rate a state carries several (``human_applied``, N or N*m, one per
-        slice of the period; TaskState and the engine's states alike): the human's effort is
-        then their variance (normalized), the person's real input, not that of the period
-        means the robot observes. One value per period (the human acts once a period): the
-        observed actions, as before.
-        """
-        applied = getattr(state, 'human_applied', None)
-        if applied is not None and len(applied) > 1:
-            scale = self.limits.full_scale(self.human_dof)
-            log.human_slices.extend(float(value) / scale for value in applied)
-
-    def _step_boundary(self, log: _EpisodeLog, observation) -> dict:
-        """Before the action for a state of a training episode: the updates due inside it.
-
-        Only under ``update_rule: horizon_or_episode_end``. First a background update that has
-        finished is swapped in (its weights act from this state on). Then, when the buffer and
-        the episode's samples not yet in it hold ``horizon`` samples, the rollout is cut here
-        and the update starts: synchronously it runs now, so this state's action already comes
-        from the new weights (a defined step: sessions stay deterministic); in the background
-        the old weights keep acting until a later boundary. The cut segment is truncated, not
-        terminated: it bootstraps from V(this state) of the weights that collected it. Returns
-        the statistics of the update that took over at this step, or None.
-        """
-        if not self.updates_inside_episodes or log.plan.deterministic:
-            return None
-        swapped = self.learner.poll()
-        if swapped is not None:
-            self._updated(swapped)
-        if self.learner.busy:
-            return swapped
-        waiting = len(self.buffer) + len(log.train_rewards) - log.segment_start
-        if waiting < self.params.horizon:
-            return swapped
-        self._hand_over_segment(log, self.ppo.value_of(observation), terminated=False)
-        started = self._start_update()
-        return started if started is not None else swapped
-
-    def _hand_over_segment(self, log: _EpisodeLog, final_value: float, terminated: bool):
-        """Add the episode's samples since the last cut to the buffer (GAE computed now).
-
-        ``final_value``: V of the state after the segment's last sample (ignored when
-        ``terminated``).
-        """
-        start, end = log.segment_start, len(log.train_rewards)
-        if end > start:
-            self.buffer.add_episode(log.observations[start:end], log.raw_actions[start:end],
-                                    log.log_probs[start:end], log.values[start:end],
-                                    log.train_rewards[start:end], final_value, terminated,
-                                    self.params.gamma, self.params.gae_lambda)
-        log.segment_start = end
-
-    def _start_update(self):
-        """Hand the buffer to the learner (a fresh buffer collects on); return its stats or None.
-
-        None: a background update started; its statistics come when it is swapped in.
-        """
-        rollout, self.buffer = self.buffer, RolloutBuffer()
-        stats = self.learner.start(rollout)
-        if stats is not None:
-            self._updated(stats)
-        return stats
-
-    def _updated(self, stats: dict) -> None:
-        """Note an update whose weights act from now on."""
-        self.last_update = stats
-        if self.judged_on_evaluation and self.params.judging_interval == 0:
-            self.judging_due = True
-
-    def _settle_learner(self):
-        """Wait for a background update still running and swap it in; return its stats or None."""
-        stats = self.learner.wait()
-        if stats is not None:
-            self._updated(stats)
-        return stats
 
     def end_episode(self, final_state, human_action=None) -> EpisodeResult:
         """Close the running episode at its final state; update counters and the strategy.
@@ -582,7 +387,6 @@ class AgentCore:
         self.total_episodes += 1
         self.human_involved_episodes += int(plan.with_person)
         self.population_episodes += int(plan.human_involved and not plan.with_person)
-        judge = plan.judging or not self.judged_on_evaluation
         if plan.judging:
             self.judging_episodes += 1
             self.judging_due = False
@@ -590,12 +394,10 @@ class AgentCore:
         else:
             self.episodes_since_judging += 1
             interval = self.params.judging_interval
-            if self.judged_on_evaluation and interval > 0 \
-                    and self.episodes_since_judging >= interval:
+            if interval > 0 and self.episodes_since_judging >= interval:
                 self.judging_due = True
-        converged, event = self.progress.record(errors) if judge else (False, '')
-        if plan.judging and event == '' and self.params.judging_rule == 'in_a_row' \
-                and self.progress.last_episode_met():
+        converged, event = self.progress.record(errors) if plan.judging else (False, '')
+        if plan.judging and event == '' and self.progress.last_episode_met():
             # Judge the same frozen policy again on the next episode, until the window is full
             # (no training, no update in between) or an episode fails.
             self.judging_due = True
@@ -635,86 +437,13 @@ class AgentCore:
                 self.policy_learner.clear_replay()
         # judge_first: the policy the step starts with may already meet it (trained before the
         # person joined): judge it on the step's first episode instead of training first.
-        self.judging_due = self.progress.step.judge_first and self.judged_on_evaluation
+        self.judging_due = self.progress.step.judge_first
         self.episodes_since_judging = 0
 
     def _next_is_judging(self) -> bool:
         """Return True when the next episode of the training phase is a judging episode."""
-        return self.judged_on_evaluation and self.judging_due \
-            and self.activity_phase == Phase.TRAINING and not self.progress.finished
-
-    def update(self) -> dict:
-        """Run the PPO update on the buffer (phase ``updating``), then go back to training.
-
-        Under ``convergence_judged_on: evaluation`` with ``judging_interval: 0`` the next
-        episode judges the updated policy. Under ``update_rule: horizon_or_episode_end`` this is
-        the update at the episode's end (of the samples since the last one inside it, after
-        swapping in a background update still running); returns the statistics of the last
-        update run.
-        """
-        if self.phase != Phase.UPDATING:
-            raise RuntimeError(f'no update is due in phase {self.phase.label!r}')
-        if self.off_policy:
-            self.last_update = stats = self.policy_learner.update()
-            self.phase = Phase.TRAINING
-            if self.judged_on_evaluation and self.params.judging_interval == 0:
-                self.judging_due = True
-            return stats
-        # A background update started inside the episode first; then the samples since.
-        stats = self._settle_learner()
-        if len(self.buffer) > 0:
-            stats = self._start_update()
-            if stats is None:        # background learner: between episodes nothing acts
-                stats = self._settle_learner()
-        self.phase = Phase.TRAINING
-        return stats
-
-    # ------------------------------------------------------------------ operator
-
-    def pause(self) -> None:
-        """Pause between two episodes: no episode starts until :meth:`resume`."""
-        if self._log is not None:
-            raise RuntimeError(f'episode {self.episode} is running: pause at its end')
-        if self.phase not in (Phase.TRAINING, Phase.EVALUATION):
-            raise RuntimeError(f'cannot pause in phase {self.phase.label!r}')
-        self._interrupted_phase, self.phase = self.phase, Phase.PAUSED
-
-    def resume(self) -> None:
-        """Continue a paused session in the phase it was paused in."""
-        if self.phase != Phase.PAUSED:
-            raise RuntimeError(f'cannot resume in phase {self.phase.label!r}: not paused')
-        self.phase, self._interrupted_phase = self._interrupted_phase, None
-
-    def abort(self) -> None:
-        """End the session now; a running episode is dropped (not learned from, not counted).
-
-        The last checkpoint taken at an episode end stays the one to resume from.
-        """
-        if self.phase != Phase.ABORTED:
-            self._interrupted_phase = self.activity_phase
-        self._log = None
-        self.phase = Phase.ABORTED
-
-    def evaluation_summary(self) -> dict:
-        """Return the Table II metrics averaged over the evaluation episodes."""
-        results = self.evaluation_results
-        if not results:
-            return {}
-        summary = {f'{subtask_id}_error': float(np.mean([r.errors[subtask_id] for r in results]))
-                   for subtask_id in self.tree.subtasks}
-        summary.update(
-            total_error=float(np.mean([r.total_error for r in results])),
-            robot_effort=float(np.mean([r.robot_effort for r in results])),
-            human_effort=float(np.mean([r.human_effort for r in results])),
-            episode_return=float(np.mean([r.episode_return for r in results])),
-            episodes=len(results), training_episodes=self.total_episodes,
-            judging_episodes=self.judging_episodes,
-            human_involved_episodes=self.human_involved_episodes,
-            human_involved_percentage=(100.0 * self.human_involved_episodes
-                                       / self.total_episodes if self.total_episodes else 0.0))
-        if self.population_episodes:     # partners-first: with the simulated population
-            summary['population_episodes'] = self.population_episodes
-        return summary
+        return self.judging_due and self.activity_phase == Phase.TRAINING \
+            and not self.progress.finished
 
     # ------------------------------------------------------------------ internals
 
@@ -740,58 +469,3 @@ class AgentCore:
         log.states_reached += 1
         log.pending = None
         return record
-
-    # ------------------------------------------------------------------ checkpoints
-
-    def state_dict(self) -> dict:
-        """Return everything needed to continue the session (see checkpoint.py)."""
-        if self._log is not None:
-            raise RuntimeError('checkpoints are taken between episodes, not during one')
-        if self.learner.busy:
-            raise RuntimeError('an update is running: checkpoints follow update()')
-        return {self.params.algorithm: self.policy_learner.state_dict(),   # 'ppo' or 'sac'
-                'reward_scaler': self.reward_scaler.state_dict(),
-                'buffer': self.buffer.state_dict(), 'progress': self.progress.state_dict(),
-                'counters': {'episode': self.episode, 'total_episodes': self.total_episodes,
-                             'human_involved_episodes': self.human_involved_episodes,
-                             'population_episodes': self.population_episodes,
-                             'judging_episodes': self.judging_episodes,
-                             'episodes_since_judging': self.episodes_since_judging,
-                             'judging_due': self.judging_due},
-                # a session resumed in evaluation runs only the evaluation episodes left
-                'evaluation_results': [result.to_plain() for result in self.evaluation_results],
-                # a paused session resumes in the phase it was paused in (saved as its
-                # label: the checkpoint format of before)
-                'phase': self.activity_phase.label}
-
-    def load_state_dict(self, state: dict, policy_only: bool = False) -> None:
-        """Continue from :meth:`state_dict` (``policy_only``: networks and counters only)."""
-        self.policy_learner.load_state_dict(state[self.params.algorithm],
-                                            policy_only=policy_only)
-        counters = state['counters']
-        self.episode = int(counters['episode'])
-        self.total_episodes = int(counters['total_episodes'])
-        self.human_involved_episodes = int(counters['human_involved_episodes'])
-        self.population_episodes = int(counters.get('population_episodes', 0))  # older: none
-        self.judging_episodes = int(counters['judging_episodes'])
-        if policy_only:
-            return
-        self.episodes_since_judging = int(counters['episodes_since_judging'])
-        self.judging_due = bool(counters['judging_due'])
-        self.reward_scaler.load_state_dict(state['reward_scaler'])
-        self.buffer.load_state_dict(state['buffer'])
-        self.progress.load_state_dict(state['progress'])
-        self.evaluation_results = [EpisodeResult.from_plain(data)
-                                   for data in state['evaluation_results']]
-        try:
-            phase = Phase.from_label(state['phase'])
-        except ValueError:       # not a phase: start training, as for paused or aborted
-            phase = Phase.TRAINING
-        # A session stopped while an update was due does the update first when resumed; one
-        # stopped in its evaluation runs the evaluation episodes it has not run yet (a finished
-        # one stays done).
-        if phase == Phase.EVALUATION \
-                and len(self.evaluation_results) >= self.params.evaluation_episodes:
-            phase = Phase.DONE
-        self.phase = phase if phase in (Phase.TRAINING, Phase.UPDATING, Phase.EVALUATION,
-                                        Phase.DONE) else Phase.TRAINING

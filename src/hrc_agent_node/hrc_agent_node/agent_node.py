@@ -1,8 +1,8 @@
-"""The agent node (``agent``): the PPO robot of a session, driving the episode loop.
+"""The agent node (``agent``): the learning robot of a session, driving the episode loop.
 
 Thin: messages in and out, the reset service client, timers and parameters. Everything the
-robot decides lives in :class:`hrc_agent_node.agent_core.AgentCore` (shared with the offline
-loop). The step protocol (docs/architecture.md):
+robot decides lives in :class:`hrc_agent_node.agent_core.AgentCore` (shared with the engine).
+The step protocol (docs/architecture.md):
 
 * at start: publish ``/hrc/session`` (transient local), wait for ``/hrc/sim/reset``, call it
   for episode 0 with a seed derived from the session seed. The reset response carries what the
@@ -21,35 +21,24 @@ loop). The step protocol (docs/architecture.md):
 * the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
   computed from the state reached);
 * on the final state (truncated/terminated): ``/hrc/agent/step`` of the last action,
-  ``/hrc/episode``; the PPO update when one is due at the episode's end (``update_rule``; phase
+  ``/hrc/episode``; the PPO update when one is due at the episode's end (phase
   ``updating`` announced first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with
   any change; then the reset for the next episode. After training (last step converged or
   max_training_episodes) the evaluation phase runs the frozen deterministic policy; then phase
   ``done`` and the node exits with code 0. In realtime the next reset waits until
   ``episode_break`` wall seconds after the final state (the person rests; the update runs
-  within the break). Under ``update_rule:
-  horizon_or_episode_end`` updates also fall inside an episode, at the step where the horizon is
+  within the break). PPO updates also fall inside an episode, at the step where the horizon is
   reached: in lockstep episodes synchronously at that step (as the in-process engine and the
   offline loop: bit-identical), in realtime episodes in a learner thread while the old weights
   keep acting; the new ones take over at the first step boundary after it finished
   (``hrc_agent_node.learner``).
 
 Practice (``practice_episodes`` N > 0, the session runner's ``--practice N``): instead of a
-session the node runs N episodes of the person alone (``hrc_agent_node.practice``): it
-announces them on ``/hrc/session`` (strategy ``practice``), resets the sim for each in realtime
-``episode_break`` apart, answers no state (the robot does not act, nothing is learned or
-checkpointed), publishes an ``EpisodeSummary`` of kind practice at each episode's end and exits
-0 after the last. So the agent is the one publisher of ``/hrc/session`` in practice too.
+session, N episodes of the person alone (``agent_practice``); the agent is the one publisher
+of ``/hrc/session`` in practice too.
 
-Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``):
-
-* ``/hrc/agent/pause``: takes effect at the next episode boundary (after the update and the
-  checkpoint): phase ``paused`` is announced and no reset is called until resumed;
-* ``/hrc/agent/resume``: continues (or cancels a pause that has not taken effect yet);
-* ``/hrc/agent/abort``: immediate: a zero wrench answers the newest state, phase ``aborted`` is
-  announced, nothing more is answered, the checkpoint of the last episode end (latest.pt) is
-  kept as it is, and the node exits with code ``EXIT_OPERATOR_ABORT`` (3). (A service call waits
-  for a PPO update in progress, which takes about a second.)
+Operator controls (``/hrc/agent/pause``, ``resume``, ``abort``): ``agent_services``; the
+practice's episodes: ``agent_practice``.
 """
 
 import math
@@ -58,17 +47,23 @@ import time
 
 from geometry_msgs.msg import WrenchStamped
 from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
+from hrc_agent_node.agent_messages import (agent_step_fields, episode_summary_fields,
+                                          session_status_fields)
+from hrc_agent_node.agent_practice import PracticeEpisodes
+from hrc_agent_node.agent_startup import SESSION_MATCH_GRACE_S, StartupWait
+from hrc_agent_node.agent_services import (ANNOUNCE_ACK_TIMEOUT_S, EXIT_LINGER_S,
+                                          OperatorServices)
 from hrc_agent_node.checkpoint import CheckpointError, load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.practice import PracticeRun
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
-from hrc_common.contract import episode_kind, Phase, SimLimits
-from hrc_common.dof import DOF_INDEX, set_wrench_value
+from hrc_common.contract import Phase, SimLimits
+from hrc_common.dof import set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
-from hrc_common.session_control import (ABORT_SERVICE, EXIT_OPERATOR_ABORT, FINAL_CHECKPOINT,
+from hrc_common.session_control import (ABORT_SERVICE, FINAL_CHECKPOINT,
                                         LATEST_CHECKPOINT, PAUSE_SERVICE, RESUME_SERVICE)
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
@@ -76,21 +71,11 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import Trigger
 
-# Wall seconds between the last message and the exit, so reliable subscribers receive it.
-EXIT_LINGER_S = 0.5
-# Wall seconds to wait for every subscriber to acknowledge an episode's announcement.
-ANNOUNCE_ACK_TIMEOUT_S = 0.5
 # Human actions kept for stamp matching (a few steps are enough: they answer the newest state).
 HUMAN_ACTIONS_KEPT = 50
 TICK_S = 0.02
-# s: once the nodes of wait_for_subscribers are seen, how long every /hrc/session reader of the
-# graph may take to match this node's writer before the first episode starts anyway.
-SESSION_MATCH_GRACE_S = 10.0
 
-PRACTICE_NO_PAUSE = ('the practice does not pause: it ends after its episodes (abort stops '
-                     'it)')
-
-SUMMARY = ('The PPO robot of an hrc session: answers every state on /hrc/robot/cmd_wrench, '
+SUMMARY = ('The learning robot of an hrc session: answers every state on /hrc/robot/cmd_wrench, '
            "learns between episodes, moves through the case's training steps, evaluates, "
            'publishes /hrc/session, /hrc/episode and /hrc/agent/step, and exits 0 when done.')
 
@@ -100,7 +85,7 @@ def stamp_key(stamp) -> tuple:
     return (int(stamp.sec), int(stamp.nanosec))
 
 
-class AgentNode(Node):
+class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
     """ROS front of an AgentCore session (see the module docstring for the protocol)."""
 
     def __init__(self):
@@ -132,6 +117,15 @@ class AgentNode(Node):
         problem = self.core.population_step_problem() if self.practice is None else ''
         if problem:   # partners first without its pre-training: refused, not a traceback
             raise ParameterError(problem)
+        self._create_interfaces()
+        self._init_state()
+        self.publish_session('session starting: ' + self.core.status_line())
+        self.get_logger().info(f'session {self.core.session_id}: {self.core.status_line()}; '
+                               f'waiting for {topics.RESET_SERVICE}')
+        self.create_timer(TICK_S, self.tick)
+
+    def _create_interfaces(self):
+        """Create the publishers, subscriptions, the reset client and the operator services."""
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.session_pub = self.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS,
                                                  event_callbacks=quiet_pub)
@@ -146,17 +140,20 @@ class AgentNode(Node):
         if self.params.human_action_source == 'same_step':
             # only same_step reads the human's answers; with 'applied' (the default) a reader
             # here would cost the human node a delivery and this process a wake-up per step for
-            # nothing (issue 24: the recorder is then the topic's only reader)
+            # nothing (the recorder is then the topic's only reader)
             self.create_subscription(HumanAction, topics.HUMAN_ACTION, self.on_human_action,
                                      qos.HUMAN_ACTION_QOS, event_callbacks=quiet_sub)
         self.reset_client = self.create_client(ResetEpisode, topics.RESET_SERVICE)
         self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)
         self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
+
+    def _init_state(self):
+        """Set the node's bookkeeping of the episode loop to its start."""
         self.pause_requested = False
         self.next_episode_at = 0.0      # monotonic s: realtime break between episodes
         if self.params.resume_from:
-            # issue 25: a resumed session (after a lost joystick or an abort) gives the person
+            # a resumed session (after a lost joystick or an abort) gives the person
             # the same break, and the page its countdown, before the first episode
             self.next_episode_at = time.monotonic() + self.break_seconds()
         self.newest_state = None        # the newest state of the running episode (for abort)
@@ -180,10 +177,6 @@ class AgentNode(Node):
         self.step_gaps = 0
         self.checkpoint_dir = (os.path.join(self.params.checkpoint_dir, self.core.session_id)
                                if self.params.checkpoint_dir and self.practice is None else '')
-        self.publish_session('session starting: ' + self.core.status_line())
-        self.get_logger().info(f'session {self.core.session_id}: {self.core.status_line()}; '
-                               f'waiting for {topics.RESET_SERVICE}')
-        self.create_timer(TICK_S, self.tick)
 
     # ------------------------------------------------------------------ session lifecycle
 
@@ -220,112 +213,6 @@ class AgentNode(Node):
                 f'{self.params.human_action_timeout} s: acting on 0 '
                 f'({self.human_timeouts} timeouts so far)', throttle_duration_sec=5.0)
             self.act(state, 0.0)  # same_step: the missing answer is observed as 0
-
-    def practice_tick(self, now: float):
-        """Start the next practice episode once the sim, the listeners and the break allow."""
-        if self.practice.in_episode or self.reset_future is not None \
-                or now < self.next_episode_at or self.core.phase == Phase.ABORTED:
-            return
-        if not self.ready_to_reset(now):
-            return
-        reset = self.practice.start_episode()
-        # As for a session's episode: every listener has the announcement before the state.
-        self.publish_session('')
-        self.session_pub.wait_for_all_acked(Duration(seconds=ANNOUNCE_ACK_TIMEOUT_S))
-        self.reset_future = self.reset_client.call_async(ResetEpisode.Request(
-            seed=reset.seed, episode=reset.episode, clock_mode=reset.clock_mode))
-        self.reset_future.add_done_callback(self.on_reset_done)
-
-    def on_practice_state(self, msg: TaskState):
-        """Follow a practice episode (no answer: the robot does not act); close it at its end."""
-        if self.core.phase == Phase.ABORTED:
-            return
-        fields = self.practice.on_state(msg)
-        if fields is None:
-            return
-        summary = EpisodeSummary(**fields)
-        summary.header.stamp = msg.header.stamp
-        summary.header.frame_id = 'world'
-        self.episode_pub.publish(summary)
-        self.get_logger().info(
-            f'practice episode {summary.episode} done: {summary.steps} steps, mean errors '
-            f'slider {summary.slider_error:.4f} pendulum {summary.pendulum_error:.4f} ball '
-            f'{summary.ball_error:.4f}')
-        self.publish_session('')
-        if self.practice.finished:
-            self.get_logger().info(f'practice done: {self.practice.done} episodes')
-            self.exit_at = time.monotonic() + EXIT_LINGER_S
-        else:
-            self.next_episode_at = time.monotonic() + self.params.episode_break
-
-    def ready_to_reset(self, now: float) -> bool:
-        """Return True once the sim's reset service and the session's listeners are there.
-
-        The session aborts when the service has not appeared after ``reset_timeout``.
-        """
-        if not self.reset_client.service_is_ready():
-            if now - self.waiting_since > self.params.reset_timeout:
-                self.abort(f'the reset service {topics.RESET_SERVICE} did not appear within '
-                           f'{self.params.reset_timeout} s')
-            return False
-        return not self.missing_subscribers(now)
-
-    def missing_subscribers(self, now: float) -> bool:
-        """Return True while a node of ``wait_for_subscribers`` is not ready for the session.
-
-        Ready: it subscribes to the states and to the session, every session reader the graph
-        shows is matched by this node's session writer (so the announcement of the first
-        episode reaches it before the reset: a human node that had not matched yet answered the
-        first states with its default roles), and every matched reader has acknowledged the
-        writer's history (the session's first announcement, sent to a late reader as
-        transient-local history: the writer keeps one sample, so the next announcement would
-        replace it before a slow reader had it, and the recorder's bag would lack it). Checked
-        before the first episode of this process only; after ``reset_timeout`` the session
-        aborts with the names.
-        """
-        wanted = {name for name in self.params.wait_for_subscribers if name}
-        if not wanted or getattr(self, 'subscribers_seen', False):
-            return False
-        on_state = {info.node_name for info in self.get_subscriptions_info_by_topic(topics.STATE)}
-        session_readers = self.get_subscriptions_info_by_topic(topics.SESSION)
-        on_session = {info.node_name for info in session_readers}
-        missing = sorted((wanted - on_state) | (wanted - on_session))
-        matched = self.session_pub.get_subscription_count()
-        if not missing:
-            if self.named_nodes_since is None:
-                self.named_nodes_since = now
-            if matched >= len(session_readers) \
-                    and self.session_pub.wait_for_all_acked(Duration(seconds=0)):
-                self.subscribers_seen = True
-                self.want_state_readers(now)
-                return False
-            if now - self.named_nodes_since > SESSION_MATCH_GRACE_S:
-                # A reader that never matches (another type or QoS, e.g. a tool) must not hold
-                # the session: the named nodes are there; go on and say so.
-                self.get_logger().warning(
-                    f'{len(session_readers)} readers of {topics.SESSION} in the graph, '
-                    f'{matched} matched (not all acknowledging the first announcement) after '
-                    f'{SESSION_MATCH_GRACE_S:g} s: starting anyway')
-                self.subscribers_seen = True
-                self.want_state_readers(now)
-                return False
-            return True
-        if now - self.waiting_since > self.params.reset_timeout:
-            self.abort(f'{", ".join(missing)} did not subscribe to {topics.STATE} and '
-                       f'{topics.SESSION} within {self.params.reset_timeout} s')
-        return True
-
-    def want_state_readers(self, now: float) -> None:
-        """Ask the first reset to wait until the sim has matched every reader of the states.
-
-        The readers this node's graph shows (itself, the human node, the recorder, a display)
-        may not all be matched by the sim's writer yet: discovery runs pairwise, and a recorder
-        the sim found late missed the first lockstep episodes (seen under load: episodes 0-4,
-        0.35 s in all, were not in the bag). A reader that never matches gets
-        SESSION_MATCH_GRACE_S.
-        """
-        self.state_readers_wanted = len(self.get_subscriptions_info_by_topic(topics.STATE))
-        self.state_readers_since = now
 
     def call_reset(self, request) -> None:
         """Ask the sim to reset for ``request`` (kept, to ask again when the sim says retry)."""
@@ -409,98 +296,6 @@ class AgentNode(Node):
         self.exit_at = time.monotonic() + EXIT_LINGER_S
 
     # ------------------------------------------------------------------ operator controls
-
-    def on_pause(self, request, response):
-        """Pause at the next episode boundary (at once when between episodes)."""
-        phase = self.core.phase
-        if self.practice is not None:
-            response.success, response.message = False, PRACTICE_NO_PAUSE
-        elif self.exit_at is not None or phase in ('done', 'aborted'):
-            response.success, response.message = False, f'cannot pause: the session is {phase}'
-        elif phase == 'paused':
-            response.success, response.message = True, 'already paused'
-        elif self.core.in_episode or self.reset_future is not None:
-            self.pause_requested = True
-            response.success = True
-            response.message = (f'pause requested: the session pauses when episode '
-                                f'{self.core.episode} ends')
-            self.publish_session(f'pause requested: the session pauses when episode '
-                                 f'{self.core.episode} ends; ' + self.core.status_line())
-        else:
-            self.enter_pause()
-            response.success, response.message = True, f'paused before episode {self.core.episode}'
-        self.get_logger().info(f'operator pause: {response.message}')
-        return response
-
-    def enter_pause(self):
-        """Pause the core between two episodes and announce it."""
-        self.pause_requested = False
-        self.core.pause()
-        self.publish_session(f'paused by the operator before episode {self.core.episode}: '
-                             + self.core.status_line())
-
-    def on_resume(self, request, response):
-        """Resume a paused session (or cancel a pause that has not taken effect)."""
-        if self.practice is not None:
-            response.success, response.message = False, PRACTICE_NO_PAUSE
-        elif self.core.phase == 'paused':
-            self.core.resume()
-            # A person gets the same break before the next episode as after an episode.
-            self.next_episode_at = time.monotonic() + self.break_seconds()
-            response.success = True
-            response.message = f'resumed: episode {self.core.episode} starts next'
-            self.publish_session('resumed by the operator: ' + self.core.status_line())
-        elif self.pause_requested:
-            self.pause_requested = False
-            response.success, response.message = True, 'pause request cancelled'
-            self.publish_session('pause request cancelled: ' + self.core.status_line())
-        else:
-            response.success = False
-            response.message = f'not paused (phase {self.core.phase})'
-        self.get_logger().info(f'operator resume: {response.message}')
-        return response
-
-    def on_abort(self, request, response):
-        """Stop now: zero wrench, phase aborted, keep the last checkpoint, exit code 3."""
-        if self.exit_at is not None:
-            response.success = False
-            response.message = f'the session is already ending (phase {self.core.phase})'
-            return response
-        if self.practice is not None:   # the robot never acted: nothing to zero or to keep
-            where = f'in the practice ({self.practice.done} of {self.practice.episodes} done)'
-            self.abort(f'by the operator {where}', EXIT_OPERATOR_ABORT)
-            response.success, response.message = True, f'aborted {where}'
-            return response
-        where = f'before episode {self.core.episode}'
-        if self.core.in_episode and self.newest_state is not None:
-            where = (f'in episode {self.newest_state.episode} at step '
-                     f'{self.newest_state.step} (dropped, not learned from)')
-        self.publish_zero_wrench(self.newest_state)
-        checkpoint = self.latest_checkpoint_path()
-        if checkpoint and os.path.exists(checkpoint):
-            resume = f'resume from {checkpoint} ({self.core.total_episodes} training episodes)'
-        else:
-            resume = 'no checkpoint yet: a new session starts from scratch'
-        self.abort(f'by the operator {where}; {resume}', EXIT_OPERATOR_ABORT)
-        response.success, response.message = True, f'aborted {where}; {resume}'
-        return response
-
-    def publish_zero_wrench(self, state):
-        """Send a zero wrench answering ``state`` (the newest state; None: stamp 0).
-
-        In realtime the sim applies the newest command whatever its stamp; in lockstep the
-        stamp makes it the answer to the state the sim waits on.
-        """
-        wrench = WrenchStamped()
-        if state is not None:
-            wrench.header.stamp = state.header.stamp
-        wrench.header.frame_id = 'world'
-        self.wrench_pub.publish(wrench)
-
-    def latest_checkpoint_path(self) -> str:
-        """Return the path of the episode-end checkpoint ('' without checkpoints)."""
-        return os.path.join(self.checkpoint_dir, LATEST_CHECKPOINT) if self.checkpoint_dir \
-            else ''
 
     def next_clock_mode(self) -> str:
         """Return the sim's clock for the next episode (ResetEpisode.clock_mode).
@@ -595,22 +390,11 @@ class AgentNode(Node):
 
     def publish_step(self, record):
         """Publish one AgentStep (the state acted on, the action and the reward it earned)."""
-        msg = AgentStep()
+        msg = AgentStep(**agent_step_fields(record))
         stamp = self.stamps.get(record.step)
         if stamp is not None:
             msg.header.stamp = stamp
         msg.header.frame_id = 'world'
-        msg.episode = record.episode
-        msg.step = record.step
-        msg.observation_human_action = record.observed_human_action
-        msg.action = record.action
-        msg.wrench = record.wrench
-        msg.subtask_ids = list(record.subtask_ids)
-        msg.reward_components = [float(value) for value in record.reward_components]
-        msg.reward = record.reward
-        msg.value_estimate = record.value
-        msg.log_prob = record.log_prob
-        msg.deterministic = record.deterministic
         self.step_pub.publish(msg)
 
     # ------------------------------------------------------------------ per episode
@@ -658,30 +442,9 @@ class AgentNode(Node):
 
     def publish_episode(self, result, final: TaskState):
         """Publish the EpisodeSummary of a finished episode."""
-        msg = EpisodeSummary()
+        msg = EpisodeSummary(**episode_summary_fields(self.core, result))
         msg.header.stamp = final.header.stamp
         msg.header.frame_id = 'world'
-        msg.session_id = self.core.session_id
-        msg.case_id = self.core.case_id
-        msg.episode = result.episode
-        msg.training_step = result.training_step
-        msg.human_involved = result.human_involved
-        # Judging episodes are not Table II evaluation: they count with the training episodes
-        # (their AgentStep messages are deterministic).
-        msg.evaluation = result.evaluation
-        msg.kind = int(episode_kind(evaluation=result.evaluation, judging=result.judging,
-                                    practice=getattr(result, 'practice', False)))
-        msg.steps = result.steps
-        msg.terminated = result.terminated
-        msg.truncated = result.truncated
-        msg.episode_return = result.episode_return
-        msg.slider_error = float(result.errors.get('slider', 0.0))
-        msg.pendulum_error = float(result.errors.get('pendulum', 0.0))
-        msg.ball_error = float(result.errors.get('ball', 0.0))
-        msg.total_error = result.total_error
-        msg.robot_effort = result.robot_effort
-        msg.human_effort = result.human_effort
-        msg.converged = result.converged
         self.episode_pub.publish(msg)
 
     def finish_session(self):
@@ -720,26 +483,9 @@ class AgentNode(Node):
             msg.header.stamp = self.get_clock().now().to_msg()
             self.session_pub.publish(msg)
             return
-        step = core.training_step
-        msg = SessionStatus()
+        msg = SessionStatus(**session_status_fields(core, message))
         msg.header.stamp = self.get_clock().now().to_msg()
-        msg.session_id = core.session_id
-        msg.case_id = core.case_id
-        msg.strategy = core.strategy
-        msg.training_step = step.index
-        msg.training_step_count = core.training_step_count
-        msg.robot_dof = DOF_INDEX[core.robot_dof]
-        msg.human_dof = DOF_INDEX[core.human_dof]
-        msg.human_involved = core.human_involved
-        msg.robot_subtasks = list(core.robot_subtasks)
-        msg.human_subtasks = list(core.human_subtasks)
-        msg.episode = core.episode
-        msg.total_episodes = core.total_episodes
-        msg.human_involved_episodes = core.human_involved_episodes
-        msg.phase = int(Phase.from_label(core.phase))
-        msg.message = message
         self.session_pub.publish(msg)
-
 
 def main(args=None) -> int:
     """Run the agent node."""

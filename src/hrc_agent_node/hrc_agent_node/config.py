@@ -1,7 +1,10 @@
 """The agent's parameters: one dataclass for the node, the offline loop and the checkpoints. Pure.
 
 Defaults are the paper's where it gives them (Table I: PPO; section IV: reward, 40 s episodes)
-and documented choices where it does not. Mirrored in ``params/agent.yaml``.
+and documented choices where it does not: the learning configuration ``paper``. A session
+applies a named learning configuration over them (``params/learning/<name>.yaml``; the
+default, ``sac``, is what the study measured best for the person's time). ``params/agent.yaml``
+is generated from this dataclass (``python -m hrc_bringup.params_files --write``).
 """
 
 from dataclasses import dataclass
@@ -13,15 +16,21 @@ from hrc_common.params import param
 PACKAGE = 'hrc_agent_node'
 TREE_FILE_NAME = 'task_tree.yaml'
 CASES_FILE_NAME = 'cases.yaml'
-# When PPO updates (AgentParams.update_rule), the earlier rule first.
-UPDATE_RULES = ('episode_end_after_horizon', 'horizon_or_episode_end')
-# How judging episodes follow one another (AgentParams.judging_rule), the earlier rule first.
-JUDGING_RULES = ('spaced', 'in_a_row')
+# Parameters that once chose an earlier behaviour, and the commit that still has it: a file or
+# an option that names one is told so (hrc_common.params.from_dict).
+RETIRED_PARAMETERS = {
+    'update_rule': 'PPO always updates after horizon samples or at an episode end, whichever '
+                   'comes first (episode_end_after_horizon: git 8c1b998)',
+    'judging_rule': 'a judging episode that meets the step is always followed by another '
+                    '(in_a_row; spaced: git 8c1b998)',
+    'convergence_judged_on': 'convergence is always judged on judging episodes (training: '
+                             'git 8c1b998)',
+}
 
 
 @dataclass
 class AgentParams:
-    """Parameters of the agent (node ``agent``)."""
+    """The agent's parameters (node ``agent``): Table I; a session applies params/learning/."""
 
     # --- session
     session_id: str = param('', 'Session id stamped on every message and checkpoint; empty = '
@@ -88,46 +97,30 @@ class AgentParams:
     satisfied_window: int = param(3, 'lower_levels_satisfied: level-2 subtasks satisfied in each '
                                      'of this many last judged episodes of the step',
                                   low=1, high=1000)
-    convergence_judged_on: str = param(
-        'evaluation', "Episodes the step's condition is judged on: evaluation = deterministic "
-        'judging episodes of the current policy (after each PPO update, or every '
-        'judging_interval training episodes), counted in the episode totals and, when the human '
-        'acts, in the human-involved ones; training = the stochastic training episodes (the '
-        'earlier rule, no judging episodes)', choices=('evaluation', 'training'))
-    judging_interval: int = param(0, 'convergence_judged_on evaluation: 0 = one judging episode '
-                                     'after each PPO update; N = one after every N training '
-                                     'episodes', low=0, high=100000)
-    judging_rule: str = param(
-        'spaced', 'convergence_judged_on evaluation: spaced = each judging episode follows its '
-        'trigger (an update or judging_interval training episodes), so the window of N judged '
-        'episodes needs N triggers (the earlier rule); in_a_row = a judging episode that '
-        "satisfies the step's watched subtasks is followed by another judging episode of the "
-        'same frozen policy until the window is full (converged) or one fails (training '
-        'resumes); see strategies.py for the floor of each rule',
-        choices=JUDGING_RULES)
+    judging_interval: int = param(0, 'Judging episodes (deterministic, of the current policy; '
+                                     'the step is judged on them alone): 0 = one after each '
+                                     'update; N = one after every N training episodes. One '
+                                     'that meets the step is followed by another until '
+                                     'convergence_window are met in a row',
+                                  low=0, high=100000)
     # --- PPO (Table I unless noted)
     gamma: float = param(0.995, 'Discount factor (Table I)', low=0.0, high=1.0)
     gae_lambda: float = param(0.95, 'GAE factor (Table I)', low=0.0, high=1.0)
-    horizon: int = param(512, 'Experience horizon (Table I): samples per PPO update; when the '
-                              'update runs is update_rule', low=2, high=1000000)
-    update_rule: str = param(
-        'episode_end_after_horizon', 'When PPO updates: episode_end_after_horizon = at the end '
-        'of the episode in which the buffer reached horizon samples (the earlier rule); '
-        "horizon_or_episode_end = after horizon samples or at an episode's end, whichever comes "
-        "first (MATLAB's PPO agent, the reading of Table I): inside an episode the rollout is "
-        'cut at the step boundary where it holds horizon samples (bootstrapped from V of that '
-        'state) and the update runs before the action for that state',
-        choices=UPDATE_RULES)
+    horizon: int = param(512, 'Experience horizon (Table I): PPO updates after this many '
+                              "samples or at an episode's end, whichever comes first "
+                              "(MATLAB's PPO agent); inside an episode the rollout is cut at "
+                              'that step and bootstrapped from V of its state',
+                         low=2, high=1000000)
     learner_niceness: int = param(
         10, "Realtime episodes (PPO updates in the learner thread): how much lower the learner "
         "thread's scheduling priority (nice) is than the node's, so that on a machine with few "
         "cores the control steps of the sim, the person and the agent run first; 0 = the same "
-        'priority (before)', low=0, high=19)
+        'priority', low=0, high=19)
     learner_switch_interval: float = param(
         REALTIME_SWITCH_INTERVAL_S, "Realtime episodes: the interpreter's thread switch "
         'interval (s) while a PPO update runs in the learner thread, about the longest the '
         "control thread waits for the interpreter lock; 0 = leave Python's (5 ms unless "
-        'HRC_REALTIME_PRIORITY set 0.5 ms; before)', low=0.0, high=0.1)
+        'HRC_REALTIME_PRIORITY set 0.5 ms)', low=0.0, high=0.1)
     minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)
     epochs: int = param(3, 'Epochs per update (Table I)', low=1, high=100)
     learning_rate: float = param(0.001, 'Adam learning rate (Table I)', low=1e-7, high=1.0)
@@ -228,3 +221,6 @@ class AgentParams:
 def share_file(name: str) -> str:
     """Return the data file ``params/<name>`` (``hrc_common.paths.params_file``)."""
     return str(params_file(name))
+
+
+AgentParams.RETIRED_PARAMETERS = RETIRED_PARAMETERS

@@ -108,7 +108,6 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
             on_episode(result, stats)
     summary = {'case': core.case_id, 'strategy': core.strategy,
                'preset': core.preset, 'seed': core.seed,
-               'convergence_judged_on': core.convergence_rule,
                'training_episodes': core.total_episodes,
                'judging_episodes': core.judging_episodes,
                'human_involved_episodes': core.human_involved_episodes,

@@ -7,8 +7,8 @@
   Box actions). The deterministic (evaluation) action is the mean, clipped.
 * Value: a separate MLP of the same shape.
 * Advantages: GAE(gamma, lambda) per episode segment. A time-limit truncation bootstraps from
-  V of the final state, and so does a rollout cut inside an episode (``update_rule:
-  horizon_or_episode_end``) from V of the state where it was cut; only a termination uses 0
+  V of the final state, and so does a rollout cut inside an episode (after ``horizon`` samples)
+  from V of the state where it was cut; only a termination uses 0
   (see :func:`compute_gae`).
 * Update: ``epochs`` passes over the buffer in shuffled minibatches; clipped surrogate,
   value MSE, entropy bonus, advantages normalized per minibatch, global gradient-norm clip, Adam.

@@ -24,25 +24,20 @@ Chosen here (and parameters of the agent):
 Episodes are counted per step: the window restarts when a step begins, so a new reward is
 judged only on episodes trained under it.
 
-**The floor of a rule.** With judging episodes (``convergence_judged_on: evaluation``) a step
-cannot end before its window of judged episodes is full, and every judging episode follows a
-trigger (a PPO update, or ``judging_interval`` training episodes). So even a policy that
-satisfies the step from its first episode needs a fixed number of episodes in the step: the
-rule's floor (:func:`episode_floor`). In the last step of every case the human acts in every
-episode, so the floor is the smallest possible count of human-involved episodes there. With a
-window W and T training episodes per trigger:
-
-* ``judging_rule: spaced`` (the earlier rule): W * (T + 1). With the earlier update rule
-  (``episode_end_after_horizon``, horizon 512, 200-step episodes) T = 3: **12** episodes for
-  W = 3, and every count is a multiple of 4. With ``horizon_or_episode_end`` every training
-  episode ends with an update, T = 1: **6**;
-* ``judging_rule: in_a_row``: a judging episode that satisfies the step is followed by another
-  judging episode of the same frozen policy, until the window is full or one fails: T + W,
-  **6** with the earlier update rule and **4** with ``horizon_or_episode_end``.
+**The floor of the rule.** A step is judged on judging episodes, and every run of judging
+episodes follows a trigger (an update, or ``judging_interval`` training episodes); a judging
+episode that satisfies the step is followed by another one of the same frozen policy until the
+window is full or one fails. So even a policy that satisfies the step from its first episode
+needs a fixed number of episodes in the step: the rule's floor (:func:`episode_floor`), T + W
+for a window W and T training episodes per trigger (T = 1 with ``judging_interval: 0``, since
+PPO updates at every episode's end, and with ``judging_interval: 1``). In the last step of
+every case the human acts in every episode, so the floor is the smallest possible count of
+human-involved episodes there: **4** for W = 3 and T = 1, **5** for T = 2 (the study's
+configurations).
 
 A step with ``judge_first`` (the person's step of ``partners_first``, cases 7 and 8) judges the
-policy it inherits on its first episode, before any training in the step: with ``in_a_row`` its
-floor is W (**3**), with ``spaced`` 1 + (W - 1) * (T + 1).
+policy it inherits on its first episode, before any training in the step: its floor is W
+(**3**).
 
 **Partners first** (cases 7, 8; not in the paper). A step with ``partner: population`` trains
 with simulated people instead of the session's person; it must come before every step with the
@@ -255,30 +250,18 @@ def _resolve_ids(raw, tree, robot_action, human_action, where) -> list:
         raise CasesError(f'{where}: {error}') from None
 
 
-def training_episodes_per_trigger(update_rule: str, horizon: int, episode_steps: int,
-                                  judging_interval: int = 0) -> int:
-    """Return how many training episodes come before each judging episode (at least).
+def training_episodes_per_trigger(judging_interval: int = 0) -> int:
+    """Return how many training episodes come before each run of judging episodes (at least).
 
-    ``judging_interval`` N > 0: N. Otherwise one judging episode follows each update:
-    ``episode_end_after_horizon`` updates at the end of the episode that fills the horizon
-    (ceil(horizon / episode_steps) episodes), ``horizon_or_episode_end`` after every episode.
+    ``judging_interval`` N > 0: N. Otherwise one run follows each update, and PPO updates at
+    the end of every training episode (SAC before each judging episode): 1.
     """
-    if judging_interval > 0:
-        return int(judging_interval)
-    if update_rule == 'horizon_or_episode_end':
-        return 1
-    return -(-int(horizon) // int(episode_steps))
+    return int(judging_interval) if judging_interval > 0 else 1
 
 
-def episode_floor(judging_rule: str, window: int, training_per_trigger: int) -> int:
-    """Return the fewest episodes a step can take under a judging rule (see the module doc).
-
-    ``spaced``: window * (training_per_trigger + 1); ``in_a_row``: training_per_trigger +
-    window.
-    """
-    if judging_rule == 'in_a_row':
-        return int(training_per_trigger) + int(window)
-    return int(window) * (int(training_per_trigger) + 1)
+def episode_floor(window: int, training_per_trigger: int) -> int:
+    """Return the fewest episodes a step can take (see the module doc): T + W."""
+    return int(training_per_trigger) + int(window)
 
 
 class StrategyProgress:

@@ -76,8 +76,7 @@ def test_resumed_session_continues_exactly(tmp_path):
 
 def test_resumed_session_continues_exactly_with_updates_inside_episodes(tmp_path):
     """Horizon 15 in 20-step episodes: updates at steps 15 and at episode ends."""
-    new_rules = dict(update_rule='horizon_or_episode_end', judging_rule='in_a_row', horizon=15,
-                     minibatch_size=8)
+    new_rules = dict(horizon=15, minibatch_size=8)
     straight = AgentCore(params(**new_rules))
     straight_returns = run(straight, 5)
     first = AgentCore(params(**new_rules))

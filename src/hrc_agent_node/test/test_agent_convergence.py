@@ -59,11 +59,12 @@ def test_judging_episode_follows_each_update_and_alone_decides_the_advance():
         plan, result = run_episode(core)
         kinds.append('judging' if plan.judging else 'training')
         assert not plan.evaluation
-    # Update after 2 training episodes (8 samples), then one judging episode; window 2.
-    assert kinds == ['training', 'training', 'judging'] * 2
+    # An update at the training episode's end, then judging episodes of the same policy in a
+    # row until the window (2) is full.
+    assert kinds == ['training', 'judging', 'judging']
     assert result.judging and result.converged and result.event == 'advanced'
     # Every episode counts in the totals; the judging ones are not learned from.
-    assert core.total_episodes == 6 and core.judging_episodes == 2
+    assert core.total_episodes == 3 and core.judging_episodes == 2
     assert core.buffered_samples == 0
 
 
@@ -78,50 +79,44 @@ def test_judging_episodes_are_deterministic_counted_and_human_involved():
         if core.phase == 'updating':
             samples = core.buffered_samples
             core.update()
-    assert samples == 2 * STEPS          # the judging episode added no sample
+    # training (update), judging (fails: training resumes), training (update): each update
+    # learns from its training episode alone, the judging episode added no sample
+    assert samples == STEPS
     assert all(record.deterministic == judging for judging, record in records)
     assert (core.total_episodes, core.human_involved_episodes, core.judging_episodes) == \
         (3, 3, 1)
 
 
-def test_training_rule_judges_the_training_episodes():
-    """The earlier rule, kept as an option: no judging episode; good training episodes advance."""
-    core = make_core(convergence_judged_on='training')
-    plan, _ = run_episode(core, training=GOOD)
-    plan2, result = run_episode(core, training=GOOD)
-    assert not plan.judging and not plan2.judging and result.event == 'advanced'
-    assert core.judging_episodes == 0 and core.total_episodes == 2
-    # And the evaluation rule does not advance on good training episodes.
-    core = make_core()
-    for _ in range(2):
-        run_episode(core, training=GOOD, judging=BAD)
-    assert core.training_step.index == 0
-
-
 def test_judging_interval_counts_training_episodes():
-    core = make_core(judging_interval=3, horizon=64, minibatch_size=4)   # no update at all
-    kinds = [run_episode(core)[0].judging for _ in range(8)]
+    core = make_core(judging_interval=3)     # the updates after each episode trigger none
+    kinds = [run_episode(core, judging=BAD)[0].judging for _ in range(8)]
     assert kinds == [False, False, False, True, False, False, False, True]
 
 
-def test_new_reward_resets_the_buffer_and_the_reward_scaler():
-    """Case 1 step 1 (slider + pendulum) -> step 2 (all three): the old samples are dropped.
-
-    Training rule, horizon 12: the advancing episode leaves 8 samples of the old reward, which
-    without the reset would go into the first update of step 2 with the old scale.
-    """
-    core = make_core(convergence_judged_on='training', horizon=12)
-    run_episode(core, training=GOOD)
-    assert core.buffered_samples == STEPS
-    assert core.reward_scaler.state_dict()['stats']['count'] > 1
-    _, result = run_episode(core, training=GOOD)
+def advance(core) -> list:
+    """Run bad training and good judging episodes until the first step advances; its kinds."""
+    kinds = []
+    while core.training_step.index == 0:
+        plan, result = run_episode(core)
+        kinds.append('J' if plan.judging else 'T')
     assert result.event == 'advanced' and core.phase == 'training'
+    return kinds
+
+
+def test_new_reward_resets_the_buffer_and_the_reward_scaler():
+    """Case 1 step 1 (slider + pendulum) -> step 2 (all three): the old reward's scale goes.
+
+    The training episode's rewards moved the scaler; the two judging episodes that advance
+    the step add none, so without the reset step 2 would learn with step 1's scale.
+    """
+    core = make_core()
+    assert advance(core) == ['T', 'J', 'J']
     assert core.buffered_samples == 0
     assert core.reward_scaler.state_dict() == AgentCore(core.params).reward_scaler.state_dict()
 
 
-def test_same_reward_keeps_the_buffer(tmp_path):
-    """A step change that keeps the robot's reward keeps its samples and scale."""
+def test_same_reward_keeps_the_reward_scale(tmp_path):
+    """A step change that keeps the robot's reward keeps its scale."""
     cases = tmp_path / 'cases.yaml'
     cases.write_text(
         'strategies:\n  two_same:\n    steps:\n'
@@ -129,10 +124,10 @@ def test_same_reward_keeps_the_buffer(tmp_path):
         '      - {robot_subtasks: [slider, pendulum], human_involved: true,\n'
         '         human_subtasks: [ball], advance: converged}\n'
         'cases:\n  1: {strategy: two_same, robot_action: translation}\n')
-    core = make_core(convergence_judged_on='training', horizon=12, cases_file=str(cases))
-    run_episode(core, training=GOOD)
-    run_episode(core, training=GOOD)
-    assert core.training_step.index == 1 and core.buffered_samples == 2 * STEPS
+    core = make_core(cases_file=str(cases))
+    advance(core)
+    assert core.training_step.index == 1
+    assert core.reward_scaler.state_dict()['stats']['count'] > 1
 
 
 def test_truncated_episode_bootstraps_from_the_final_state_with_its_human_action():

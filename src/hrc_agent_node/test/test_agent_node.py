@@ -171,12 +171,12 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     fake.node.destroy_node()
     assert code == 0, agent.output
 
-    # Per training step: 2 training episodes (2 x 10 samples >= horizon 16), the PPO update,
-    # 1 judging episode that meets the condition (window 1); then 1 evaluation episode.
-    judging, evaluation_episode, joined = (2, 5), 6, 3
-    assert [episode for episode, _ in fake.resets] == list(range(7))
-    assert len({seed for _, seed in fake.resets}) == 7
-    expected = [(episode, step) for episode in range(7) for step in range(STEPS)]
+    # Per training step: 1 training episode and the PPO update at its end, 1 judging episode
+    # that meets the condition (window 1); then 1 evaluation episode.
+    judging, evaluation_episode, joined = (1, 3), 4, 2
+    assert [episode for episode, _ in fake.resets] == list(range(5))
+    assert len({seed for _, seed in fake.resets}) == 5
+    expected = [(episode, step) for episode in range(5) for step in range(STEPS)]
     assert fake.answers == expected, 'every non-final state answered exactly once, in order'
     assert fake.stale == [] and fake.off_axis == []
     assert fake.human_action_readers == {1}, 'same_step: the agent reads /hrc/human/action'
@@ -184,8 +184,8 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     summaries = fake.episodes
     # A judging episode is no Table II evaluation: evaluation false, counted with training.
     assert [(s.episode, s.training_step, s.human_involved, s.evaluation) for s in summaries] == \
-        [(0, 0, False, False), (1, 0, False, False), (2, 0, False, False), (3, 1, True, False),
-         (4, 1, True, False), (5, 1, True, False), (6, 1, True, True)]
+        [(0, 0, False, False), (1, 0, False, False), (2, 1, True, False), (3, 1, True, False),
+         (4, 1, True, True)]
     assert all(s.steps == STEPS and s.truncated and s.session_id == 'dds_test'
                for s in summaries)
     assert [s.episode for s in summaries if s.converged] == list(judging)
@@ -217,7 +217,7 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
         < phases.index((updating, 1, True)) < phases.index((evaluation, 1, True))
     assert phases[-1] == (done, 1, True)
     last = fake.sessions[-1]
-    assert (last.total_episodes, last.human_involved_episodes) == (6, 3)
+    assert (last.total_episodes, last.human_involved_episodes) == (4, 2)
     assert (last.robot_dof, last.human_dof) == (SessionStatus.DOF_TRANSLATION,
                                                 SessionStatus.DOF_ROTATION)
     assert last.strategy == 'responsibility_guided' and last.case_id == 1

@@ -1,28 +1,16 @@
-"""params/agent.yaml mirrors AgentParams; bad values are refused with reasons; core wiring."""
+"""AgentParams: Table I defaults; bad values are refused with reasons; core wiring."""
 
 from dataclasses import fields
 import math
 import types
 
 import pytest
-import yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.observation import derive_seed
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
-from hrc_common.params import checked, load_yaml, ParameterError, with_overrides
-from hrc_common.paths import params_dir
-
-AGENT_YAML = f'{params_dir()}/agent.yaml'
-
-
-def test_yaml_mirrors_the_dataclass():
-    with open(AGENT_YAML) as stream:
-        values = yaml.safe_load(stream)['agent']['ros__parameters']
-    assert set(values) == {f.name for f in fields(AgentParams)}
-    assert load_yaml(AgentParams, AGENT_YAML, 'agent') == AgentParams()
-
+from hrc_common.params import checked, ParameterError, with_overrides
 
 def test_table_one_defaults():
     p = AgentParams()

@@ -31,7 +31,7 @@ class State:
 def make_core(case=8, **overrides):
     values = dict(case=case, seed=3, preset='tuned', checkpoint_dir='', horizon=8,
                   minibatch_size=4, convergence_window=2, satisfied_window=2,
-                  max_training_episodes=100, evaluation_episodes=1, judging_rule='in_a_row')
+                  max_training_episodes=100, evaluation_episodes=1)
     values.update(overrides)
     return AgentCore(with_overrides(AgentParams(), **values), limits=LIMITS)
 

@@ -140,7 +140,7 @@ def test_learning_happens_inside_act_at_defined_steps():
 
 
 def test_episode_end_schedule_learns_only_in_update():
-    core = AgentCore(sac_params(sac_update_at='episode_end', convergence_judged_on='training'))
+    core = AgentCore(sac_params(sac_update_at='episode_end', judging_interval=100000))
     run(core, 1)
     assert core.policy_learner.gradient_steps == 2     # the 20th transition, learned in update()
     counts = []

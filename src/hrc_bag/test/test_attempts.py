@@ -18,7 +18,7 @@ from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import ATTEMPTS_KEY, EpisodeRecorder
 from hrc_bag.report.loading import load_session
 from hrc_bag.report.metrics import human_time
-from hrc_bag.synthetic import ManualClock, RecorderFeeder
+from hrc_testing.bag_traffic import ManualClock, RecorderFeeder
 
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
            'durability': 'volatile'}

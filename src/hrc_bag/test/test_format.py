@@ -20,7 +20,7 @@ from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, EpisodeRecorder
 from hrc_bag.session_index import bag_metadata, dump_bag_metadata
 from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
-from hrc_bag.synthetic import SyntheticSession, type_name_of
+from hrc_testing.bag_traffic import SyntheticSession, type_name_of
 
 START_NS = 1_700_000_000_000_000_000
 CONFIG = {'session_id': 'fmt', 'case': 1, 'strategy': 'responsibility_guided',

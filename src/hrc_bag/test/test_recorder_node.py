@@ -10,7 +10,8 @@ import sys
 import tempfile
 import time
 
-from hrc_common.testing import executable_path, wait_for
+from hrc_common.executables import executable_path
+from hrc_testing.nodes import wait_for
 from hrc_msgs.msg import SessionStatus
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
@@ -22,7 +23,8 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import EPISODE_RECORD, SESSION_RECORD
 from hrc_bag.session_writer import contract_descriptions
-from hrc_bag.synthetic import kill_trial, SyntheticSession
+from hrc_testing.bag_traffic import SyntheticSession
+from hrc_testing.recorder_kill import kill_trial
 
 EXIT_RECORDING_FAILED = 3
 

@@ -1,11 +1,10 @@
 """The episode recorder core without ROS: boundaries, file format, metadata.yaml, recovery."""
 
 import dataclasses
-import pathlib
 import shutil
 
 from geometry_msgs.msg import WrenchStamped
-from hrc_common.params import load_yaml, validate
+from hrc_common.params import validate
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
 import pytest
@@ -17,23 +16,14 @@ from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import boundary_event, boundary_event_of_cdr, EpisodeRecorder
-from hrc_bag.synthetic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
-                               SyntheticSession, type_name_of)
+from hrc_testing.bag_traffic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
+                                     SyntheticSession, type_name_of)
 
-PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
            'durability': 'volatile', 'deadline': {'sec': 1, 'nsec': 0},
            'lifespan': {'sec': 9223372036, 'nsec': 854775807}, 'liveliness': 'automatic',
            'liveliness_lease_duration': {'sec': 9223372036, 'nsec': 854775807},
            'avoid_ros_namespace_conventions': False}
-
-
-def test_params_yaml_mirrors_the_dataclass_defaults():
-    assert load_yaml(RecorderParams, PARAMS_DIR / 'recorder.yaml', 'recorder') == \
-        RecorderParams()
-    document = yaml.safe_load((PARAMS_DIR / 'recorder.yaml').read_text())
-    assert set(document['recorder']['ros__parameters']) == {
-        field.name for field in dataclasses.fields(RecorderParams)}
 
 
 @pytest.mark.parametrize('changes, reason', [

@@ -1,11 +1,10 @@
 """The replay node over DDS: same bytes, original timing, selection, offset, /clock, loop."""
 
-import dataclasses
 import pathlib
 import time
 
-from hrc_common.params import default_of, load_yaml, ParameterError
-from hrc_common.testing import wait_for
+from hrc_common.params import load_yaml, ParameterError
+from hrc_testing.nodes import wait_for
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -15,16 +14,12 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.recorder_node import message_class
 from hrc_bag.replay import bag_start, playlist, publisher_qos, ReplayParams, Timeline
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 
 PARAMS_DIR = pathlib.Path(__file__).resolve().parents[3] / 'params'
 
 
-def test_params_yaml_mirrors_the_dataclass_defaults():
-    # (the default path is empty, which is refused: a bag must be given)
-    document = yaml.safe_load((PARAMS_DIR / 'replay.yaml').read_text())
-    assert document['replay']['ros__parameters'] == {
-        field.name: default_of(field) for field in dataclasses.fields(ReplayParams)}
+def test_the_default_file_names_no_bag_and_is_refused_with_the_reason():
     with pytest.raises(ParameterError, match='path: give an episode file'):
         load_yaml(ReplayParams, PARAMS_DIR / 'replay.yaml', 'replay')
 

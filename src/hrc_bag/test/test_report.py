@@ -1,4 +1,4 @@
-"""The report on recorded sessions: Table II values, CSV, valid PNG figures, the CLI."""
+"""The report on recorded sessions: Table II values and intervals, CSV, PNG figures, the CLI."""
 
 import csv
 import io
@@ -6,12 +6,12 @@ import math
 import struct
 import subprocess
 
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 import numpy
 import pytest
 
 from hrc_bag import report
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 
 CASES = {1: 'responsibility_guided', 2: 'responsibility_guided', 4: 'level_guided',
          5: 'learn_together'}
@@ -34,9 +34,10 @@ def bags(tmp_path_factory):
 
 @pytest.fixture(scope='module')
 def written(bags, tmp_path_factory):
-    """Run the report once on every session; return (result, output folder)."""
+    """Run the report once on every session; return (result, records, output folder)."""
     out = tmp_path_factory.mktemp('report')
-    return report.write_report([bags[0]], out), out
+    records = report.load_records([bags[0]], log=lambda text: None)
+    return report.write_report(records, out, resamples=500), records, out
 
 
 def expected_values(summaries) -> dict:
@@ -58,45 +59,50 @@ def png_size(path) -> tuple:
     return struct.unpack('>II', data[16:24])
 
 
-def test_table2_values_are_the_mean_and_spread_over_seeds(bags, written):
+def test_table2_values_are_the_mean_and_interval_over_seeds(bags, written):
     folder, published = bags
-    result, _ = written
-    rows = {row.case_id: row for row in result['rows']}
-    assert sorted(rows) == sorted(CASES)
+    result, _, _ = written
+    intervals = result['intervals']
+    assert list(intervals) == sorted(CASES)
     for case in CASES:
         per_seed = [expected_values(published[(case, seed)]) for seed in SEEDS]
-        for key, _, _ in report.METRICS:
-            mean, spread, count = rows[case].values[key]
-            values = [entry[key] for entry in per_seed]
-            assert count == 2
-            assert mean == pytest.approx(numpy.mean(values), rel=1e-12), (case, key)
-            assert spread == pytest.approx(numpy.std(values, ddof=1), rel=1e-9, abs=1e-15)
+        for key, values in ((key, [entry[key] for entry in per_seed]) for key in per_seed[0]):
+            interval = intervals[case][key]
+            assert interval.count == 2
+            assert interval.estimate == pytest.approx(numpy.mean(values), rel=1e-12), (case, key)
+            if len(set(values)) == 1:
+                assert interval.low == interval.high == interval.estimate
+            else:
+                assert 0.0 <= interval.low <= interval.estimate <= interval.high, (case, key)
     # responsibility-guided: the human joins in step 2 only; the others: always involved
-    assert rows[1].values['human_involved_episodes'][0] == 1.0
-    assert rows[1].values['total_episodes'][0] == 2.5
-    assert rows[4].values['percentage'][0] == 100.0
-    assert [row.case_id for row in result['rows']] == [1, 2, 4, 5]
-    assert (rows[1].robot_dof, rows[2].robot_dof) == ('translation', 'rotation')
+    assert intervals[1]['human_involved_episodes'].estimate == 1.0
+    assert intervals[1]['total_episodes'].estimate == 2.5
+    assert intervals[4]['percentage'].estimate == 100.0
+    groups = result['groups']
+    assert (groups[1][0].robot_dof, groups[2][0].robot_dof) == ('translation', 'rotation')
 
 
 def test_markdown_csv_and_figures_are_written(bags, written):
     folder, published = bags
-    _, tmp_path = written
+    _, _, tmp_path = written
     markdown = (tmp_path / 'table2.md').read_text()
     lines = [line for line in markdown.splitlines() if line.startswith('| ')]
-    assert len(lines) == 1 + len(CASES)
-    assert 'Human-involved episodes' in lines[0] and 'Robot effort' in lines[0]
-    case4 = next(line for line in lines if '| Case 4 |' in line)
-    assert 'Learn human first' in case4 and '100% ± 0%' in case4
+    assert len(lines) == 1 + len(CASES) + 1          # Table II, then the person's time header
+    assert 'human-involved episodes' in lines[0] and 'robot effort' in lines[0]
+    case4 = next(line for line in lines if line.startswith('| 4 |'))
+    assert '| human first | rotation | 2 | ' in case4 and '| 100 [100, 100] |' in case4
+    assert 'Learning configuration: unrecorded (8 sessions).' in markdown
     with open(tmp_path / 'table2.csv') as stream:
         table = list(csv.DictReader(stream))
     assert [int(row['case_id']) for row in table] == [1, 2, 4, 5]
     expected = numpy.mean([expected_values(published[(2, seed)])['ball_error']
                            for seed in SEEDS])
     assert float(table[1]['ball_error_mean']) == pytest.approx(expected)
+    assert float(table[1]['ball_error_low']) <= expected <= float(table[1]['ball_error_high'])
     sessions = list(csv.DictReader(io.StringIO((tmp_path / 'sessions.csv').read_text())))
     assert len(sessions) == len(CASES) * len(SEEDS)
     assert {row['seed'] for row in sessions} == {'1', '2'}
+    assert {row['learning'] for row in sessions} == {'unrecorded'}
     for name, minimum in (('fig5_training.png', (1000, 400)), ('fig6_actions.png', (900, 400)),
                           ('fig7_three_factor.png', (500, 500))):
         width, height = png_size(tmp_path / name)
@@ -104,24 +110,27 @@ def test_markdown_csv_and_figures_are_written(bags, written):
         assert (tmp_path / name).stat().st_size > 20_000, name   # not an empty canvas
 
 
-def test_figure_data(bags):
-    folder, published = bags
-    sessions = [report.load_session(path) for path in report.find_sessions([folder])]
-    case1 = next(session for session in sessions if session.session_id == 'case1_seed2')
-    curve = report.training_curve(case1)
-    assert len(curve['returns']) == 3
-    assert curve['human_joins'] == [3] and curve['reward_changes'] == [3]
-    trace = report.action_trace(case1, seconds=2.0)
+def test_figure_data(bags, written):
+    from hrc_bag.report.curves import first_human_episode, return_band
+    from hrc_bag.report.metrics import factor_score, final_trace, three_factors
+
+    _, records, _ = written
+    case1 = next(record for record in records if record.session_id == 'case1_seed2')
+    band = return_band([case1])
+    assert band.episodes == [1, 2, 3] and band.stops == [3]
+    assert band.median == band.low == band.high          # one session: its own curve
+    assert first_human_episode(case1) == 3
+    trace = final_trace(case1, seconds=2.0)
     assert trace['episode'] == 3                                 # first evaluation episode
     assert [time for time, _ in trace['robot']] == pytest.approx(
         [0.2 * step for step in range(10)])
-    factors = {entry['strategy']: entry for entry in report.three_factors(report.table2(
-        sessions))}
-    assert factors['responsibility_guided']['human_involved_episodes'][0] == 1.0
-    assert factors['learn_together']['total_episodes'][0] == 2.5
-    assert report.factor_score(0.0, 10.0) == 1.0
-    assert report.factor_score(10.0, 10.0) == pytest.approx(0.2)
-    assert math.isnan(report.factor_score(math.nan, 1.0))
+    factors = {entry['strategy']: entry for entry in three_factors(records, resamples=200)}
+    assert factors['responsibility_guided']['human_involved_episodes'].estimate == 1.0
+    assert factors['learn_together']['total_episodes'].estimate == 2.5
+    assert factors['learn_together']['sessions'] == 2
+    assert factor_score(0.0, 10.0) == 1.0
+    assert factor_score(10.0, 10.0) == pytest.approx(0.2)
+    assert math.isnan(factor_score(math.nan, 1.0))
 
 
 def test_cli_writes_the_report_and_refuses_an_empty_folder(bags, tmp_path):
@@ -130,7 +139,7 @@ def test_cli_writes_the_report_and_refuses_an_empty_folder(bags, tmp_path):
     done = subprocess.run(command + [str(folder / 'case5_seed1'), '--out', str(tmp_path / 'a')],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert '| Learn together (baseline) | Case 5 |' in done.stdout
+    assert '| 5 | together | translation | 1 |' in done.stdout
     assert (tmp_path / 'a' / 'fig7_three_factor.png').is_file()
     empty = tmp_path / 'empty'
     empty.mkdir()
@@ -149,7 +158,7 @@ def test_human_time_is_counted_by_input_source(bags, written):
     alone_first = report.load_session(folder / 'case1_seed1')    # the first one without him
     assert report.human_time(alone_first)['simulated']['engaged_steps'] == 22
     assert report.human_time(alone_first)['simulated']['seconds'] == pytest.approx(4.4)
-    text = (written[1] / 'human_time.md').read_text()
+    text = (written[2] / 'human_time.md').read_text()
     assert '| case5_seed1 | 5 | simulated | 6.6 | 33 | 33 | 3 |' in text
 
 

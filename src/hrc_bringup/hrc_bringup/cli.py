@@ -11,7 +11,7 @@ that verb's own help followed by an example. The flags that several verbs take a
 same everywhere: ``--case``, ``--seed``, ``--engine graph|inprocess``, ``--human
 sim|auto|device|joy|model|script``, ``--profile`` (a simulated-human profile), ``--set
 NODE.PARAM=VALUE``. The nodes keep their own executables (``ros2 run hrc_sim_node sim_node``
-...). Benchmarks are scripts, not verbs (``bench/``, ``python -m hrc_gym.bench.compare_ppo``).
+...). Benchmarks are scripts, not verbs (``bench/``, ``python bench/gym_ppo_vs_sb3.py``).
 
 Exit codes: those of the verb; 2 for an unknown verb or bad flags (every reason at once, no
 traceback); 130 on Ctrl-C.

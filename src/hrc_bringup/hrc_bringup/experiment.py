@@ -184,6 +184,7 @@ def plan_tasks(options, bags_dir: pathlib.Path, runs_dir: pathlib.Path) -> list:
                       for seed_index in range(seeds)))
     return [SessionTask(
         SessionSettings(case=case, seed=options.first_seed + seed_index, human_profile=profile,
+                        learning=options.learning,
                         session_id=(session_id := session_id_of(
                             case, options.first_seed + seed_index, profile, order)),
                         bags_dir=str(bags_dir.resolve()),
@@ -259,16 +260,7 @@ def main(argv=None) -> int:
     except Exception as error:   # Ray not reachable: say so, no traceback
         print(f'[experiment] cannot start the executor: {error}', file=sys.stderr)
         return 1
-    profiles = ', '.join(f'{profile or "default"}: {seeds} seeds'
-                         for profile, seeds in options.profile_seeds.items())
-    print(f'[experiment] {name}: {len(planned)} sessions ({len(options.cases)} cases; '
-          f'{profiles}), engine '
-          f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
-    if options.resume:
-        versions = sorted({record['version'] for _, record in reused})
-        print(f'[experiment] resuming: {len(reused)} of {len(planned)} sessions finished by '
-              f'earlier runs of the folder ({", ".join(versions) or "none"}), {len(tasks)} '
-              'to run', flush=True)
+    announce(options, name, planned, executor, bags_dir, reused, tasks)
     tasks_by_id = {task.session_id: task for task in tasks}
     outcomes = []
     progress = TimeLeft(len(tasks), 'sessions')
@@ -291,11 +283,7 @@ def main(argv=None) -> int:
                       f'{outcome["host"]} in {outcome["seconds"]:.0f} s ({len(outcomes)}/'
                       f'{len(tasks)}): {status}')
 
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGINT, interrupt)    # also when started with SIGINT ignored (nohup &)
-    signal.signal(signal.SIGTERM, interrupt)
+    interrupt_on_signals()
     try:
         executor.run(tasks, on_done)
     except KeyboardInterrupt:
@@ -314,25 +302,10 @@ def main(argv=None) -> int:
     this_run = {'command': 'hrc experiment ' + ' '.join(shlex.quote(arg) for arg in options.argv),
                 'started': started_at, 'wall_seconds': wall, 'version': version,
                 'sessions_run': len(outcomes) - len(skipped)}
-    runs = prior_runs + [this_run]
-    record = {'command': this_run['command'],
-              'engine': options.engine, 'executor': description, 'sessions': len(planned),
-              'failed': failed, 'skipped': skipped,
-              # the sum over the runs of the folder when resumed (each run's own in 'runs')
-              'wall_seconds': sum(run.get('wall_seconds', 0.0) for run in runs),
-              'started': runs[0].get('started', started_at),
-              'host_cpus': os.cpu_count(), 'version': version,
-              'uncommitted': uncommitted, 'runs': runs,
-              'tasks': [asdict(task) for task in tasks] + [record['task']
-                                                           for _, record in reused],
-              'outcomes': sorted(outcomes + [dict(record['outcome'], reused=True,
-                                                  version=record['version'])
-                                             for _, record in reused],
-                                 key=lambda outcome: outcome['session_id'])}
-    cpu = sum(outcome.get('cpu_seconds', 0.0) for outcome in outcomes)
-    record['cpu_seconds'] = cpu + sum(record['outcome'].get('cpu_seconds', 0.0)
-                                      for _, record in reused)
+    record = manifest(options, planned, tasks, reused, outcomes, prior_runs + [this_run],
+                      description, uncommitted)
     (bags_dir / MANIFEST_NAME).write_text(json.dumps(record, indent=1))
+    cpu = sum(outcome.get('cpu_seconds', 0.0) for outcome in outcomes)
     print(f'[experiment] {len(outcomes) - len(skipped)} sessions in {wall:.0f} s wall '
           f'({wall / 60:.1f} min; {cpu:.0f} CPU s in the sessions)'
           + (f'; {len(reused)} kept from earlier runs' if reused else '')
@@ -344,6 +317,55 @@ def main(argv=None) -> int:
     from hrc_study import results_cli  # lazy: scipy and matplotlib (seconds), only for --report
     code = results_cli.main([str(bags_dir), '--out', out])
     return 1 if failed or code else 0
+
+
+def interrupt_on_signals() -> None:
+    """Turn SIGINT and SIGTERM into KeyboardInterrupt (also when started with SIGINT ignored)."""
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, interrupt)    # nohup & starts with SIGINT ignored
+    signal.signal(signal.SIGTERM, interrupt)
+
+
+def announce(options, name, planned, executor, bags_dir, reused, tasks) -> None:
+    """Print what the sweep runs, where, and (resumed) what earlier runs already did."""
+    profiles = ', '.join(f'{profile or "default"}: {seeds} seeds'
+                         for profile, seeds in options.profile_seeds.items())
+    print(f'[experiment] {name}: {len(planned)} sessions ({len(options.cases)} cases; '
+          f'{profiles}), learning configuration {options.learning}, engine '
+          f'{options.engine}, on {executor.describe()}; bags in {bags_dir}', flush=True)
+    if options.resume:
+        versions = sorted({record['version'] for _, record in reused})
+        print(f'[experiment] resuming: {len(reused)} of {len(planned)} sessions finished by '
+              f'earlier runs of the folder ({", ".join(versions) or "none"}), {len(tasks)} '
+              'to run', flush=True)
+
+
+def manifest(options, planned, tasks, reused, outcomes, runs, description,
+             uncommitted) -> dict:
+    """Return the sweep's manifest: its runs, tasks and outcomes (the reused ones marked)."""
+    this_run = runs[-1]
+    record = {'command': this_run['command'],
+              'engine': options.engine, 'executor': description, 'sessions': len(planned),
+              'learning': options.learning,
+              'failed': sorted(outcome['session_id'] for outcome in outcomes
+                               if outcome['exit_code'] not in (0, None)),
+              'skipped': sorted(outcome['session_id'] for outcome in outcomes
+                                if outcome['exit_code'] is None),
+              # the sum over the runs of the folder when resumed (each run's own in 'runs')
+              'wall_seconds': sum(run.get('wall_seconds', 0.0) for run in runs),
+              'started': runs[0].get('started', this_run['started']),
+              'host_cpus': os.cpu_count(), 'version': this_run['version'],
+              'uncommitted': uncommitted, 'runs': runs,
+              'tasks': [asdict(task) for task in tasks] + [kept['task'] for _, kept in reused],
+              'outcomes': sorted(outcomes + [dict(kept['outcome'], reused=True,
+                                                  version=kept['version'])
+                                             for _, kept in reused],
+                                 key=lambda outcome: outcome['session_id'])}
+    record['cpu_seconds'] = sum(outcome.get('cpu_seconds', 0.0) for outcome in outcomes) \
+        + sum(kept['outcome'].get('cpu_seconds', 0.0) for _, kept in reused)
+    return record
 
 
 def _uncommitted_sources() -> list:

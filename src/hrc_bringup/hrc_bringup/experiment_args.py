@@ -7,6 +7,7 @@ sweep's modules load them); ``hrc_bringup.experiment.parse_args`` checks the val
 import argparse
 
 from hrc_common.contract import paper_case_ids
+from hrc_common.session_plan import add_learning_option
 
 ENGINES = ('inprocess', 'graph')
 
@@ -33,8 +34,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--engine', choices=ENGINES, default='inprocess',
                         help='inprocess (default): one process per session; graph: the ROS '
                         'nodes over DDS per session')
+    add_learning_option(parser)
     parser.add_argument('--episodes', type=int, default=0,
-                        help='max training episodes per session (default: params/agent.yaml)')
+                        help='max training episodes per session (default: the learning '
+                        'configuration)')
     parser.add_argument('--eval-episodes', type=int, default=-1,
                         help='final evaluation episodes (default: params/agent.yaml)')
     parser.add_argument('--set', dest='overrides', action='append', default=[],

@@ -150,7 +150,7 @@ def graph_arguments(settings: SessionSettings, params_dir: str, domain_id: int) 
     arguments = ['--case', str(settings.case), '--seed', str(settings.seed), '--session-id',
                  settings.session_id, '--bags-dir', settings.bags_dir, '--no-report',
                  '--runs-dir', settings.runs_dir, '--params-dir', params_dir,
-                 '--domain-id', str(domain_id)]
+                 '--domain-id', str(domain_id), '--learning', settings.learning]
     if settings.human_profile:
         arguments += ['--profile', settings.human_profile]
     if settings.resume_from:

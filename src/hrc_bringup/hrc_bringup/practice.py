@@ -63,7 +63,7 @@ def run_practice(settings: SessionSettings, options, params_dir: pathlib.Path, e
     run_dir = pathlib.Path(settings.runs_dir) / practice.session_id
     if settings.record:
         parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
-    params_path, _ = write_session_files(practice, parameters, run_dir)
+    params_path, _ = write_session_files(practice, parameters, run_dir, params_dir)
     supervisor = Supervisor(run_dir / 'logs', env)
     human_dof = parameters['human']['dof']
 

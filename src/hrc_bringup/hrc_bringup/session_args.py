@@ -5,7 +5,8 @@ import pathlib
 import shlex
 import sys
 
-from hrc_common.session_plan import NODES, new_session_id, parse_overrides, SessionSettings
+from hrc_common.session_plan import (add_learning_option, NODES, new_session_id,
+                                     parse_overrides, SessionSettings)
 from hrc_live.study import consent_problem, load_registry, StudyError
 import yaml
 
@@ -35,8 +36,9 @@ def build_parser() -> argparse.ArgumentParser:
                         'simulation time, --set human.script_file=PATH)')
     parser.add_argument('--profile', dest='human_profile', default='',
                         help='simulated-human profile (params/sim_human.yaml)')
+    add_learning_option(parser)
     parser.add_argument('--episodes', dest='training_episodes', type=int, default=0,
-                        help='max training episodes (default: params/agent.yaml)')
+                        help='max training episodes (default: the learning configuration)')
     parser.add_argument('--eval-episodes', dest='evaluation_episodes', type=int, default=-1,
                         help='evaluation episodes (default: params/agent.yaml)')
     parser.add_argument('--session-id', default='', help='default: case<N>-seed<S>-<time>')
@@ -123,7 +125,7 @@ def parse_args(argv=None):
     settings = SessionSettings(
         case=options.case, seed=options.seed, mode=options.mode,
         human_input=options.human_input, human_profile=options.human_profile,
-        training_episodes=options.training_episodes,
+        learning=options.learning, training_episodes=options.training_episodes,
         evaluation_episodes=options.evaluation_episodes, session_id=options.session_id,
         bags_dir=options.bags_dir, runs_dir=options.runs_dir, record=options.record,
         resume_from=options.resume_from, subject_id=options.subject_id, notes=options.notes,

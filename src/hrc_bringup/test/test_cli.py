@@ -6,7 +6,7 @@ as ``ros2 run hrc_bringup hrc`` starts it.
 
 import subprocess
 
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 from hrc_bringup import bag_info, cli
 from hrc_common.executables import executable_path
 import pytest

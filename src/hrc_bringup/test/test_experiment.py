@@ -19,10 +19,10 @@ import threading
 import time
 
 from hrc_bringup import cli, experiment
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 import pytest
 
-from hrc_study.loading import load_sessions
+from hrc_bag.report import load_records
 
 # A private cluster on loopback: no usage reports, and no token authentication (Ray 2.60
 # enables it on a head that finds ~/.ray/auth_token, while clients default to 'disabled').
@@ -116,7 +116,7 @@ def _run_experiment(tmp_path, name, *extra) -> dict:
 
 
 def _episodes(folder) -> dict:
-    return {session.session_id: session.episodes for session in load_sessions([folder],
+    return {session.session_id: session.episodes for session in load_records([folder],
                                                                                log=print)}
 
 

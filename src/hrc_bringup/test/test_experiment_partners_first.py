@@ -11,7 +11,7 @@ import yaml
 from hrc_bringup.experiment_task import run_task, SessionTask
 from hrc_common.session_plan import parse_overrides, SessionSettings
 from hrc_common.paths import params_dir
-from hrc_study.loading import load_sessions
+from hrc_bag.report import load_records
 
 
 @pytest.mark.slow
@@ -27,7 +27,6 @@ def test_a_case_8_task_pretrains_then_runs_the_person_from_the_checkpoint(tmp_pa
         evaluation_episodes=1,
         overrides=parse_overrides(('sim.episode_duration=2.0', 'agent.horizon=20',
                                    'agent.minibatch_size=10', 'agent.convergence_window=1',
-                                   'agent.judging_rule=in_a_row',
                                    f'agent.task_tree_file={easy}', 'human.person=0')))
     task = SessionTask(settings, engine='inprocess', params_dir=str(params_dir()),
                        pull_bags=False)
@@ -38,7 +37,7 @@ def test_a_case_8_task_pretrains_then_runs_the_person_from_the_checkpoint(tmp_pa
     assert record['reached_person_step'] and record['person'] == 'person:paper:0'
     assert record['population_episodes'] > 0 and record['person'] not in record['partners_met']
     # the study reads the session: the person's step only, from the pre-trained episode count
-    sessions = load_sessions([tmp_path / 'bags'])
+    sessions = load_records([tmp_path / 'bags'])
     assert [session.strategy for session in sessions] == ['partners_first']
     episodes = sessions[0].episodes
     assert episodes[0].episode == record['episodes']

@@ -26,8 +26,9 @@ from rclpy.utilities import timeout_sec_to_nsec
 
 from hrc_common.contract import REALTIME_SWITCH_INTERVAL_S
 from hrc_common.qos import NO_SUBSCRIPTION_EVENTS
-from hrc_common.params import (describe, node_parameter_problems, ParameterError,
-                               parse_ros_arguments, RosArguments, set_process_arguments)
+from hrc_common.params import describe, ParameterError
+from hrc_common.params_arguments import (node_parameter_problems, parse_ros_arguments,
+                                         RosArguments, set_process_arguments)
 
 # Exit code of a node whose parameters were rejected (distinct from a crash, for the supervisor).
 EXIT_BAD_PARAMETERS = 2

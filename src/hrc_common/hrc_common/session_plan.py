@@ -22,6 +22,7 @@ import yaml
 from hrc_common.contract import (atomic_write, case_problem, case_table, id_problem,
                                  make_session_id, PERSONAL_FILE_MODE)
 from hrc_common.params import field_problems, param
+from hrc_common.paths import params_dir as default_params_dir
 
 # Node name -> (package, executable, parameter file). The node name is the section of the file.
 NODES = {
@@ -31,23 +32,48 @@ NODES = {
     'recorder': ('hrc_bag', 'recorder_node', 'recorder.yaml'),
 }
 
-# The study's learning settings (issue 22), used by `make run` (scripts/main_job.py) and the
-# study rerun (scripts/rerun_study.py); the agent's defaults stay the paper's Table I rules.
-# PPO updates after `horizon` samples or at an episode's end, whichever first (MATLAB's reading
-# of Table I); convergence is judged on deterministic episodes in a row, every 2nd episode (the
-# last step's floor: 5 human-involved episodes instead of 12); the `graded` reward preset (a
-# slope from the stops to the goal on every subtask); 10 epochs and a clip of 0.2
-# (Stable-Baselines3's defaults: the paper's 3 epochs and 0.05 learn too little per update of
-# 200-step episodes). Measured: case 2's robot-alone step 8-14 episodes instead of ~90.
-STUDY_LEARNING = {'agent.update_rule': 'horizon_or_episode_end', 'agent.judging_rule': 'in_a_row',
-                  'agent.judging_interval': 2, 'agent.preset': 'graded', 'agent.epochs': 10,
-                  'agent.clip_coef': 0.2}
+# The learning configurations: params/learning/<name>.yaml, each a ROS 2 parameter file of the
+# agent node (so `ros2 run hrc_agent_node agent_node --ros-args --params-file` takes it too). The
+# default is the one the study measured best for the person's time; its file says why.
+LEARNING_DIR = 'learning'
+DEFAULT_LEARNING = 'sac'
 
 
-def study_learning_arguments() -> list:
-    """Return STUDY_LEARNING as command-line overrides: ['--set', 'agent.x=v', ...]."""
-    return [item for key, value in STUDY_LEARNING.items()
-            for item in ('--set', f'{key}={value}')]
+LEARNING_HELP = ('learning configuration: params/learning/<name>.yaml (default '
+                 f"{DEFAULT_LEARNING}, the study's best for the person's time; ppo: the "
+                 "paper's algorithm with the study's rules; paper: Table I literally)")
+
+
+def add_learning_option(parser) -> None:
+    """Add ``--learning NAME`` (one help for every command that runs sessions)."""
+    parser.add_argument('--learning', default=DEFAULT_LEARNING, metavar='NAME',
+                        help=LEARNING_HELP)
+
+
+def learning_names(params_dir: pathlib.Path) -> list:
+    """Return the names of the learning configurations in ``params_dir/learning/``."""
+    return sorted(path.stem for path in (pathlib.Path(params_dir) / LEARNING_DIR).glob('*.yaml'))
+
+
+def load_learning(params_dir: pathlib.Path, name: str) -> dict:
+    """Return the agent parameters of the learning configuration ``name``.
+
+    Raises ValueError naming the configurations there are when ``name`` is not one of them,
+    or when the file is not an agent parameter file.
+    """
+    path = pathlib.Path(params_dir) / LEARNING_DIR / f'{name}.yaml'
+    if not isinstance(name, str) or not name or '/' in name or not path.is_file():
+        names = ', '.join(learning_names(params_dir)) or 'none'
+        raise ValueError(f'learning configuration {name!r} not found in '
+                         f'{pathlib.Path(params_dir) / LEARNING_DIR} (there are: {names})')
+    document = yaml.safe_load(path.read_text()) or {}
+    nodes = set(document) if isinstance(document, dict) else {'?'}
+    section = document.get('agent') if isinstance(document, dict) else None
+    values = section.get('ros__parameters') if isinstance(section, dict) else None
+    if nodes != {'agent'} or not isinstance(values, dict):
+        raise ValueError(f'{path}: a learning configuration holds one section, '
+                         f'agent: ros__parameters: {{...}} (found {sorted(map(str, nodes))})')
+    return dict(values)
 
 
 # The settings a session owns that are not one node's parameter: checked here, not by a node.
@@ -56,7 +82,7 @@ SESSION_MODES = ('lockstep', 'realtime')
 
 @dataclass
 class SessionSettings:
-    """What a user chooses for one session: the one session configuration (issue 20).
+    """What a user chooses for one session: the one session configuration.
 
     The graph runner (``hrc session``), the in-process engine (``hrc_engine.engine``), the
     experiment's tasks (``hrc_bringup.experiment_task``) and the Gymnasium environment
@@ -76,7 +102,10 @@ class SessionSettings:
                                     'script, device, joy, auto; the human node checks it)')
     human_profile: str = param('', "Simulated-human profile of params/sim_human.yaml ('' = "
                                    "human.yaml's)")
-    training_episodes: int = param(0, "Max training episodes (0 = agent.yaml's "
+    learning: str = param(DEFAULT_LEARNING, 'Learning configuration: params/learning/<name>'
+                                            '.yaml (sac, the default; ppo; paper)')
+    training_episodes: int = param(0, "Max training episodes (0 = the learning "
+                                      "configuration's or agent.yaml's "
                                       'max_training_episodes)', low=0)
     evaluation_episodes: int = param(-1, "Evaluation episodes (-1 = agent.yaml's)", low=-1)
     session_id: str = param('', "Session id, names the bag and run folders ('' = "
@@ -190,6 +219,7 @@ def compose(settings: SessionSettings, params_dir: pathlib.Path) -> dict:
         raise ValueError('session settings rejected: ' + '; '.join(reasons))
     nodes = [node for node in NODES if settings.record or node != 'recorder']
     parameters = {node: load_node_parameters(params_dir, node) for node in nodes}
+    parameters['agent'].update(load_learning(params_dir, settings.learning))
     for key, value in settings.overrides.items():
         node, name = key.split('.', 1)
         if node in parameters:
@@ -260,8 +290,11 @@ def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
         agent['wait_for_subscribers'] = ['human', 'recorder']
 
 
-def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path):
+def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path,
+                        params_dir: pathlib.Path = None):
     """Write ``parameters.yaml`` (for --params-file) and ``session.yaml`` (the session config).
+
+    ``params_dir``: where the learning configuration was read (default: ``params_dir()``).
 
     ``session.yaml`` holds the subject id and notes, so it is created owner-only (0600).
 
@@ -282,6 +315,11 @@ def write_session_files(settings: SessionSettings, parameters: dict, session_dir
         'seed': settings.seed,
         'mode': settings.mode,
         'human_input': settings.human_input,
+        # the learning configuration by name and in full (what the agent ran with; hrc results
+        # pools only sessions of one configuration unless told)
+        'learning': {'name': settings.learning,
+                     'settings': load_learning(params_dir or default_params_dir(),
+                                               settings.learning)},
         'subject_id': settings.subject_id,
         'notes': settings.notes,
         'version': package_version(),

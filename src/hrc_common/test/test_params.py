@@ -184,7 +184,7 @@ def test_changes_are_checked_and_other_parameters_left_alone(rclpy_context):
 
 
 def test_domain_reservations_are_exclusive():
-    from hrc_common.testing import DomainReservation
+    from hrc_common.domains import DomainReservation
 
     first, second = DomainReservation(), DomainReservation()
     try:
@@ -195,7 +195,7 @@ def test_domain_reservations_are_exclusive():
 
 
 def test_command_line_problems_all_at_once(tmp_path):
-    from hrc_common.params import parse_ros_arguments
+    from hrc_common.params_arguments import parse_ros_arguments
     good = tmp_path / 'good.yaml'
     good.write_text('/**:\n  ros__parameters: {period: 0.3}\nns:\n  node:\n'
                     '    ros__parameters: {inner: {deep: 1}}\n')
@@ -225,7 +225,8 @@ def test_command_line_problems_all_at_once(tmp_path):
 
 
 def test_node_problems_name_the_closest_parameter_and_section(tmp_path):
-    from hrc_common.params import node_parameter_problems, parse_ros_arguments, section_applies
+    from hrc_common.params_arguments import (node_parameter_problems, parse_ros_arguments,
+                                              section_applies)
     assert section_applies('/**', '/sim') and section_applies('/**/sim', '/ns/sim')
     assert section_applies('sim', '/sim') and section_applies('/*', '/sim')
     assert not section_applies('/ns/sim', '/sim') and not section_applies('simm', '/sim')

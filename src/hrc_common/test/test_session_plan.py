@@ -102,17 +102,41 @@ def test_an_override_the_session_overrules_is_refused_not_dropped():
     assert compose(settings, PARAMS)['human']['input'] == 'script'
 
 
-def test_the_study_learning_settings_are_agent_parameters_the_session_takes():
-    from hrc_common.session_plan import STUDY_LEARNING, study_learning_arguments
+def test_the_session_applies_its_learning_configuration_under_the_overrides(tmp_path):
+    from hrc_common.session_plan import DEFAULT_LEARNING, load_learning
 
     defaults = yaml.safe_load((PARAMS / 'agent.yaml').read_text())['agent']['ros__parameters']
-    overrides = {key: value for key, value in STUDY_LEARNING.items()}
-    agent = compose(SessionSettings(case=2, overrides=overrides), PARAMS)['agent']
-    for key, value in STUDY_LEARNING.items():
-        name = key.split('.', 1)[1]
-        assert name in defaults and defaults[name] != value, key   # a real change of default
-        assert agent[name] == value
-    assert study_learning_arguments()[:2] == ['--set', 'agent.update_rule=horizon_or_episode_end']
+    assert DEFAULT_LEARNING == 'sac'
+    for name in ('sac', 'ppo', 'paper'):
+        learning = load_learning(PARAMS, name)
+        agent = compose(SessionSettings(case=2, learning=name), PARAMS)['agent']
+        assert {key: agent[key] for key in learning} == learning, name
+        assert set(learning) <= set(defaults), name        # only the agent's parameters
+    # the default needs no option; --set wins over the configuration
+    assert compose(SessionSettings(case=2), PARAMS)['agent']['algorithm'] == 'sac'
+    agent = compose(SessionSettings(case=2, overrides={'agent.preset': 'graded'}), PARAMS)['agent']
+    assert (agent['algorithm'], agent['preset']) == ('sac', 'graded')
+    # --episodes wins over the configuration's episode cap
+    assert compose(SessionSettings(case=2, training_episodes=7), PARAMS)['agent'][
+        'max_training_episodes'] == 7
+    # every session records the configuration's name and its whole content
+    settings = SessionSettings(case=2, learning='ppo', session_id='s1')
+    _, config_path = write_session_files(settings, compose(settings, PARAMS), tmp_path, PARAMS)
+    recorded = yaml.safe_load(config_path.read_text())['learning']
+    assert recorded == {'name': 'ppo', 'settings': load_learning(PARAMS, 'ppo')}
+
+
+def test_an_unknown_learning_configuration_is_refused_with_the_names_there_are(tmp_path):
+    with pytest.raises(ValueError) as refused:
+        compose(SessionSettings(case=2, learning='fast'), PARAMS)
+    assert "learning configuration 'fast' not found" in str(refused.value)
+    assert 'there are: paper, ppo, sac' in str(refused.value)
+    # a file that is not one agent section is refused with what it holds
+    (tmp_path / 'learning').mkdir()
+    (tmp_path / 'learning' / 'odd.yaml').write_text('sim:\n  ros__parameters: {seed: 1}\n')
+    from hrc_common.session_plan import load_learning
+    with pytest.raises(ValueError, match=r"one section, agent: ros__parameters.*\['sim'\]"):
+        load_learning(tmp_path, 'odd')
 
 
 def test_every_setting_is_documented_and_checked_with_every_reason_at_once():

@@ -185,7 +185,8 @@ class InProcessSession:
 
     # -- recording --------------------------------------------------------------------------
     def _open_bags(self) -> None:
-        _, config_path = write_session_files(self.settings, self.parameters, self.run_dir)
+        _, config_path = write_session_files(self.settings, self.parameters, self.run_dir,
+                                             self.config.params_dir or None)
         text = config_path.read_text()
         self.writer = SessionWriter(self.settings.bags_dir, self.session_id,
                                     session_config=yaml.safe_load(text),

@@ -6,6 +6,8 @@ PyBullet (the engine loads them); ``hrc_engine.inprocess_session.parse_args`` ch
 
 import argparse
 
+from hrc_common.session_plan import add_learning_option
+
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the parser of ``hrc session --engine inprocess`` (its flags and help)."""
@@ -17,7 +19,7 @@ def build_parser() -> argparse.ArgumentParser:
                         'partners first (from their pre-trained checkpoint; default 2)')
     parser.add_argument('--seed', type=int, default=0, help='session seed (default 0)')
     parser.add_argument('--episodes', type=int, default=0,
-                        help='max training episodes (default: params/agent.yaml)')
+                        help='max training episodes (default: the learning configuration)')
     parser.add_argument('--eval-episodes', type=int, default=-1,
                         help='evaluation episodes (default: params/agent.yaml)')
     parser.add_argument('--session-id', default='', help='default: case<N>-seed<S>-<time>')
@@ -28,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--no-checkpoints', action='store_true', help='write no checkpoints')
     parser.add_argument('--profile', dest='human_profile', default='',
                         help='simulated-human profile (params/sim_human.yaml)')
+    add_learning_option(parser)
     # The flags of the graph's session: the values without wall time are accepted, so one
     # command line works with either engine; any other value is refused with the reason.
     parser.add_argument('--human', dest='human_input', default='sim',

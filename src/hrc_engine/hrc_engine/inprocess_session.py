@@ -40,7 +40,8 @@ def parse_args(argv=None) -> tuple:
     settings = SessionSettings(
         case=options.case, seed=options.seed, mode=options.mode,
         human_input=options.human_input, human_profile=options.human_profile,
-        training_episodes=options.episodes, evaluation_episodes=options.eval_episodes,
+        learning=options.learning, training_episodes=options.episodes,
+        evaluation_episodes=options.eval_episodes,
         session_id=options.session_id, bags_dir=options.bags_dir, runs_dir=options.runs_dir,
         record=not options.no_record, resume_from=options.resume_from, overrides=overrides)
     # the engine loads the cores, torch among them (seconds): --help and usage errors answer

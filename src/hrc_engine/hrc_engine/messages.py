@@ -6,7 +6,9 @@ human: HumanAction, WrenchStamped), so a bag of the engine holds the same fields
 the graph. ``hrc_bag.session_writer`` encodes them to CDR.
 """
 
-from hrc_common.contract import DOF_INDEX, episode_kind, InputSource, Phase
+from hrc_agent_node.agent_messages import (agent_step_fields, episode_summary_fields,
+                                          session_status_fields)
+from hrc_common.contract import DOF_INDEX, InputSource
 # Wrench values live with the sim's command rules; wrench_on is used here and re-exported.
 from hrc_sim_node.commands import HUMAN, ROBOT, Wrench, wrench_on  # noqa: F401
 from hrc_sim_node.protocol import stamp_fields
@@ -55,45 +57,16 @@ def human_action(stamp: int, episode: int, step: int, answer) -> dict:
 
 def agent_step(record, stamp: int) -> dict:
     """Return the AgentStep of a completed StepRecord (stamp of the state acted on)."""
-    return {'header': header(stamp), 'episode': record.episode, 'step': record.step,
-            'observation_human_action': record.observed_human_action,
-            'action': record.action, 'wrench': record.wrench,
-            'subtask_ids': list(record.subtask_ids),
-            'reward_components': [float(value) for value in record.reward_components],
-            'reward': record.reward, 'value_estimate': record.value,
-            'log_prob': record.log_prob, 'deterministic': record.deterministic}
+    return {'header': header(stamp), **agent_step_fields(record)}
 
 
 def episode_summary(core, result, stamp: int) -> dict:
     """Return the EpisodeSummary of a finished episode (stamp of its final state)."""
-    return {'header': header(stamp), 'session_id': core.session_id,
-            'case_id': core.case_id, 'episode': result.episode,
-            'training_step': result.training_step, 'human_involved': result.human_involved,
-            'evaluation': result.evaluation,
-            'kind': int(episode_kind(evaluation=result.evaluation, judging=result.judging,
-                                     practice=getattr(result, 'practice', False))),
-            'steps': result.steps,
-            'terminated': result.terminated, 'truncated': result.truncated,
-            'episode_return': result.episode_return,
-            'slider_error': float(result.errors.get('slider', 0.0)),
-            'pendulum_error': float(result.errors.get('pendulum', 0.0)),
-            'ball_error': float(result.errors.get('ball', 0.0)),
-            'total_error': result.total_error, 'robot_effort': result.robot_effort,
-            'human_effort': result.human_effort, 'converged': result.converged}
+    return {'header': header(stamp), **episode_summary_fields(core, result)}
 
 
 def session_status(core, text: str, wall_ns: int) -> dict:
     """Return the SessionStatus the agent publishes (header stamp: wall time)."""
-    step = core.training_step
     sec, nanosec = stamp_fields(wall_ns)
     return {'header': {'stamp': {'sec': sec, 'nanosec': nanosec}, 'frame_id': ''},
-            'session_id': core.session_id, 'case_id': core.case_id,
-            'strategy': core.strategy, 'training_step': step.index,
-            'training_step_count': core.training_step_count,
-            'robot_dof': DOF_INDEX[core.robot_dof], 'human_dof': DOF_INDEX[core.human_dof],
-            'human_involved': core.human_involved,
-            'robot_subtasks': list(core.robot_subtasks),
-            'human_subtasks': list(core.human_subtasks), 'episode': core.episode,
-            'total_episodes': core.total_episodes,
-            'human_involved_episodes': core.human_involved_episodes,
-            'phase': int(Phase.from_label(core.phase)), 'message': text}
+            **session_status_fields(core, text)}

@@ -11,7 +11,7 @@ import sys
 import textwrap
 
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import executable_path
+from hrc_common.executables import executable_path
 from hrc_engine.engine import compose_parameters, EngineConfig, OFFERED_QOS, run_session
 from hrc_engine.inprocess_session import main, parse_args
 import pytest
@@ -87,7 +87,8 @@ def test_the_bags_carry_the_graphs_qos_and_the_report_reads_them(tmp_path, read_
                              '--out', str(tmp_path / 'report')],
                             capture_output=True, text=True, timeout=120)
     assert report.returncode == 0, report.stdout + report.stderr
-    assert 'Case 1' in (tmp_path / 'report' / 'table2.md').read_text()
+    table = (tmp_path / 'report' / 'table2.md').read_text()
+    assert '| 1 | task first | translation | 1 |' in table, table     # case 1, one seed
 
 
 def test_offered_qos_table_matches_the_contract():

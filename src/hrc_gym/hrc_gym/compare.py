@@ -23,7 +23,6 @@ weight 0.5).
 import math
 
 from hrc_agent_node.agent_core import AgentCore
-from hrc_agent_node.config import AgentParams
 from hrc_agent_node.strategies import StrategyProgress
 from hrc_common.params import with_overrides
 import numpy as np
@@ -57,9 +56,10 @@ def agent_params(env: SliderPendulumBallEnv, seed: int, episodes: int, **changes
                      checkpoint_dir='', torch_threads=1,
                      # Stay in the environment's training step: the criterion is judged
                      # afterwards, on the training episodes, for both learners alike.
-                     convergence_window=1000, satisfied_window=1000)
-    if hasattr(AgentParams, 'convergence_judged_on'):
-        overrides['convergence_judged_on'] = 'training'  # no deterministic judging episodes
+                     convergence_window=1000, satisfied_window=1000,
+                     # no judging episodes within the budget (one after every 10^5 training
+                     # episodes): both learners spend every episode on training
+                     judging_interval=100000)
     return with_overrides(env.task.agent_params, **dict(overrides, **changes))
 
 

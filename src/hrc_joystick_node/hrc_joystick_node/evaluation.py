@@ -1,7 +1,7 @@
 """Run the simulated human on the physics core alone (the robot doing nothing); pure, no rclpy.
 
-Used by the tests and ``bench/sim_human_table.py`` to measure how well a profile holds its own
-subtask next to zero action. The physics is passed in (an ``hrc_sim_node.physics``
+Used by the tests and ``bench/sim_human_error_table.py`` to measure how well a profile holds its
+own subtask next to zero action. The physics is passed in (an ``hrc_sim_node.physics``
 ``SliderPendulumBall``), so this module does not import it.
 """
 

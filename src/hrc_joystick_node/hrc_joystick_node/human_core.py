@@ -40,7 +40,8 @@ from hrc_common.contract import InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import from_dict, param, ParameterError
 from hrc_joystick_node.human_model import ClonedHuman, load_human_model
-from hrc_joystick_node.human_profile import default_profiles_path, HumanProfile, load_profiles
+from hrc_joystick_node.human_profile import (default_profiles_path, HumanProfile, load_profiles,
+                                             RETIRED_PROFILES, unknown_profile_reason)
 from hrc_joystick_node.inputs import (AUTO, DEVICE, FALLBACKS, INPUT_MODES, InputSelector, JOY,
                                       MODEL, PAUSE, SCRIPT, SIM, stick_command, StickReading,
                                       ZERO)
@@ -57,7 +58,7 @@ SOURCE_CODE = {name: int(source) for name, source in (
 
 @dataclass
 class HumanParams:
-    """Parameters of the human node (mirrored in params/human.yaml)."""
+    """Parameters of the human node (node ``human``, params/human.yaml)."""
 
     input: str = param('auto', 'where the command comes from: auto = the device if it opens, '
                        'else /joy if a publisher is seen; sim = the simulated human; model = '
@@ -86,11 +87,6 @@ class HumanParams:
     input_check_period: float = param(0.1, 'interval of the input check: drain the device, '
                                       'watch the /joy deadline, publish the input status (s)',
                                       low=0.01, high=5.0)
-    forward_stick: bool = param(True, 'joystick (device, /joy): send the stick as it moves, '
-                                'at once, answering the newest state (a person acts '
-                                'continuously; the realtime sim applies the newest command '
-                                'at each human slice); false: only when a state arrives, the '
-                                'behaviour before the human had its own rate')
     dof: str = param('rotation', 'degree of freedom of the human until /hrc/session says',
                      choices=DOFS)
     involved: bool = param(True, 'whether the human acts, until /hrc/session says')
@@ -166,6 +162,8 @@ def resolve_profile(params: HumanParams, profiles: typing.Dict[str, HumanProfile
                     where='profiles_file') -> HumanProfile:
     """Return the person the parameters name (profile, then the population draw)."""
     if params.profile not in profiles:
+        if params.profile in RETIRED_PROFILES:
+            raise ParameterError(f'profile: {unknown_profile_reason(params.profile, profiles)}')
         raise ParameterError(f'profile: {params.profile!r} is not in {where} '
                              f'(known: {sorted(profiles)})')
     return person_or_profile(profiles[params.profile], params.person)
@@ -325,13 +323,13 @@ class HumanCore:
         """Answer the newest state again with the stick as it is now; None if nothing to send.
 
         Only for a person at a joystick (the active input device or /joy, involved, the
-        session not aborted, ``forward_stick``): between two states the stick moves and the
+        session not aborted): between two states the stick moves and the
         realtime sim applies the newest command at its next human slice, so a move reaches
         the physics within one human period instead of waiting for the next state. Nothing
         is sent when the command did not change.
         """
         last = self.last_answer
-        if (last is None or self.aborted or not self.involved or not self.params.forward_stick
+        if (last is None or self.aborted or not self.involved
                 or self.selector.active not in (DEVICE, JOY)):
             return None
         command, engaged, source, detail = self._decide(

@@ -147,7 +147,7 @@ class HumanNode(Node):
             self.joy_subscription = self.create_subscription(Joy, topics.JOY, self.on_joy,
                                                              qos.JOY_QOS)
         self.create_timer(params.input_check_period, self.check_inputs)
-        # A person acts continuously: a stick event is forwarded at once (forward_stick).
+        # A person acts continuously: a stick event is forwarded at once (HumanCore.forward).
         # A thread waits on the device's file descriptor and wakes the executor through a
         # guard condition; the device is read and the answer published in the executor's
         # thread, as everything else.
@@ -155,7 +155,7 @@ class HumanNode(Node):
         self._stick_read = threading.Event()
         self._watching = threading.Event()
         self._watcher = None
-        if self.device is not None and params.forward_stick:
+        if self.device is not None:
             self._watching.set()
             self._watcher = threading.Thread(target=self._watch_device, daemon=True,
                                              name='stick watcher')

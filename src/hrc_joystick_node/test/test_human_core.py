@@ -227,11 +227,7 @@ def test_a_person_at_the_stick_is_forwarded_between_states_with_the_newest_stamp
     assert (moved.episode, moved.step, moved.slice, moved.stamp_ns) == (
         0, 4, 3, answer.stamp_ns)                         # answers the newest state
     assert core.last_answer == moved                      # a repeat of the state sends it
-    # The behaviour before the human's own rate, and a simulated person: never forwarded.
-    old = core_of(dataclasses.replace(params, forward_stick=False))
-    old.on_inputs(True, 'open', False, '')
-    old.answer(0, 4, stamp(0, 4), State(), at)
-    assert old.forward({DEVICE: StickReading(-0.5, None, '/dev/input/js0')}) is None
+    # A simulated person: never forwarded.
     simulated = core_of(HumanParams(input='sim'))
     simulated.on_inputs(False, '', False, '')
     simulated.answer(0, 0, stamp(0, 0), State())

@@ -15,7 +15,7 @@ from sensor_msgs.msg import Joy
 from hrc_common.paths import params_dir
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
-from hrc_common.testing import serve_sim_parameters
+from hrc_testing.nodes import serve_sim_parameters
 from hrc_joystick_node.human_node import HUMAN_INPUT
 from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT, pack_event
 from hrc_joystick_node.human_profile import load_profile
@@ -399,8 +399,8 @@ def test_device_through_a_fifo_with_garbage_deadman_and_hot_plug(start_node, har
         action = answer()
         assert action.command == pytest.approx(16384 / 32767)
         assert action.dof == HumanAction.DOF_TRANSLATION
-        # the 3 bytes of garbage are reported as they are read (forward_stick reads the device
-        # as bytes arrive, so possibly in two reports): 3 in total
+        # the 3 bytes of garbage are reported as they are read (the stick is forwarded as it
+        # moves, so the device is read as bytes arrive, possibly in two reports): 3 in total
         assert harness.spin_until(lambda: '(resynchronized; 3 in total)' in process.output), \
             process.output
 

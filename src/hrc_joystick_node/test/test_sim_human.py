@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+import re
 
 import numpy
 import pytest
@@ -9,7 +10,8 @@ import pytest
 from hrc_common.paths import params_dir
 from hrc_common.params import ParameterError
 from hrc_joystick_node.evaluation import human_episode, run_episode
-from hrc_joystick_node.human_profile import HumanProfile, load_profile, load_profiles
+from hrc_joystick_node.human_profile import (HumanProfile, load_profile, load_profiles,
+                                             RETIRED_PROFILES)
 from hrc_joystick_node.sim_human import normalize_subtasks, SimulatedHuman
 
 CONTROL_PERIOD = 0.2   # s: the sim's control period (params/sim.yaml), the people's call period
@@ -26,7 +28,7 @@ def physics():
         yield model
 
 
-def test_the_profiles_the_issue_asks_for_exist_and_are_valid():
+def test_the_four_profiles_exist_and_are_valid():
     assert {'novice', 'skilled', 'paper', 'paper_symmetric'} <= set(PROFILES)
     for name, profile in PROFILES.items():
         assert profile.description, f'{name} has no description'
@@ -34,9 +36,9 @@ def test_the_profiles_the_issue_asks_for_exist_and_are_valid():
             continue  # the control profiles (test_human_model.py)
         # The paper's observation: the beam angle is judged worse than the slider height, as
         # seen on the monitor: a misjudged angle moves the end of the 0.5 m beam this far (m).
-        # The misjudged reference (the horizontal) more than twice; the momentary noise more
-        # than twice up to version 2, still worse on the screen in version 3 (`paper`: 5 mm at
-        # the beam's end against 3 mm; sim_human.py, "Version 2 and version 3").
+        # The misjudged reference (the horizontal) more than twice; the momentary noise worse
+        # on the screen (`paper`: 5 mm at the beam's end against 3 mm; the other people more
+        # than twice; human_profile.py, "The paper's person").
         assert profile.pendulum_bias * 0.5 > 2 * profile.slider_bias, name
         assert profile.pendulum_noise * 0.5 > profile.slider_noise, name
         if name != 'paper':
@@ -60,6 +62,27 @@ def test_bad_profiles_are_refused_with_the_reason(tmp_path):
         load_profiles(path)
     with pytest.raises(ParameterError, match="unknown simulated-human profile 'expert'"):
         load_profile('expert', REPO_PROFILES)
+
+
+@pytest.mark.parametrize('name', sorted(RETIRED_PROFILES))
+def test_a_retired_profile_is_refused_with_the_commit_that_has_it(name):
+    assert name not in PROFILES
+    commit, (before, earlier_name) = RETIRED_PROFILES[name]
+    with pytest.raises(ParameterError) as refused:
+        load_profile(name, REPO_PROFILES)
+    message = str(refused.value)
+    assert f"profile '{name}' was retired; it lives at git {commit}" in message, message
+    assert f"'{earlier_name}' at git {before}" in message, message
+    # The human node's parameters say the same (human_core.resolve_profile).
+    from hrc_joystick_node.human_core import HumanCore, HumanParams
+    with pytest.raises(ParameterError, match=f"profile: simulated-human profile '{name}' was "
+                       f'retired; it lives at git {commit}'):
+        HumanCore(HumanParams(input='sim', profile=name), PROFILES)
+
+
+def test_at_most_four_profiles_none_versioned():
+    assert len(PROFILES) <= 4, sorted(PROFILES)
+    assert not [name for name in PROFILES if re.search(r'_v[0-9]+$', name)], sorted(PROFILES)
 
 
 def test_subtask_ids_and_aliases():
@@ -187,7 +210,7 @@ def test_profile_defaults_are_valid():
     assert validate(HumanProfile()) == []
 
 
-# -- issue 21: a person grounded in tilt perception, the same at any call period ---------------
+# -- a person grounded in tilt perception, the same at any call period -------------------------
 def synthetic_states(steps=200, period=0.2):
     """Return a fixed, physics-free state sequence (smooth sines on every quantity)."""
     import math
@@ -203,107 +226,23 @@ def synthetic_states(steps=200, period=0.2):
     return states
 
 
-# sha256 (first 16 hex digits) of repr() of the commands of two seeded episodes (seed 3,
-# episodes 0 and 1) on synthetic_states, computed with the model before issue 21 (commit
-# 0aecc4c, profiles novice/skilled/paper/paper_symmetric). The *_v1 profiles reproduce them.
-VERSION_1_COMMANDS = {
-    ('paper', 'rotation'): '34c432c25097471b', ('paper', 'translation'): '11f2e5ea59a3708e',
-    ('paper_symmetric', 'rotation'): 'd41860aa97dd044d',
-    ('paper_symmetric', 'translation'): '1b60fc876f4a7e24',
-    ('skilled', 'rotation'): '00559984ffeb5059', ('skilled', 'translation'): 'd5f053bfe04daa98',
-    ('novice', 'rotation'): 'a6d75cbd0ec57825', ('novice', 'translation'): 'e6b072aa5c0f5933',
-}
-VERSION_1_PERSON_4 = {'paper': '35eaa9437b341f98', 'skilled': 'd7c066533c23c45c'}
-SUBTASKS_OF = {'rotation': ['pendulum', 'ball'], 'translation': ['slider', 'ball']}
-
-
-def command_digest(profile, dof, stamps=False):
-    import hashlib
-
-    human = SimulatedHuman(profile, dof, seed=3, control_period=CONTROL_PERIOD)
-    commands = []
-    for episode in (0, 1):
-        human.reset(episode)
-        for state in synthetic_states():
-            now = (episode * 200 + state.step) * 0.2 if stamps else None
-            commands.append(human.act(state, SUBTASKS_OF[dof], now=now))
-    return hashlib.sha256(repr(commands).encode()).hexdigest()[:16]
-
-
-@pytest.mark.parametrize('name, dof', sorted(VERSION_1_COMMANDS))
-def test_the_version_1_profiles_reproduce_the_old_commands_exactly(name, dof):
-    expected = VERSION_1_COMMANDS[(name, dof)]
-    assert command_digest(PROFILES[f'{name}_v1'], dof) == expected
-    assert command_digest(PROFILES[f'{name}_v1'], dof, stamps=True) == expected
-    # ... and the current profile of that name is a different person.
-    assert command_digest(PROFILES[name], dof) != expected
-
-
-# The same digests of the paper people of stop 26 (commit 1241f4c, profiles paper and
-# paper_symmetric before version 3), at the 0.2 s call period and at 0.02 s (the default human
-# period); person 4 of that paper population. The *_v2 profiles reproduce them.
-VERSION_2_COMMANDS = {
-    ('paper', 'rotation'): 'c6dd489d6c332761', ('paper', 'translation'): 'e583a3cbad201c07',
-    ('paper_symmetric', 'rotation'): 'fbea328c931c5369',
-    ('paper_symmetric', 'translation'): '2668386029bca4d6',
-}
-VERSION_2_AT_HUMAN_RATE = '55c7fc5e1e968b5d'  # paper, rotation, one episode at 0.02 s
-VERSION_2_PERSON_4 = '669261592797f6ad'
-
-
-@pytest.mark.parametrize('name, dof', sorted(VERSION_2_COMMANDS))
-def test_the_version_2_profiles_reproduce_the_stop_26_commands_exactly(name, dof):
-    expected = VERSION_2_COMMANDS[(name, dof)]
-    assert command_digest(PROFILES[f'{name}_v2'], dof) == expected
-    assert command_digest(PROFILES[f'{name}_v2'], dof, stamps=True) == expected
-    # ... and version 3 (the current profile of that name) is a different person.
-    assert command_digest(PROFILES[name], dof) != expected
-
-
-def test_the_version_2_paper_person_reproduces_at_the_human_rate_and_in_the_population():
-    import hashlib
-    from hrc_joystick_node.population import sample_person
-
-    def digest(profile, period):
-        human = SimulatedHuman(profile, 'rotation', seed=3, control_period=period)
-        human.reset(0)
-        commands = [human.act(state, ['pendulum', 'ball'])
-                    for state in synthetic_states(period=period)]
-        return hashlib.sha256(repr(commands).encode()).hexdigest()[:16]
-
-    assert digest(PROFILES['paper_v2'], 0.02) == VERSION_2_AT_HUMAN_RATE
-    assert digest(sample_person(PROFILES['paper_v2'], 4), 0.2) == VERSION_2_PERSON_4
-    assert digest(PROFILES['paper'], 0.02) != VERSION_2_AT_HUMAN_RATE
-
-
-@pytest.mark.parametrize('name', sorted(VERSION_1_PERSON_4))
-def test_a_person_of_the_version_1_population_reproduces_too(name):
-    import hashlib
-    from hrc_joystick_node.population import sample_person
-
-    human = SimulatedHuman(sample_person(PROFILES[f'{name}_v1'], 4), 'rotation', seed=3,
-                           control_period=CONTROL_PERIOD)
-    human.reset(0)
-    commands = [human.act(state, ['pendulum', 'ball']) for state in synthetic_states()]
-    assert hashlib.sha256(repr(commands).encode()).hexdigest()[:16] == VERSION_1_PERSON_4[name]
-
-
 def test_the_current_profiles_judge_the_beam_within_human_ranges():
     # Subjective visual vertical of healthy adults: within ~2 deg, within-person SD ~1 deg.
     # The person's total misjudgement of the horizontal (the per-episode bias and a
-    # population offset of the same SD) and the noise stay within 2 deg; paper_v1's did not.
+    # population offset of the same SD) and the noise stay within 2 deg.
     two_degrees = math.radians(2.0)
 
     def within(profile):
         return (profile.pendulum_noise <= two_degrees
                 and math.sqrt(2.0) * profile.pendulum_bias <= two_degrees)
 
-    assert not within(PROFILES['paper_v1']) and not within(PROFILES['novice_v1'])
+    # (the earlier paper person, 4 deg of noise and 3.4 deg of bias, was outside)
+    assert not within(dataclasses.replace(PROFILES['paper'], pendulum_noise=0.07,
+                                          pendulum_bias=0.06))
     for name, profile in PROFILES.items():
-        if not name.endswith('_v1'):
-            assert within(profile), name
-            assert profile.perception_noise_time > 0.0 and profile.motor_noise_time > 0.0
-            assert profile.lapse_duration > 0.0 and profile.ball_cue_time > 0.0
+        assert within(profile), name
+        assert profile.perception_noise_time > 0.0 and profile.motor_noise_time > 0.0
+        assert profile.lapse_duration > 0.0 and profile.ball_cue_time > 0.0
 
 
 def quiet_profile(**changes):
@@ -334,7 +273,7 @@ def test_motor_noise_is_one_process_in_seconds_at_any_call_period(period):
     # The correlation over 0.2 s is exp(-0.2 / 0.1) at both periods: the same process.
     calls = int(round(0.2 / period))
     assert lag_correlation(commands, calls) == pytest.approx(math.exp(-2.0), abs=0.04)
-    # Version 1 (time 0): fresh noise at every call, uncorrelated even 0.02 s apart.
+    # Correlation time 0: fresh noise at every call, uncorrelated even 0.02 s apart.
     white = SimulatedHuman(dataclasses.replace(profile, motor_noise_time=0.0), 'rotation',
                            seed=0, control_period=period)
     commands = [white.act(still, []) for _ in range(20000)]
@@ -346,7 +285,7 @@ def test_perception_noise_is_correlated_over_its_time_constant(period):
     profile = quiet_profile(pendulum_noise=0.02, perception_noise_time=0.5, ball_cue_time=0.0)
     human = SimulatedHuman(profile, 'rotation', seed=1, control_period=period)
     still = synthetic_states(1)[0]
-    seen = [human._perceive(still, 1.0).pendulum - still.pendulum_angle
+    seen = [human.perception.perceive(still, 1.0).pendulum - still.pendulum_angle
             for _ in range(int(round(4000.0 / period)))]
     assert numpy.std(seen) == pytest.approx(0.02, rel=0.08)
     calls = int(round(0.4 / period))  # 0.4 s apart: exp(-0.4 / 0.5) at both periods
@@ -376,8 +315,8 @@ def test_the_rolling_ball_corrects_a_misjudged_horizontal(cue_time, judged_tilt)
     human = SimulatedHuman(profile, 'rotation', seed=0, control_period=0.02)
     rolling = StateView(0, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0, -0.05 / 0.2)
     for _ in range(1000):  # 20 s, ten cue time constants
-        percept = human._perceive(rolling, 1.0)
+        percept = human.perception.perceive(rolling, 1.0)
     assert percept.pendulum == pytest.approx(judged_tilt, abs=1e-3)
     # A ball resting at an end stop says nothing: the correction stays where it was.
     at_stop = rolling._replace(ball_position=0.25, ball_velocity=0.0)
-    assert human._perceive(at_stop, 1.0).pendulum == pytest.approx(judged_tilt, abs=1e-3)
+    assert human.perception.perceive(at_stop, 1.0).pendulum == pytest.approx(judged_tilt, abs=1e-3)

@@ -7,7 +7,7 @@ from hrc_common.params import param
 
 @dataclass
 class DisplayParams:
-    """Parameters of the display node (mirrored in params/display.yaml)."""
+    """Parameters of the display node (node ``display``, params/display.yaml)."""
 
     port: int = param(8765, 'TCP port of the pages on 127.0.0.1 (localhost only); 0 = any free '
                       'port (logged)', low=0, high=65535)

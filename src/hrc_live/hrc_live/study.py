@@ -33,15 +33,6 @@ import yaml
 SUBJECTS_FILE = 'subjects.yaml'
 CONSENT_VALUES = ('yes', 'no')
 SUBJECT_FIELDS = ('id', 'consent', 'consent_date', 'registered', 'order')
-# The agent settings every condition of the study runs with (docs/live_study.md, "the study's
-# settings"), written into each session command by ``study plan``. A modelling choice, from a
-# measured case 2 run: with the tuned reward preset the robot alone converged in 92 episodes
-# and the person then trained with it; with the agent's defaults (paper preset, at most 60
-# training episodes) it does not converge alone and the person goes straight to the test
-# episodes. Convergence is judged on deterministic judging episodes after each PPO update.
-STUDY_AGENT_SETTINGS = (('agent.preset', 'tuned'), ('agent.max_training_episodes', 300),
-                        ('agent.convergence_judged_on', 'evaluation'),
-                        ('agent.judging_interval', 0))
 
 
 class StudyError(ValueError):

@@ -17,8 +17,9 @@ import shlex
 import sys
 
 from hrc_live.study import (assign_orders, by_subject, consent_problem, load_index,
-                            load_registry, PAPER_CASES, register, save_registry,
-                            STUDY_AGENT_SETTINGS, StudyError)
+                            load_registry, PAPER_CASES, register, save_registry, StudyError)
+from hrc_common.paths import params_dir
+from hrc_common.session_plan import DEFAULT_LEARNING, learning_names
 
 
 def parse_args(argv=None):
@@ -41,20 +42,20 @@ def parse_args(argv=None):
     plan.add_argument('--practice', type=int, default=3,
                       help='practice episodes before each condition (default 3; 0 = none)')
     plan.add_argument('--human', default='device', choices=('device', 'joy'))
-    plan.add_argument('--agent-defaults', action='store_true',
-                      help="leave the agent's own defaults (params/agent.yaml: paper preset, "
-                      'at most 60 episodes) instead of the study settings (tuned preset, at '
-                      'most 300 episodes, judged on judging episodes): the earlier commands')
+    plan.add_argument('--learning', default=DEFAULT_LEARNING, metavar='NAME',
+                      help='learning configuration of every condition (params/learning/'
+                      f'<name>.yaml; default {DEFAULT_LEARNING}, the one the simulated study '
+                      "measured best for the person's time)")
     commands.add_parser('index', help='list the sessions per subject')
     return parser.parse_args(argv)
 
 
 def plan_commands(subject, study_dir: str, practice: int, human: str,
-                  agent_defaults: bool = False) -> list:
+                  learning: str = DEFAULT_LEARNING) -> list:
     """Return the session command lines of ``subject``'s conditions, in order.
 
-    Each carries the study's agent settings (``STUDY_AGENT_SETTINGS``) unless
-    ``agent_defaults`` (the earlier commands, the agent's own defaults).
+    Each names its learning configuration (``--learning``), the same in every condition, so
+    the plan says what the robot runs and the live study runs what a simulated one predicts.
     """
     lines = []
     for position, case in enumerate(subject.order, start=1):
@@ -63,9 +64,7 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
                    study_dir]
         if practice:
             command += ['--practice', str(practice)]
-        if not agent_defaults:
-            for name, value in STUDY_AGENT_SETTINGS:
-                command += ['--set', f'{name}={value}']
+        command += ['--learning', learning]
         lines.append(f'# condition {position} of {len(subject.order)}: case {case}')
         lines.append(shlex.join(command))
     return lines
@@ -93,11 +92,15 @@ def main(argv=None) -> int:
             problem = consent_problem(subjects, options.subject_id)
             if problem:
                 raise StudyError(problem)
+            if options.learning not in learning_names(params_dir()):
+                raise StudyError(f'--learning {options.learning!r}: not a learning '
+                                 'configuration (there are: '
+                                 f'{", ".join(learning_names(params_dir()))})')
             subject = next(s for s in subjects if s.id == options.subject_id)
             if not subject.order:
                 raise StudyError(f'{subject.id} has no case order yet: run "study assign"')
             print('\n'.join(plan_commands(subject, options.study_dir, options.practice,
-                                          options.human, options.agent_defaults)))
+                                          options.human, options.learning)))
         else:
             for subject_id, entries in by_subject(load_index(options.study_dir)).items():
                 print(f'{subject_id}:')

@@ -6,7 +6,7 @@ must stop stepping at once and hold, the human node must send zero at once and k
 
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
-from hrc_common.testing import serve_sim_parameters, wait_for
+from hrc_testing.nodes import serve_sim_parameters, wait_for
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.physics import PhysicsParams

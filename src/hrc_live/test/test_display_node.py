@@ -8,7 +8,6 @@ at a phone's size, including the extreme configurations (beam at a hinge stop, b
 stop, slider at an end of the rod).
 """
 
-from dataclasses import fields
 import json
 import math
 import os
@@ -26,10 +25,8 @@ import urllib.request
 
 from hrc_common import qos, topics
 from hrc_common.contract import BODY_COLOURS, rgb8
-from hrc_common.params import as_dict, load_yaml
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 from hrc_live.display_documents import COLORS
-from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.body_geometry import body_poses
@@ -41,17 +38,10 @@ import yaml
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from browser import open_browser, screenshot, set_viewport  # noqa: E402
 
-PARAMS_FILE = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'display.yaml'
 PENDULUM_LENGTH = 0.4  # not the default 0.5: the display must take it from the sim
 PHYSICS = PhysicsParams(pendulum_length=PENDULUM_LENGTH)
 BALL, PENDULUM, SLIDER, ROD = (rgb8(BODY_COLOURS[name]) for name in
                                ('ball', 'pendulum', 'slider', 'rod'))
-
-
-def test_params_yaml_mirrors_the_dataclass_defaults():
-    assert as_dict(load_yaml(DisplayParams, PARAMS_FILE, 'display')) == as_dict(DisplayParams())
-    document = yaml.safe_load(PARAMS_FILE.read_text())
-    assert set(document['display']['ros__parameters']) == {f.name for f in fields(DisplayParams)}
 
 
 def test_a_port_in_use_is_refused_with_the_reason(start_node):

@@ -11,11 +11,12 @@ import subprocess
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.params import load_yaml
-from hrc_common.testing import executable_path, serve_sim_parameters, wait_for
+from hrc_common.executables import executable_path
+from hrc_testing.nodes import serve_sim_parameters, wait_for
 from hrc_joystick_node.human_node import HumanParams
 from hrc_joystick_node.js_event import (JS_EVENT_AXIS, JS_EVENT_BUTTON, JS_EVENT_INIT,
                                         pack_event)
-from hrc_live.joystick_setup import deadzone_from_rest
+from hrc_live.joystick_watch import deadzone_from_rest
 from hrc_msgs.msg import HumanAction, TaskState
 from hrc_sim_node.physics import PhysicsParams
 import pytest

@@ -95,14 +95,14 @@ def test_cli_register_assign_plan(tmp_path, capsys):
     assert lines[0] == '# condition 1 of 2: case 2'
     assert lines[1].startswith('hrc session --case 2 --mode realtime')
     assert '--subject-id P01' in lines[1] and '--practice 2' in lines[1]
-    # Issue 25: the study's settings in every condition, so the robot converges alone and the
-    # person trains with it; --agent-defaults gives the earlier commands.
-    study_settings = ('--set agent.preset=tuned --set agent.max_training_episodes=300 --set '
-                      'agent.convergence_judged_on=evaluation --set agent.judging_interval=0')
-    assert lines[1].endswith(study_settings) and lines[3].endswith(study_settings), lines
-    assert main(['--study-dir', study, 'plan', 'P01', '--practice', '2',
-                 '--agent-defaults']) == 0
-    earlier = capsys.readouterr().out.splitlines()
-    assert earlier[1] == lines[1][:-len(study_settings) - 1] and '--set' not in earlier[1]
+    # Every condition names its learning configuration (the default: what the simulated study
+    # measured best), so the live study runs what a simulated one predicts; no --set at all.
+    assert lines[1].endswith('--learning sac') and lines[3].endswith('--learning sac'), lines
+    assert '--set' not in lines[1] and '--set' not in lines[3]
+    assert main(['--study-dir', study, 'plan', 'P01', '--learning', 'ppo']) == 0
+    assert capsys.readouterr().out.splitlines()[1].endswith('--learning ppo')
+    assert main(['--study-dir', study, 'plan', 'P01', '--learning', 'fast']) == 2
+    assert "--learning 'fast': not a learning configuration (there are: paper, ppo, sac)" in \
+        capsys.readouterr().err
     assert main(['--study-dir', study, 'register', 'Jane Doe', '--consent', 'yes']) == 2
     assert 'is not valid' in capsys.readouterr().err

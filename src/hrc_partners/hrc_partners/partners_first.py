@@ -7,8 +7,8 @@ two need no person, so they run here, in one process (the offline loop of
 the nodes), in minutes; :func:`pretrain` returns the checkpoint in which the strategy stands at
 the person's step. The session with the person (the in-process engine, the experiment runner
 or the graph session) then starts from that checkpoint (agent ``resume_from``): its first
-episode judges the pre-trained policy with the person (the step's ``judge_first``), and with
-``judging_rule: in_a_row`` the person's step can end after ``convergence_window`` episodes.
+episode judges the pre-trained policy with the person (the step's ``judge_first``), and the
+person's step can end after ``convergence_window`` episodes.
 A population step that has not met its condition after ``POPULATION_BUDGET`` episodes ends
 anyway (``AgentCore.skip_step``; ``PretrainResult.population_met`` says so): the population,
 with its slow and noisy people, may be a harder partner than the person.

@@ -20,7 +20,7 @@ from hrc_common.contract import EpisodeKind, SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
-from hrc_common.testing import easy_task_tree
+from hrc_testing.sessions import easy_task_tree
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
@@ -33,7 +33,7 @@ from hrc_partners.training import training_partner
 from hrc_sim_node.physics import PhysicsParams
 
 SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10,
-         'agent.convergence_window': 1, 'agent.judging_rule': 'in_a_row'}
+         'agent.convergence_window': 1}
 
 
 @pytest.fixture
@@ -59,7 +59,7 @@ def test_pretraining_meets_the_population_only_and_stops_at_the_persons_step(tmp
                                                                            easy_tree):
     physics = with_overrides(PhysicsParams(), episode_duration=2.0)
     params = with_overrides(AgentParams(), case=7, seed=2, horizon=20, minibatch_size=10,
-                            convergence_window=1, judging_rule='in_a_row',
+                            convergence_window=1,
                             task_tree_file=easy_tree, checkpoint_dir='', torch_threads=1)
     population = ['person:novice:1000', 'person:skilled:1001', 'person:paper:1002']
     result = pretrain(params, physics, tmp_path / 'pre.pt', 'person:paper:2', population)
@@ -135,7 +135,7 @@ def test_a_population_step_that_cannot_be_met_ends_after_its_budget(tmp_path):
     path.write_text(yaml.safe_dump(tree))
     physics = with_overrides(PhysicsParams(), episode_duration=2.0)
     params = with_overrides(AgentParams(), case=8, seed=4, horizon=20, minibatch_size=10,
-                            convergence_window=1, judging_rule='in_a_row',
+                            convergence_window=1,
                             task_tree_file=str(path), checkpoint_dir='', torch_threads=1)
     result = pretrain(params, physics, tmp_path / 'pre.pt', 'person:paper:4',
                       population_budget=3)
@@ -231,7 +231,7 @@ def test_the_pretraining_can_take_fewer_sac_gradient_steps_than_the_session(tmp_
     params = with_overrides(AgentParams(), case=8, seed=1, algorithm='sac',
                             sac_learning_starts=5, sac_batch_size=4, sac_hidden_size=8,
                             sac_updates_per_step=3, convergence_window=1,
-                            judging_rule='in_a_row', task_tree_file=easy_tree,
+                            task_tree_file=easy_tree,
                             checkpoint_dir='', torch_threads=1)
     steps = {}
     for setting in (0, 1):

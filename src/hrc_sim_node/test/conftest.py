@@ -4,7 +4,7 @@ import time
 
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 import pytest

@@ -1,19 +1,15 @@
 """Tests of the sim node in its own process over DDS (fixtures: start_node, sim_client)."""
 
-from dataclasses import fields
 import math
 import pathlib
 import re
 import statistics
 
-from hrc_common.params import as_dict, load_yaml
-from hrc_common.testing import wait_for
+from hrc_testing.nodes import wait_for
 from hrc_msgs.msg import SessionStatus
 from hrc_sim_node.body_geometry import body_poses
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-from hrc_sim_node.sim_node import SimParams
 import pytest
-import yaml
 
 PARAMS_FILE = pathlib.Path(__file__).resolve().parents[3] / 'params' / 'sim.yaml'
 # Lockstep tests wait for commands much longer than they need, so a slow machine never makes
@@ -39,14 +35,6 @@ def start_sim(start_node, sim_client, **parameters):
     process = start_node('hrc_sim_node', 'sim_node', parameters=parameters)
     sim_client.connect()
     return process
-
-
-def test_params_yaml_mirrors_the_dataclass_defaults():
-    assert as_dict(load_yaml(SimParams, PARAMS_FILE, 'sim')) == as_dict(SimParams())
-    document = yaml.safe_load(PARAMS_FILE.read_text())
-    assert set(document['sim']['ros__parameters']) == {f.name for f in fields(SimParams)}
-    physics_names = {f.name for f in fields(PhysicsParams)}
-    assert physics_names <= {f.name for f in fields(SimParams)}
 
 
 def test_lockstep_advances_once_per_answered_step_and_holds_otherwise(start_node, sim_client):

@@ -24,8 +24,9 @@ import math
 
 import numpy
 
-from hrc_study.sessions import measures, STRATEGY_ORDER, STRATEGY_SHORT
-from hrc_study.statistics import Interval
+from hrc_bag.report.intervals import Interval
+from hrc_bag.report.metrics import strategy_rank
+from hrc_bag.report.records import measures, STRATEGY_SHORT
 
 FACTORS = {'performance': ('total_error', 'team performance (total error)'),
            'human': ('human_involved_episodes', 'human involvement (human-involved episodes)'),
@@ -122,8 +123,7 @@ def choose(sessions, weights: dict, robot_dof: str = '', profile: str = '',
     values = _factor_values(groups)
     scores = _scores(values, weights)
     generator = numpy.random.default_rng(seed)
-    strategies = sorted(groups, key=lambda name: STRATEGY_ORDER.index(name)
-                        if name in STRATEGY_ORDER else len(STRATEGY_ORDER))
+    strategies = sorted(groups, key=strategy_rank)
     draws = {strategy: {factor: [] for factor in FACTORS} for strategy in strategies}
     draw_scores = {strategy: [] for strategy in strategies}
     for _ in range(resamples):

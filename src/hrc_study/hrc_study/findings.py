@@ -55,7 +55,7 @@ import numpy
 
 from hrc_common.contract import paper_case_ids
 
-from hrc_study.sessions import measures
+from hrc_bag.report.records import measures
 from hrc_study.statistics import (holm, logrank_faster, mann_whitney_less,
                                   stratified_logrank_faster, TestResult, wilcoxon_less)
 

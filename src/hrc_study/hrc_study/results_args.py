@@ -6,10 +6,11 @@ modules load them); ``hrc_study.results_cli.parse_arguments`` checks the values.
 
 import argparse
 
-DESCRIPTION = ('Write results.md (Table II with 95%% intervals, censored episodes to '
+DESCRIPTION = ('Write results.md (Table II with 95% BCa intervals, censored episodes to '
                "convergence, the paper's findings with paired, censoring-aware, "
-               'Holm-corrected tests, the strategy '
-               'chooser) and its figures from recorded sessions.')
+               'Holm-corrected tests, the strategy chooser) and, in results/, the report '
+               '`hrc bag report` writes (Fig. 5-7, sessions.csv, ...) from recorded sessions '
+               'of one learning configuration.')
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,9 +24,9 @@ def build_parser() -> argparse.ArgumentParser:
                         'a preset: balanced, "performance first", "least human time", '
                         '"fastest training"')
     parser.add_argument('--seed', type=int, default=0, help='bootstrap seed (default 0)')
-    parser.add_argument('--intervals', default='bca', choices=['bca', 'student-t'],
-                        help="Table II intervals: bca (BCa bootstrap within each quantity's "
-                        'physical range, default) or student-t (the tables before issue 23)')
+    parser.add_argument('--pool-configurations', action='store_true',
+                        help='pool sessions of different learning configurations (refused '
+                        'without: exit 2, the configurations and their session counts)')
     parser.add_argument('--note', default='',
                         help='a paragraph put under the run description (e.g. the commit)')
     return parser

@@ -6,20 +6,24 @@
 Writes ``<out>/results.md`` and ``<out>/results/`` (Fig. 5-7, convergence curves,
 sessions.csv), prints the findings, the targets and the strategy ranking. On stderr, the
 progress with the time left: one step per session loaded, then one for the tables, findings
-and figures (a bar on a terminal, plain lines when piped). Exit codes: 0 done, 1 no session
-found, 2 bad arguments.
+and figures (a bar on a terminal, plain lines when piped). Sessions of different learning
+configurations (``session.yaml``'s ``learning``) are refused unless ``--pool-configurations``.
+Exit codes: 0 done, 1 no session found or a file not usable, 2 bad arguments (sessions of
+different learning configurations among them).
 """
 
 import shlex
 import sys
 
-from hrc_bag.report import find_sessions
+from hrc_bag.report import find_sessions, load_records, pooling_refusal
+from hrc_bag.report.records import session_order
 from hrc_common.time_left import TimeLeft
 
 from hrc_study.chooser import choice_markdown, parse_priorities
-from hrc_study.loading import load_sessions, session_order
 from hrc_study.results_args import build_parser
-from hrc_study.results_doc import read_experiment, write_results
+from hrc_study.results_doc import write_results
+from hrc_study.results_tables import read_experiment
+
 
 def parse_arguments(argv):
     """Return the parsed command line; exit 2 with every reason on bad input."""
@@ -36,7 +40,7 @@ def parse_arguments(argv):
 
 
 def load_with_progress(folders, progress, log) -> tuple:
-    """Return (SessionRecords sorted as ``load_sessions`` sorts them, problems), one at a time.
+    """Return (SessionRecords sorted as ``load_records`` sorts them, problems), one at a time.
 
     Each folder is one step of ``progress``; a folder that cannot be read is a problem (its
     message), and the others are still read so that every problem is named at once.
@@ -44,7 +48,7 @@ def load_with_progress(folders, progress, log) -> tuple:
     sessions, problems = [], []
     for done, folder in enumerate(folders, start=1):
         try:
-            loaded = load_sessions([folder], log=log)
+            loaded = load_records([folder], log=log)
         except (FileNotFoundError, ValueError) as error:   # ValueError: BagError, a bad file
             problems.append(str(error))
             loaded = []
@@ -80,12 +84,16 @@ def main(argv=None) -> int:
         progress.close()
         log('no session with episode summaries in ' + ', '.join(arguments.paths))
         return 1
+    refusal = pooling_refusal(sessions, arguments.pool_configurations)
+    if refusal:
+        progress.close()
+        log(refusal)
+        return 2
     command = 'hrc results ' + ' '.join(shlex.quote(arg) for arg in argv)
     try:
         result = write_results(sessions, arguments.out, command,
                                read_experiment(arguments.paths), arguments.weights,
-                               arguments.seed, arguments.note,
-                               intervals=arguments.intervals)
+                               arguments.seed, arguments.note)
     except ValueError as error:
         progress.close()
         log(str(error))

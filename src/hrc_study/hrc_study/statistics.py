@@ -1,11 +1,8 @@
 """The statistics of the study (pure: numpy and scipy, no ROS).
 
-* :func:`mean_interval`: mean with a Student-t confidence interval (kept for comparison; the
-  study's tables use :func:`bca_interval`).
-* :func:`bca_interval`: a statistic (the mean) with a bias-corrected and accelerated bootstrap
-  interval (scipy.stats.bootstrap, method 'BCa', seeded), clipped to the quantity's physical
-  range (effort, errors and counts >= 0): with n = 10 on capped or skewed data the Student-t
-  interval leaves the range and the percentile bootstrap under-covers (Efron 1987).
+* :func:`mean_interval`: mean with a Student-t confidence interval (the partner tools' tables;
+  Table II uses :func:`hrc_bag.report.intervals.bca_interval`; :class:`Interval` is that
+  module's).
 * :func:`kaplan_meier`: episodes to convergence as right-censored data (a session that hits the
   episode limit without converging is censored at the limit): the Kaplan-Meier median with the
   confidence interval of Brookmeyer and Crowley (1982), read off the pointwise log-log interval
@@ -26,40 +23,9 @@ from dataclasses import dataclass
 import math
 import warnings
 
+from hrc_bag.report.intervals import CONFIDENCE, finite, Interval
 import numpy
 from scipy import stats
-
-CONFIDENCE = 0.95
-
-
-@dataclass(frozen=True)
-class Interval:
-    """An estimate with a two-sided confidence interval (NaN bounds: not estimable)."""
-
-    estimate: float
-    low: float
-    high: float
-    count: int
-
-    def overlaps(self, other: 'Interval') -> bool:
-        """Return whether the two intervals share a point (NaN bounds count as unbounded)."""
-        low = -math.inf if math.isnan(self.low) else self.low
-        high = math.inf if math.isnan(self.high) else self.high
-        other_low = -math.inf if math.isnan(other.low) else other.low
-        other_high = math.inf if math.isnan(other.high) else other.high
-        return low <= other_high and other_low <= high
-
-    def clipped(self, floor: float = -math.inf, ceiling: float = math.inf) -> 'Interval':
-        """Return the interval with both bounds kept in [floor, ceiling] (NaN stays NaN)."""
-        def clip(value):
-            return value if math.isnan(value) else min(max(value, floor), ceiling)
-        return Interval(self.estimate, clip(self.low), clip(self.high), self.count)
-
-
-def finite(values) -> numpy.ndarray:
-    """Return the finite values as a float array."""
-    array = numpy.asarray(list(values), dtype=float)
-    return array[numpy.isfinite(array)]
 
 
 def mean_interval(values, confidence: float = CONFIDENCE) -> Interval:
@@ -76,33 +42,6 @@ def mean_interval(values, confidence: float = CONFIDENCE) -> Interval:
     half = float(stats.t.ppf(0.5 + confidence / 2, data.size - 1)
                  * data.std(ddof=1) / math.sqrt(data.size))
     return Interval(mean, mean - half, mean + half, int(data.size))
-
-
-def bca_interval(values, statistic=numpy.mean, floor: float = -math.inf,
-                 ceiling: float = math.inf, resamples: int = 9999, seed: int = 0,
-                 confidence: float = CONFIDENCE) -> Interval:
-    """Return ``statistic`` of the finite values with its BCa bootstrap interval (seeded).
-
-    The bounds are clipped to [floor, ceiling], the quantity's physical range (an effort or a
-    count cannot be negative). Every value equal: the interval is that value (no spread to
-    resample); one value: not estimable (NaN bounds); none: everything NaN.
-    """
-    data = finite(values)
-    if data.size == 0:
-        return Interval(math.nan, math.nan, math.nan, 0)
-    estimate = float(statistic(data))
-    if data.size < 2:
-        return Interval(estimate, math.nan, math.nan, 1)
-    if numpy.all(data == data[0]):
-        return Interval(estimate, estimate, estimate, int(data.size)).clipped(floor, ceiling)
-    with warnings.catch_warnings():
-        # BCa's acceleration is undefined for some degenerate resamples: scipy warns, NaN
-        warnings.simplefilter('ignore')
-        result = stats.bootstrap((data,), statistic, n_resamples=resamples,
-                                 confidence_level=confidence, method='BCa',
-                                 rng=numpy.random.default_rng(seed))
-    low, high = (float(bound) for bound in result.confidence_interval)
-    return Interval(estimate, low, high, int(data.size)).clipped(floor, ceiling)
 
 
 @dataclass(frozen=True)

@@ -2,15 +2,16 @@
 
 import math
 import pathlib
+import re
 
 import pytest
 
 from hrc_study.chooser import choose, parse_priorities
 from hrc_study.findings import evaluate_findings
-from hrc_study.sessions import final_block_start, measures
+from hrc_bag.report.records import final_block_start, measures
 from hrc_study.statistics import holm
 
-from hrc_study.synthetic import make_session, paper_like
+from hrc_testing.study_records import make_session, paper_like
 
 
 def test_measures_count_judging_evaluations_as_training():
@@ -94,7 +95,8 @@ def test_priorities_are_checked_with_every_reason():
 
 
 def test_results_document_carries_the_computed_numbers(tmp_path):
-    from hrc_study.results_doc import cell, column_interval, write_results
+    from hrc_bag.report.intervals import cell, column_interval
+    from hrc_study.results_doc import write_results
     from hrc_study.statistics import kaplan_meier
 
     sessions = paper_like(seeds=4) + paper_like(seeds=3, profile='paper_symmetric', seed=2)
@@ -141,27 +143,28 @@ def test_a_file_that_is_not_mcap_is_named_without_a_traceback(tmp_path, capsys):
     assert 'is not an MCAP file' in capsys.readouterr().err
 
 
-def test_student_t_setting_reproduces_the_tables_before_issue_23(tmp_path, monkeypatch):
-    from hrc_study import figures
-    from hrc_study.results_doc import cell, table2_markdown, UNITS_CAVEAT, write_results
-    from hrc_study.statistics import mean_interval
+def test_the_documents_table2_is_the_reports(tmp_path, monkeypatch):
+    from hrc_bag.report import figures
+    from hrc_study import results_doc
+    from hrc_study.results_tables import UNITS_CAVEAT
 
     # The tables only: the figures (seconds of matplotlib; drawn and checked by the test
     # above) are left empty here.
-    for name in ('figure_training', 'figure_actions', 'figure_convergence',
-                 'figure_three_factor'):
-        monkeypatch.setattr(figures, name, lambda *args: pathlib.Path(args[-1]).touch())
+    for module, name in ((figures, 'figure_training'), (figures, 'figure_actions'),
+                         (figures, 'figure_three_factor'), (results_doc, 'figure_convergence')):
+        monkeypatch.setattr(module, name, lambda *args, **_: pathlib.Path(args[2]).touch())
     sessions = paper_like(seeds=4)
-    write_results(sessions, tmp_path, 'hrc_results x', resamples=50, intervals='student-t')
+    results_doc.write_results(sessions, tmp_path, 'hrc results x', resamples=50,
+                              table_resamples=200)
     text = (tmp_path / 'results.md').read_text()
-    case5 = [measures(s) for s in sessions if s.case_id == 5]
-    old_cell = cell(mean_interval(v['total_error'] for v in case5), 3)
-    assert old_cell in text and 'Intervals: Student t' in text
-    assert old_cell not in table2_markdown({5: case5})     # the default (BCa) differs
-    assert UNITS_CAVEAT in text     # beside the comparison with the paper
+    report = (tmp_path / 'results' / 'table2.md').read_text()
+    rows = [line for line in report.splitlines() if re.match(r'^\| \d \|', line)]
+    assert len(rows) == 6              # one per case (no episode duration: no person's time)
+    assert all(row in text for row in rows)
+    assert 'Intervals: 95% BCa bootstrap' in text and UNITS_CAVEAT in text
 
 
-# ---------------------------------------------------------------- issue 23: the fixed findings
+# ---------------------------------------------------------------- the findings
 
 
 def _sessions(spec, seeds=10, kinds=False):
@@ -235,7 +238,7 @@ def test_unpaired_sessions_fall_back_to_the_unpaired_tests():
 
 
 def test_fig5_keeps_every_seed_and_plots_judging_apart():
-    from hrc_study.figures import return_band, returns_of_kind
+    from hrc_bag.report.curves import return_band, returns_of_kind
 
     # three seeds that stop after 10, 20, 30 episodes; every 5th is a judging episode
     # (return 100), the others return their index

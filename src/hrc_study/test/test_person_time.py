@@ -1,9 +1,11 @@
-"""The person's time a lab budgets (issue 23): human-involved training episodes x duration."""
+"""The person's time a lab budgets: human-involved training episodes x episode duration."""
 
 import math
 
-from hrc_study.results_doc import paper_person_minutes, person_time_markdown, targets
-from hrc_study.sessions import EpisodeRecord, measures, SessionRecord
+from hrc_bag.report.paper import paper_person_minutes
+from hrc_bag.report.records import EpisodeRecord, measures, SessionRecord
+from hrc_bag.report.tables import person_time_markdown
+from hrc_study.results_tables import targets
 
 
 def episode(index, human, evaluation=False, converged=False, kind='training'):

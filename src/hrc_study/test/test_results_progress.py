@@ -8,10 +8,11 @@ terminal, as when the output is piped.
 import functools
 import pathlib
 
-from hrc_bag.synthetic import record_in_process, strategy_plan
+from hrc_testing.bag_traffic import record_in_process, strategy_plan
 from hrc_common.time_left import TimeLeft
 
-from hrc_study import figures, results_cli
+from hrc_bag.report import figures
+from hrc_study import results_cli, results_doc
 
 
 class TickingClock:
@@ -34,9 +35,9 @@ def test_results_shows_each_session_and_the_report_with_the_time_left(tmp_path, 
     (tmp_path / 'bags' / 'notes').mkdir()        # not a session folder: not a step
     # the figures (seconds of matplotlib; drawn and checked in test_findings_chooser) are
     # left empty here
-    for name in ('figure_training', 'figure_actions', 'figure_convergence',
-                 'figure_three_factor'):
-        monkeypatch.setattr(figures, name, lambda *args: pathlib.Path(args[-1]).touch())
+    for module, name in ((figures, 'figure_training'), (figures, 'figure_actions'),
+                         (figures, 'figure_three_factor'), (results_doc, 'figure_convergence')):
+        monkeypatch.setattr(module, name, lambda *args, **_: pathlib.Path(args[2]).touch())
     monkeypatch.setattr(results_cli, 'TimeLeft', functools.partial(TimeLeft,
                                                                    clock=TickingClock()))
     out = tmp_path / 'out'

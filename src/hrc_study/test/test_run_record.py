@@ -1,6 +1,6 @@
 """How results.md says the sessions were run: one run, or a folder resumed over several."""
 
-from hrc_study.results_doc import run_record_lines, wall_target
+from hrc_study.results_tables import run_record_lines, wall_target
 
 
 def _outcome(case, seed, version=None, after=60.0):
@@ -26,7 +26,7 @@ def test_a_resumed_folder_lists_its_runs_and_the_versions_of_its_sessions():
     assert '1. 2026-12-02 00:33:06 UTC, git a35b056: 50 sessions in 10.0 min wall' in text
     assert 'git a35b056 50, git c0ffee1 6' in text      # six outcomes were new in run 2
     assert 'run by (the last run)' in text and '15.0 min wall' in text
-    # no single wall time covers sessions of two runs: #12's target is not measured
+    # no single wall time covers sessions of two runs: the wall-time target is not measured
     assert wall_target(experiment)[2] is None and 'resumed' in wall_target(experiment)[1]
 
 
@@ -40,7 +40,7 @@ def test_one_run_reads_as_before():
 
 
 def test_the_wall_target_times_the_papers_six_cases_and_says_what_ran_beside_them():
-    """With cases 7 and 8 in the sweep, #12's row timed the last of 80 sessions as '60'.
+    """With cases 7 and 8 in the sweep, the wall-time row timed the last of 80 sessions as '60'.
 
     Here cases 7 and 8 finish last (at 900 s): the row must time the paper's 60 sessions (the
     last at 60 + 9 * 10 + 6 = 156 s) and say that 20 other sessions ran beside them.

@@ -1,7 +1,7 @@
 """The study reads the paper's cases and strategies from params/cases.yaml (no copy of its own)."""
 
 from hrc_common.contract import case_table
-from hrc_study.sessions import case_roles, SessionRecord, strategy_step_counts
+from hrc_bag.report.records import case_roles, SessionRecord, strategy_step_counts
 
 
 def test_the_cases_are_the_case_table():
@@ -12,7 +12,7 @@ def test_the_cases_are_the_case_table():
         1: ('responsibility_guided', 'translation'), 2: ('responsibility_guided', 'rotation'),
         3: ('level_guided', 'translation'), 4: ('level_guided', 'rotation'),
         5: ('learn_together', 'translation'), 6: ('learn_together', 'rotation'),
-        # beyond the paper (issue 22): partners first
+        # beyond the paper: partners first
         7: ('partners_first', 'translation'), 8: ('partners_first', 'rotation')}
 
 

@@ -66,7 +66,7 @@ def test_restricted_mean_and_logrank_direction():
     assert fast.effect > 0
 
 
-# ---------------------------------------------------------------- issue 23: the fixed analysis
+# ---------------------------------------------------------------- the intervals and paired tests
 
 
 def test_bca_interval_tracks_the_exact_interval_of_an_exponential_mean():
@@ -75,7 +75,7 @@ def test_bca_interval_tracks_the_exact_interval_of_an_exponential_mean():
     # low on both ends, BCa follows the skew
     from scipy import stats
 
-    from hrc_study.statistics import bca_interval
+    from hrc_bag.report.intervals import bca_interval
 
     sample = numpy.random.default_rng(3).exponential(1.0, 10)
     total = 2 * sample.sum()
@@ -89,7 +89,7 @@ def test_bca_interval_tracks_the_exact_interval_of_an_exponential_mean():
 
 
 def test_bca_interval_never_leaves_the_physical_range():
-    from hrc_study.statistics import bca_interval
+    from hrc_bag.report.intervals import bca_interval
 
     # an effort (a variance, >= 0) that is near zero in 9 of 10 seeds: Student t goes negative
     efforts = [0.0001] * 9 + [0.05]

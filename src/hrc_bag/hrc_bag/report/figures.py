@@ -1,153 +1,157 @@
-"""Figures of the report: Fig. 5 (training), Fig. 6 (actions), Fig. 7 (three factors)."""
+"""Figures of the report: Fig. 5 (training), Fig. 6 (actions), Fig. 7 (three factors).
+
+matplotlib (Agg, no display), loaded only when a figure is drawn. Each figure is of one
+simulated-human profile's sessions (:func:`hrc_bag.report.metrics.primary_profile`).
+"""
 
 import math
 
-from hrc_common.contract import DOFS, other_dof
+from hrc_common.contract import other_dof, paper_case_ids
+import numpy
 
-from hrc_bag.report.metrics import (mean_curve, action_trace, FACTOR_AXES, factor_score,
-                                    three_factors, training_curve)
-from hrc_bag.report.tables import STRATEGY_TITLES
+from hrc_bag.report.curves import first_human_episode, return_band
+from hrc_bag.report.metrics import (by_case, FACTOR_AXES, factor_score, final_trace,
+                                    median_session, three_factors)
+from hrc_bag.report.records import kinds_known, STRATEGY_SHORT
+
+PANELS = [('translation', '(a) robot: translation, human: rotation (cases 1, 3, 5)'),
+          ('rotation', '(b) robot: rotation, human: translation (cases 2, 4, 6)')]
+KIND_ROWS = [('training', 'training episodes (stochastic policy)'),
+             ('judging', 'judging episodes (deterministic policy, judge convergence)')]
 
 
-def _pyplot():
+def load_pyplot():
     import matplotlib  # lazy: optional heavy dependency (about 1 s): only when a figure is drawn
     matplotlib.use('Agg')
     import matplotlib.pyplot as pyplot  # lazy: after use('Agg'): no display needed
     return pyplot
 
 
-def figure_training_curves(rows, path) -> None:
-    """Write Fig. 5: training curves per case, marks where the human joins / reward changes."""
-    pyplot = _pyplot()
-    from matplotlib.ticker import MaxNLocator  # lazy: matplotlib: loaded by _pyplot() just before
-    panels = [('translation', '(a) robot: translation, human: rotation'),
-              ('rotation', '(b) robot: rotation, human: translation')]
-    figure, axes = pyplot.subplots(1, 2, figsize=(13, 4.8), sharey=True)
-    for axis, (dof, title) in zip(axes, panels):
-        members = [row for row in rows if row.robot_dof == dof]
-        for row in members:
-            curves = [training_curve(session) for session in row.sessions]
-            curves = [curve for curve in curves if curve['returns']]
-            if not curves:
-                continue
-            means, spreads = mean_curve([curve['returns'] for curve in curves])
-            episodes = list(range(1, len(means) + 1))
-            label = f'case {row.case_id}' + (f' ({len(curves)} seeds)' if len(curves) > 1
-                                             else '')
-            line, = axis.plot(episodes, means, marker='.', label=label)
-            if len(curves) > 1:
-                axis.fill_between(episodes, [m - s for m, s in zip(means, spreads)],
-                                  [m + s for m, s in zip(means, spreads)],
-                                  color=line.get_color(), alpha=0.2)
-            for curve in curves:
-                for episode in curve['human_joins']:
-                    axis.annotate('', xy=(episode, means[episode - 1]),
-                                  xytext=(episode, means[episode - 1] + _arrow_length(means)),
-                                  arrowprops={'arrowstyle': '->', 'color': line.get_color(),
-                                              'lw': 1.5})
-                for episode in curve['reward_changes']:
-                    axis.axvline(episode - 0.5, color=line.get_color(), linestyle='--',
-                                 linewidth=0.8)
-        axis.set_title(title)
-        axis.set_xlabel('training episode')
-        axis.xaxis.set_major_locator(MaxNLocator(integer=True))
-        axis.grid(alpha=0.3)
-        if axis.get_lines():
-            axis.legend(loc='lower right')
-        else:
-            axis.text(0.5, 0.5, 'no session of these cases', transform=axis.transAxes,
-                      ha='center', va='center', color='gray')
-    axes[0].set_ylabel('episode return (robot reward)')
-    figure.suptitle('Fig. 5: training (judging episodes left out); arrows: the human joins; '
-                    'dashed: the reward changes '
-                    '(new training step)')
+def _save(pyplot, figure, path) -> None:
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     pyplot.close(figure)
 
 
-def _arrow_length(values) -> float:
-    finite = [value for value in values if not math.isnan(value)]
-    spread = (max(finite) - min(finite)) if finite else 1.0
-    return 0.12 * (spread or 1.0)
+def _draw_band(axis, case_id: int, members, kind: str) -> None:
+    """Draw one case's median return and inter-quartile band of ``kind`` episodes on ``axis``."""
+    band = return_band(members, kind)
+    if not band.episodes or all(math.isnan(value) for value in band.median):
+        return
+    seeds = f'{len(members)} seed{"" if len(members) == 1 else "s"}'
+    line, = axis.plot(band.episodes, band.median, label=(
+        f'case {case_id} ({seeds}, {STRATEGY_SHORT.get(members[0].strategy, "")})'))
+    axis.fill_between(band.episodes, band.low, band.high, color=line.get_color(), alpha=0.2)
+    # each session's last training episode: a tick on the median line
+    stops = [stop for stop in band.stops if stop > 0]
+    axis.plot(stops, [band.median[stop - 1] for stop in stops], '|', color=line.get_color(),
+              markersize=9)
+    joins = [join for join in map(first_human_episode, members) if join is not None]
+    if kind == 'training' and joins and numpy.median(joins) > 1:
+        axis.axvline(numpy.median(joins), color=line.get_color(), linestyle='--', linewidth=0.9)
 
 
-def figure_actions(rows, path, seconds: float = 4.0, start: float = 0.0) -> None:
-    """Write Fig. 6: robot and human actions over ``seconds`` of an evaluation episode."""
-    pyplot = _pyplot()
-    columns = max(1, min(3, len(rows)))
-    lines = max(1, math.ceil(len(rows) / columns))
-    figure, axes = pyplot.subplots(lines, columns,
-                                   figsize=(max(4.6 * columns, 7.5), 3.2 * lines + 0.6),
-                                   squeeze=False, sharey=True)
-    # the first session of each case (lowest seed) gives the trace
-    traces = [action_trace(sorted(row.sessions, key=lambda member: member.seed)[0], seconds,
-                           start) for row in rows]
-    # one symmetric scale for all cases, so that their action sizes compare
-    largest = max([abs(value) for trace in traces for key in ('robot', 'human')
-                   for _, value in trace.get(key, [])] + [0.1])
-    for index, axis in enumerate(axes.flat):
-        if index >= len(rows):
-            axis.set_visible(False)
+def figure_training(sessions, profile: str, path) -> None:
+    """Write Fig. 5: training and judging returns apart, median and IQR over all seeds."""
+    pyplot = load_pyplot()
+    groups = by_case(sessions, profile)
+    figure, axes = pyplot.subplots(2, 2, figsize=(13, 8.4), sharex='col', squeeze=False)
+    known = any(kinds_known(session) for members in groups.values() for session in members)
+    for row, (kind, kind_title) in enumerate(KIND_ROWS):
+        for axis, (dof, title) in zip(axes[row], PANELS):
+            for case_id, members in groups.items():
+                if members[0].robot_dof == dof:
+                    _draw_band(axis, case_id, members, kind)
+            axis.set_title(f'{title}\n{kind_title}', fontsize='medium')
+            axis.grid(alpha=0.3)
+            if axis.get_lines():
+                axis.legend(loc='lower right', fontsize='small')
+            elif kind == 'judging':
+                axis.text(0.5, 0.5, 'no judging episodes recorded' if known else
+                          'episode kinds not recorded (bags before EpisodeSummary.kind):\n'
+                          'judging episodes are in the training row',
+                          transform=axis.transAxes, ha='center', va='center',
+                          fontsize='small')
+            axis.set_xlabel('episode of training (training and judging episodes counted)')
+        axes[row][0].set_ylabel('episode return (robot reward)')
+    figure.suptitle('Fig. 5: median return over all seeds, band: inter-quartile range across '
+                    'seeds\na session that stopped (converged or at the limit) is carried at '
+                    'its last value (tick: where it stopped); dashed: median episode at which '
+                    'the human joins', fontsize='medium')
+    _save(pyplot, figure, path)
+
+
+def figure_actions(sessions, profile: str, path, seconds: float = 4.0,
+                   start: float = 0.0) -> None:
+    """Write Fig. 6: both actors' actions over ``seconds`` of evaluation, median seed per case."""
+    pyplot = load_pyplot()
+    figure, axes = pyplot.subplots(2, 3, figsize=(14, 6.6), squeeze=False, sharey=True)
+    for axis in axes.flat:
+        axis.set_visible(False)
+    for case_id, members in by_case(sessions, profile).items():
+        if case_id not in paper_case_ids():   # the paper's 2 x 3 panels
             continue
-        row, trace = rows[index], traces[index]
-        human_dof = other_dof(row.robot_dof) if row.robot_dof in DOFS else '?'
-        if trace:
-            for key, label in (('robot', f'robot ({row.robot_dof or "?"})'),
-                               ('human', f'human ({human_dof})')):
-                points = trace[key]
-                if points:
-                    axis.step([time for time, _ in points], [value for _, value in points],
-                              where='post', label=label)
-            axis.set_title(f'case {row.case_id}, evaluation episode {trace["episode"]}')
-        else:
-            axis.set_title(f'case {row.case_id}: no evaluation episode')
+        axis = axes[(case_id + 1) % 2][(case_id - 1) // 2]
+        axis.set_visible(True)
+        chosen = median_session(members)
+        trace = final_trace(chosen, seconds, start) if chosen is not None else {}
+        human_dof = other_dof(members[0].robot_dof)
+        for key, label in (('robot', f'robot ({members[0].robot_dof})'),
+                           ('human', f'human ({human_dof})')):
+            points = trace.get(key, [])
+            if points:
+                axis.step([time for time, _ in points], [value for _, value in points],
+                          where='post', label=label)
+        title = f'case {case_id}' + (f', median seed {chosen.seed}' if chosen else '')
+        axis.set_title(title if trace else title + ': no evaluation trace', fontsize='medium')
         axis.set_xlim(start, start + seconds)
-        axis.set_ylim(-1.1 * largest, 1.1 * largest)
-        axis.set_xlabel('time in episode (s)')
+        axis.set_xlabel('time in the evaluation episode (s)')
         axis.grid(alpha=0.3)
         if axis.get_lines():
             axis.legend(loc='upper right', fontsize='small')
     axes[0][0].set_ylabel('normalized action')
-    figure.suptitle(f'Fig. 6: actions of the robot and the human over {seconds:g} s of '
-                    f'evaluation')
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    pyplot.close(figure)
+    axes[1][0].set_ylabel('normalized action')
+    figure.suptitle(f'Fig. 6: actions over {seconds:g} s of the first final evaluation '
+                    f'episode of the seed with the median total error', fontsize='medium')
+    _save(pyplot, figure, path)
 
 
-def figure_three_factor(rows, path) -> None:
-    """Write Fig. 7: the three-factor diagram, one polygon per strategy."""
-    factors = three_factors(rows)
-    largest = {key: max((entry[key][0] for entry in factors
-                         if not math.isnan(entry[key][0])), default=0.0)
-               for key, _ in FACTOR_AXES}
+def figure_three_factor(sessions, profile: str, path, factors=None) -> None:
+    """Write Fig. 7: the three factors per strategy (outer is better) with 95% intervals.
+
+    Radius 1 - 0.8 * value / largest value of the factor; the whisker on each axis spans the
+    factor's BCa interval. ``factors``: :func:`three_factors` of the profile's sessions, if
+    already computed.
+    """
+    if factors is None:
+        factors = three_factors([session for session in sessions if session.profile == profile])
+    largest = {key: max([value for entry in factors for value in (entry[key].estimate,
+                                                                  entry[key].high)
+                         if not math.isnan(value)], default=0.0) for key, _ in FACTOR_AXES}
     polygons = []
     for entry in factors:
-        label = STRATEGY_TITLES.get(entry['strategy'], entry['strategy'] or 'unknown')
-        values = ', '.join(f'{entry[key][0]:.2f}' for key, _ in FACTOR_AXES)
-        scores = [factor_score(entry[key][0], largest[key]) for key, _ in FACTOR_AXES]
-        whiskers = []   # mean +- sample std over the sessions, where there is a spread
-        for key, _ in FACTOR_AXES:
-            mean, spread, count = entry[key]
-            whiskers.append((factor_score(mean + spread, largest[key]),
-                             factor_score(max(mean - spread, 0.0), largest[key]))
-                            if count > 1 and spread > 0 else None)
-        polygons.append((f'{label}: {values}', scores, whiskers))
+        label = (f'{STRATEGY_SHORT.get(entry["strategy"], entry["strategy"] or "unknown")}: '
+                 + ', '.join(f'{entry[key].estimate:.3g}' for key, _ in FACTOR_AXES))
+        radii = [factor_score(entry[key].estimate, largest[key]) for key, _ in FACTOR_AXES]
+        whiskers = [None if math.isnan(entry[key].low) or math.isnan(entry[key].high)
+                    else (factor_score(entry[key].high, largest[key]),
+                          factor_score(entry[key].low, largest[key]))
+                    for key, _ in FACTOR_AXES]
+        polygons.append((label, radii, whiskers))
     draw_three_factor(polygons, [text for _, text in FACTOR_AXES], path,
-                      'Fig. 7: three-factor diagram (outer is better)',
-                      'strategy: human-involved, total episodes, total error')
+                      'Fig. 7: three factors per strategy, whiskers: 95% BCa intervals '
+                      '(outer is better)',
+                      'strategy: human-involved episodes, episodes, total error')
 
 
 def draw_three_factor(polygons, axis_labels, path, title: str, legend_title: str,
-                      size: float = 6.4) -> None:
+                      size: float = 6.8) -> None:
     """Write a Fig. 7 radar: one polygon per ``(label, radii, whiskers)``, outer is better.
 
     ``radii``: :func:`factor_score` per axis (NaN drawn at the centre); ``whiskers``: per axis
-    ``(low, high)`` radii of a spread or interval, or None. Shared by the bag report (mean and
-    standard deviation) and the study (bootstrap intervals).
+    ``(low, high)`` radii of an interval, or None.
     """
-    pyplot = _pyplot()
+    pyplot = load_pyplot()
     angles = [math.pi / 2 + 2 * math.pi * index / len(axis_labels)
               for index in range(len(axis_labels))]
     figure = pyplot.figure(figsize=(size, size))
@@ -166,6 +170,4 @@ def draw_three_factor(polygons, axis_labels, path, title: str, legend_title: str
     axis.legend(loc='upper center', bbox_to_anchor=(0.5, -0.06), fontsize='small',
                 title=legend_title)
     axis.set_title(title, fontsize='medium')
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    pyplot.close(figure)
+    _save(pyplot, figure, path)

@@ -1,148 +1,108 @@
-"""Metrics of loaded sessions: Table II values, Fig. 5-7 data, human time (pure, no rclpy).
+"""Groupings and derived data of session records: cases, Fig. 6-7 data, human time (no rclpy).
 
-Per session, then mean and sample standard deviation over the sessions of a case (seeds):
-
-* training: human-involved episodes, total episodes (training episodes, i.e. not evaluation)
-  and their ratio (Table II "Training (Episode)");
-* performance: the mean over the evaluation episodes of each subtask's error (mean |S_x| m,
-  |P_z| rad, |B_y| m, as the agent computes them) and of their sum (Table II "Performance");
-* effort: the mean over the evaluation episodes of the variance of each actor's normalized
-  action (Table II "Effort");
-* human time by input source (:func:`human_time`): the simulated seconds in which the human
-  was engaged, per source that drove him (device, joy, simulated, replay, none), and the
-  episodes each source drove most.
-
-A session without evaluation episodes has no performance or effort values (NaN).
+* :func:`by_case` / :func:`primary_profile`: the sessions of a Table II row (a case of one
+  simulated-human profile) and the profile the tables and figures are for;
+* :func:`three_factors`: Fig. 7 per strategy: human-involved episodes, total episodes, total
+  error, each the mean over the strategy's sessions with its BCa interval;
+* :func:`action_trace` / :func:`final_trace`: Fig. 6's robot and human actions of an evaluation
+  episode, read from the session's bags;
+* :func:`human_time`: the simulated seconds in which the human was engaged, per input source
+  that drove him (device, joy, simulated, replay, none), and the episodes each source drove.
 """
 
-from dataclasses import dataclass
+import dataclasses
 import math
 import typing
 
-from hrc_common.contract import AGENT_STEP_TYPE, dof_name, EpisodeKind, HUMAN_ACTION_TYPE
+from hrc_common.contract import AGENT_STEP_TYPE, HUMAN_ACTION_TYPE
 import yaml
 
 from hrc_bag import bag_reader
-from hrc_bag.report.loading import kind_of, Session, topics_of_type
+from hrc_bag.report.intervals import bca_interval
+from hrc_bag.report.loading import Session, topics_of_type
+from hrc_bag.report.records import final_block_start, measures, STRATEGY_ORDER
 
-STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
-
-# (key, Table II column title, decimals)
-METRICS = [
-    ('human_involved_episodes', 'Human-involved episodes', 1),
-    ('total_episodes', 'Total episodes', 1),
-    ('percentage', 'Percentage', 0),
-    ('slider_error', 'Slider error (m)', 3),
-    ('pendulum_error', 'Pendulum error (rad)', 3),
-    ('ball_error', 'Ball error (m)', 3),
-    ('total_error', 'Total error', 3),
-    ('human_effort', 'Human effort', 4),
-    ('robot_effort', 'Robot effort', 4),
-]
+# (measure, Fig. 7's axis: outer is better)
+FACTOR_AXES = [('human_involved_episodes', 'less human-involved training'),
+               ('total_episodes', 'less total training'),
+               ('total_error', 'higher team performance')]
+FIGURE_RESAMPLES = 2000             # bootstrap resamples of a Fig. 7 whisker
 
 
-def _mean(values) -> float:
-    values = list(values)
-    return sum(values) / len(values) if values else math.nan
+def primary_profile(sessions) -> str:
+    """Return the profile the report's tables and figures are for: 'paper' if present."""
+    profiles = sorted({session.profile for session in sessions},
+                      key=lambda name: (name != 'paper', name))
+    return profiles[0] if profiles else 'paper'
 
 
-def session_metrics(session: Session) -> dict:
-    """Return the Table II values of one session (NaN where there is no data)."""
-    training, evaluation = session.training, session.evaluation
-    involved = sum(1 for summary in training if summary.human_involved)
-    metrics = {
-        'human_involved_episodes': float(involved),
-        'total_episodes': float(len(training)),
-        'percentage': 100.0 * involved / len(training) if training else math.nan,
-        'evaluation_episodes': float(len(evaluation)),
-    }
-    for key in ('slider_error', 'pendulum_error', 'ball_error', 'total_error', 'human_effort',
-                'robot_effort'):
-        metrics[key] = _mean(getattr(summary, key) for summary in evaluation)
-    return metrics
-
-
-def mean_and_spread(values) -> tuple:
-    """Return (mean, sample standard deviation, count) of the finite values."""
-    finite = [value for value in values if not math.isnan(value)]
-    if not finite:
-        return math.nan, math.nan, 0
-    mean = sum(finite) / len(finite)
-    if len(finite) < 2:
-        return mean, 0.0, len(finite)
-    variance = sum((value - mean) ** 2 for value in finite) / (len(finite) - 1)
-    return mean, math.sqrt(variance), len(finite)
-
-
-@dataclass
-class CaseRow:
-    """One row of Table II: a case over its sessions (seeds)."""
-
-    case_id: int
-    strategy: str
-    robot_dof: str
-    sessions: list                  # Session
-    values: dict                    # metric -> (mean, std, n)
-
-
-def _case_robot_dof(case_id: int, sessions) -> str:
-    known = [session.robot_dof for session in sessions if session.robot_dof]
-    if known:
-        return known[0]
-    # the paper's cases: odd = robot translation, even = robot rotation
-    return dof_name(0 if case_id % 2 else 1) if case_id else ''
-
-
-def table2(sessions) -> list:
-    """Return the Table II rows (CaseRow), one per case, ordered as the paper."""
-    by_case = {}
+def by_case(sessions, profile: str) -> dict:
+    """Return {case_id: [SessionRecord]} of one profile, by case."""
+    groups = {}
     for session in sessions:
-        by_case.setdefault(session.case_id, []).append(session)
-    rows = []
-    for case_id, members in by_case.items():
-        metrics = [session_metrics(session) for session in members]
-        values = {key: mean_and_spread(metric[key] for metric in metrics)
-                  for key, _, _ in METRICS}
-        strategy = next((session.strategy for session in members if session.strategy), '')
-        rows.append(CaseRow(case_id, strategy, _case_robot_dof(case_id, members), members,
-                            values))
-    rows.sort(key=lambda row: (_strategy_rank(row.strategy), row.case_id))
-    return rows
+        if session.profile == profile:
+            groups.setdefault(session.case_id, []).append(session)
+    return dict(sorted(groups.items()))
 
 
-def _strategy_rank(strategy: str) -> int:
+def case_measures(sessions, profile: str) -> dict:
+    """Return {case_id: [measures of each session]} of one profile."""
+    return {case_id: [measures(member) for member in members]
+            for case_id, members in by_case(sessions, profile).items()}
+
+
+def strategy_rank(strategy: str) -> int:
+    """Return the paper's order of a strategy (unknown ones last)."""
     return STRATEGY_ORDER.index(strategy) if strategy in STRATEGY_ORDER else len(STRATEGY_ORDER)
 
 
-def training_curve(session: Session) -> dict:
-    """Return the Fig. 5 data of a session: returns per training episode and the marks.
+def three_factors(sessions, seed: int = 0, resamples: int = FIGURE_RESAMPLES) -> list:
+    """Return Fig. 7's data per strategy: {'strategy', 'sessions', factor: Interval}.
 
-    Judging episodes (deterministic, ``EpisodeSummary.kind``) are left out: their returns are
-    not on the training policy's scale. Bags before the field cannot tell them apart.
+    Each factor (:data:`FACTOR_AXES`) is the mean over every session of the strategy's cases
+    (both role assignments) with its 95% BCa interval (:mod:`hrc_bag.report.intervals`).
     """
-    training = [summary for summary in session.training
-                if kind_of(summary) is EpisodeKind.TRAINING]
-    returns = [summary.episode_return for summary in training]
-    human_joins, reward_changes = [], []
-    for index, summary in enumerate(training):
-        before = training[index - 1] if index else None
-        if summary.human_involved and (before is None or not before.human_involved):
-            human_joins.append(index + 1)
-        if before is not None and summary.training_step != before.training_step:
-            reward_changes.append(index + 1)
-    return {'returns': returns, 'human_joins': human_joins, 'reward_changes': reward_changes}
+    groups = {}
+    for session in sessions:
+        groups.setdefault(session.strategy, []).append(measures(session))
+    factors = []
+    for strategy in sorted(groups, key=strategy_rank):
+        values = groups[strategy]
+        entry = {'strategy': strategy, 'sessions': len(values)}
+        for key, _ in FACTOR_AXES:
+            entry[key] = bca_interval([value[key] for value in values], floor=0.0, seed=seed,
+                                      resamples=resamples)
+        factors.append(entry)
+    return factors
 
 
-def mean_curve(curves) -> tuple:
-    """Return (mean, std) per episode index over curves of different lengths."""
-    length = max(len(curve) for curve in curves)
-    means, spreads = [], []
-    for index in range(length):
-        mean, spread, _ = mean_and_spread(curve[index] for curve in curves
-                                          if index < len(curve))
-        means.append(mean)
-        spreads.append(spread)
-    return means, spreads
+def factor_score(value: float, largest: float) -> float:
+    """Return the radius of a factor on Fig. 7: 1 for 0, 0.2 for the largest (outer = better)."""
+    if math.isnan(value):
+        return math.nan
+    if largest <= 0:
+        return 1.0
+    return 1.0 - 0.8 * value / largest
+
+
+def median_session(members):
+    """Return the session whose total error is the (lower) median of its case."""
+    ranked = sorted((value, session.seed, session.session_id, session) for session, value in
+                    ((session, measures(session)['total_error']) for session in members)
+                    if not math.isnan(value))
+    return ranked[(len(ranked) - 1) // 2][3] if ranked else None
+
+
+def final_trace(session, seconds: float = 4.0, start: float = 0.0) -> dict:
+    """Return the robot and human actions of the first final-evaluation episode (Fig. 6)."""
+    bag_session = session.extra.get('bag_session')
+    if bag_session is None:
+        return {}
+    first = final_block_start(session)
+    final_episodes = {episode.episode for episode in session.episodes[first:]}
+    summaries = [summary for summary in bag_session.summaries
+                 if summary.episode in final_episodes]
+    return action_trace(dataclasses.replace(bag_session, summaries=summaries), seconds, start)
 
 
 def action_trace(session: Session, seconds: float = 4.0, start: float = 0.0,
@@ -184,45 +144,6 @@ def action_trace(session: Session, seconds: float = 4.0, start: float = 0.0,
                 if start - 1e-6 <= time < start + seconds - 1e-6]
 
     return {'episode': episode, 'robot': window(robot), 'human': window(human)}
-
-
-def three_factors(rows) -> list:
-    """Return the Fig. 7 data per strategy: mean and spread of the three factors.
-
-    Factors: human-involved training episodes, total training episodes (training time), total
-    error (team performance), over every session of the strategy's cases.
-    """
-    by_strategy = {}
-    for row in rows:
-        by_strategy.setdefault(row.strategy, []).extend(row.sessions)
-    factors = []
-    for strategy in sorted(by_strategy, key=_strategy_rank):
-        metrics = [session_metrics(session) for session in by_strategy[strategy]]
-        factors.append({
-            'strategy': strategy,
-            'sessions': len(metrics),
-            'human_involved_episodes': mean_and_spread(m['human_involved_episodes']
-                                                       for m in metrics),
-            'total_episodes': mean_and_spread(m['total_episodes'] for m in metrics),
-            'total_error': mean_and_spread(m['total_error'] for m in metrics),
-        })
-    return factors
-
-
-FACTOR_AXES = [('human_involved_episodes', 'less human-involved training'),
-               ('total_episodes', 'less total training'),
-               ('total_error', 'higher team performance')]
-
-
-def factor_score(value: float, largest: float) -> float:
-    """Return the radius of a factor on Fig. 7: 1 for 0, 0.2 for the largest (outer = better)."""
-    if math.isnan(value):
-        return math.nan
-    if largest <= 0:
-        return 1.0
-    return 1.0 - 0.8 * value / largest
-
-
 
 
 def _counts(text) -> dict:

@@ -42,10 +42,10 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import source_names
 from hrc_bag.report.loading import load_session
-from hrc_bag.report.metrics import human_time, session_metrics
+from hrc_bag.report.metrics import human_time
+from hrc_bag.report.records import ERROR_KEYS, measures, record_from_bag_session
 
 PRACTICE_SUFFIX = '-practice'
-ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 
 
 class StudyIndexError(ValueError):
@@ -233,7 +233,7 @@ def subject_rows(entries: list, sessions=(), log=print) -> list:
         row.update(session_id=entry.session_id, exit_code=entry.exit_code)
         session = _session_of(entry, known, log)
         if session is not None:
-            metrics = session_metrics(session)
+            metrics = measures(record_from_bag_session(session))
             row.update({key: metrics[key] for key in ('human_involved_episodes',
                                                       'total_episodes', 'evaluation_episodes')
                         + ERROR_KEYS})

@@ -1,110 +1,182 @@
-"""Tables of the report (pure, no rclpy).
+"""Tables of the report (pure, no rclpy): Table II, sessions.csv, the person's time, human time.
 
-Table II (Markdown, CSV), the values per session, the Fig. 7 values, human time by input
-source, the by-subject table of a live study.
+Table II gives per case (one simulated-human profile) the mean over its sessions (seeds) with
+the 95% BCa interval (:mod:`hrc_bag.report.intervals`); one session: its values.
 """
 
 import csv
 import io
 import math
 
-from hrc_bag.report.metrics import (FACTOR_AXES, human_time, METRICS, session_metrics,
-                                    three_factors)
-from hrc_bag.report.study import ERROR_KEYS, source_columns
+import numpy
 
-STRATEGY_TITLES = {
-    'responsibility_guided': 'Learn task first (responsibility-guided)',
-    'level_guided': 'Learn human first (level-guided)',
-    'learn_together': 'Learn together (baseline)',
-}
+from hrc_bag.report.intervals import cell, column_interval, INTERVAL_NOTE, RESAMPLES
+from hrc_bag.report.metrics import FACTOR_AXES, human_time
+from hrc_bag.report.paper import PAPER_TABLE2, paper_person_minutes, TARGET_PERSON_TIME_RATIO
+from hrc_bag.report.records import (EFFORT_UNITS, measures, other_dof_of, PHYSICAL_EFFORT_KEYS,
+                                    STRATEGY_SHORT)
+
+# (measure, Table II column title, decimals)
+COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
+           ('total_episodes', 'episodes', 1),
+           ('percentage', 'human %', 0),
+           ('slider_error', 'slider (m)', 3),
+           ('pendulum_error', 'pendulum (rad)', 3),
+           ('ball_error', 'ball (m)', 3),
+           ('total_error', 'total error (m + rad)', 3),
+           ('human_effort', 'human effort (normalized)', 4),
+           ('robot_effort', 'robot effort (normalized)', 4),
+           ('human_effort_physical', 'human effort (N^2 or (N*m)^2)', 4),
+           ('robot_effort_physical', 'robot effort (N^2 or (N*m)^2)', 4)]
+TABLE2_NOTE = (
+    'Episodes count every episode until training ended, the evaluation episodes that judged '
+    'convergence included; human-involved episodes count those in which the human acted (the '
+    "person's time). Errors and efforts: mean over the final evaluation episodes of the frozen "
+    'deterministic policy (mean |S_x| m, |P_z| rad, |B_y| m per episode, their sum; effort = '
+    "variance of the normalized action, 1 = the sim's limit; the physical columns multiply it "
+    "by the limit squared: N^2 for the slider's force, (N*m)^2 for the pendulum's torque, from "
+    "the session's recorded sim parameters or the sim's defaults). Total error sums metres and "
+    "radians (mixed units, as the paper's sum). " + INTERVAL_NOTE + ' Sessions that hit the '
+    'episode limit enter the episode counts at the limit: those columns are restricted means '
+    '(a lower bound of the unrestricted mean).')
+PERSON_TIME_NOTE = (
+    "The person's minutes: the human-involved episodes of training (judging episodes "
+    "included) at the session's episode duration; breaks, practice and the final evaluation "
+    "excluded. The paper's: its human-involved episodes x 40 s.")
 
 
-def _format(value: tuple, decimals: int, percent: bool = False) -> str:
-    mean, spread, count = value
-    if count == 0:
-        return 'n/a'
-    suffix = '%' if percent else ''
-    if count == 1 and decimals == 1 and float(mean).is_integer():
-        return f'{int(mean)}'  # an episode count of one session
-    text = f'{mean:.{decimals}f}{suffix}'
-    if count > 1:
-        text += f' ± {spread:.{decimals}f}{suffix}'
-    return text
+def _roles(members) -> tuple:
+    return members[0].strategy, members[0].robot_dof
 
 
-def table2_markdown(rows) -> str:
-    """Return Table II as Markdown (mean ± sample std over the sessions of each case)."""
-    header = ['Strategy', 'Case', 'Robot', 'Sessions'] + [title for _, title, _ in METRICS]
+def _units_of(key: str, robot: str) -> str:
+    """Return the physical unit of a physical-effort cell of a case whose robot has ``robot``."""
+    if robot not in EFFORT_UNITS:
+        return ''
+    dof = robot if key.startswith('robot') else other_dof_of(robot)
+    return ' ' + EFFORT_UNITS[dof]
+
+
+def table2_intervals(groups: dict, seed: int = 0, resamples: int = RESAMPLES) -> dict:
+    """Return {case_id: {measure: Interval}} of ``groups`` ({case_id: [SessionRecord]})."""
+    result = {}
+    for case_id, members in groups.items():
+        values = [measures(member) for member in members]
+        result[case_id] = {key: column_interval([value[key] for value in values], key, seed,
+                                                resamples) for key, _, _ in COLUMNS}
+    return result
+
+
+def table2_markdown(groups: dict, seed: int = 0, resamples: int = RESAMPLES,
+                    intervals: dict = None) -> str:
+    """Return Table II: mean and 95% interval over seeds per cell (see column_interval)."""
+    intervals = intervals or table2_intervals(groups, seed, resamples)
+    header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
-    for row in rows:
-        cells = [STRATEGY_TITLES.get(row.strategy, row.strategy or 'unknown'),
-                 f'Case {row.case_id}' if row.case_id else 'custom', row.robot_dof or '?',
-                 str(len(row.sessions))]
-        cells += [_format(row.values[key], decimals, key == 'percentage')
-                  for key, _, decimals in METRICS]
+    for case_id, members in groups.items():
+        strategy, robot = _roles(members)
+        cells = [str(case_id) if case_id else 'custom',
+                 STRATEGY_SHORT.get(strategy, strategy or '?'), robot or '?', str(len(members))]
+        for key, _, decimals in COLUMNS:
+            text = cell(intervals[case_id][key], decimals)
+            if key in PHYSICAL_EFFORT_KEYS and text != 'n/a':
+                text += _units_of(key, robot)
+            cells.append(text)
         lines.append('| ' + ' | '.join(cells) + ' |')
-    lines += ['', 'Training (Table II "Training"): training episodes, evaluation excluded. '
-              'Errors (Table II "Performance"): mean over the evaluation episodes of the mean '
-              '|S_x|, |P_z|, |B_y| per episode and their sum. Effort: variance of the '
-              'normalized action, mean over the evaluation episodes. Several sessions (seeds) '
-              'of a case: mean ± sample standard deviation.']
     return '\n'.join(lines) + '\n'
 
 
-def table2_csv(rows) -> str:
-    """Return Table II as CSV with mean, std and count columns per metric."""
+def _csv_number(value: float) -> str:
+    return '' if value is None or math.isnan(value) else repr(float(value))
+
+
+def table2_csv(groups: dict, intervals: dict) -> str:
+    """Return Table II as CSV: per measure its mean, interval bounds and count."""
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     header = ['strategy', 'case_id', 'robot_dof', 'sessions']
-    for key, _, _ in METRICS:
-        header += [f'{key}_mean', f'{key}_std', f'{key}_n']
+    for key, _, _ in COLUMNS:
+        header += [f'{key}_mean', f'{key}_low', f'{key}_high', f'{key}_n']
     writer.writerow(header)
-    for row in rows:
-        cells = [row.strategy, row.case_id, row.robot_dof, len(row.sessions)]
-        for key, _, _ in METRICS:
-            mean, spread, count = row.values[key]
-            cells += [_csv_number(mean), _csv_number(spread), count]
+    for case_id, members in groups.items():
+        strategy, robot = _roles(members)
+        cells = [strategy, case_id, robot, len(members)]
+        for key, _, _ in COLUMNS:
+            interval = intervals[case_id][key]
+            cells += [_csv_number(interval.estimate), _csv_number(interval.low),
+                      _csv_number(interval.high), interval.count]
         writer.writerow(cells)
     return buffer.getvalue()
 
 
+# the measures of sessions.csv, in its column order (later columns appended: earlier ones stay)
+SESSION_KEYS = (['human_involved_episodes', 'total_episodes', 'converged',
+                 'evaluation_episodes']
+                + [key for key, _, _ in COLUMNS[3:] if key not in PHYSICAL_EFFORT_KEYS]
+                + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes'])
+
+
 def sessions_csv(sessions) -> str:
-    """Return one CSV row per session (the values behind Table II)."""
+    """Return one CSV row per session: the values behind every table."""
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    keys = [key for key, _, _ in METRICS] + ['evaluation_episodes']
-    writer.writerow(['session_id', 'path', 'case_id', 'strategy', 'robot_dof', 'seed',
-                     'complete'] + keys)
+    writer.writerow(['session_id', 'profile', 'person', 'case_id', 'strategy', 'robot_dof',
+                     'seed'] + SESSION_KEYS + ['learning', 'complete'])
     for session in sessions:
-        metrics = session_metrics(session)
-        writer.writerow([session.session_id, str(session.path), session.case_id,
-                         session.strategy, session.robot_dof, session.seed, session.complete]
-                        + [_csv_number(metrics[key]) for key in keys])
+        values = measures(session)
+        bag = session.extra.get('bag_session')
+        writer.writerow([session.session_id, session.profile, session.extra.get('person', ''),
+                         session.case_id, session.strategy, session.robot_dof, session.seed]
+                        + [values[key] for key in SESSION_KEYS]
+                        + [session.learning, '' if bag is None else bag.complete])
     return buffer.getvalue()
 
 
-def _csv_number(value: float) -> str:
-    return '' if math.isnan(value) else repr(float(value))
+def _met(met: bool) -> str:
+    return 'yes' if met else '**no**'
 
 
-def three_factors_csv(rows) -> str:
-    """Return the Fig. 7 values as CSV."""
-    lines = ['strategy,sessions,' + ','.join(f'{key}_mean,{key}_std' for key, _ in FACTOR_AXES)]
-    for entry in three_factors(rows):
-        cells = [entry['strategy'], str(entry['sessions'])]
-        for key, _ in FACTOR_AXES:
-            cells += [_csv_number(entry[key][0]), _csv_number(entry[key][1])]
-        lines.append(','.join(cells))
+def person_time_markdown(rows: dict) -> str:
+    """Return the person's time per case: median [IQR] minutes beside the paper's.
+
+    ``rows``: {case_id: [measures of each session]}.
+    """
+    lines = ["| case | sessions | person's minutes, median [IQR] | paper (min) | ratio | "
+             'within 2x |', '|---|---|---|---|---|---|']
+    for case_id, values in sorted(rows.items()):
+        minutes = numpy.array([value['person_minutes'] for value in values], dtype=float)
+        minutes = minutes[numpy.isfinite(minutes)]
+        if not len(minutes):
+            continue
+        low, median, high = numpy.percentile(minutes, [25, 50, 75])
+        paper = paper_person_minutes(case_id) if case_id in PAPER_TABLE2 else None
+        ratio = median / paper if paper else None
+        lines.append(f'| {case_id} | {len(minutes)} | {median:.1f} [{low:.1f}, {high:.1f}] | '
+                     + (f'{paper:.1f} | {ratio:.2f}x | '
+                        f'{_met(ratio <= TARGET_PERSON_TIME_RATIO)} |' if paper
+                        else 'not in the paper | | |'))
     return '\n'.join(lines) + '\n'
 
 
+def three_factors_csv(factors) -> str:
+    """Return the Fig. 7 values (:func:`hrc_bag.report.metrics.three_factors`) as CSV."""
+    lines = ['strategy,sessions,' + ','.join(f'{key}_mean,{key}_low,{key}_high'
+                                             for key, _ in FACTOR_AXES)]
+    for entry in factors:
+        cells = [entry['strategy'], str(entry['sessions'])]
+        for key, _ in FACTOR_AXES:
+            cells += [_csv_number(entry[key].estimate), _csv_number(entry[key].low),
+                      _csv_number(entry[key].high)]
+        lines.append(','.join(cells))
+    return '\n'.join(lines) + '\n'
 
 
 def human_time_rows(sessions) -> list:
     """Return one row per session and input source: the values behind human_time.md."""
     rows = []
     for session in sessions:
-        for source, entry in sorted(human_time(session).items()):
+        bag = session.extra.get('bag_session')
+        for source, entry in sorted((human_time(bag) if bag else {}).items()):
             rows.append({'session_id': session.session_id, 'case_id': session.case_id,
                          'source': source, **entry})
     return rows
@@ -134,86 +206,4 @@ def human_time_csv(sessions) -> str:
         writer.writerow([row['session_id'], row['case_id'], row['source'],
                          repr(float(row['seconds'])), row['engaged_steps'], row['steps'],
                          row['episodes']])
-    return buffer.getvalue()
-
-
-# ---------------------------------------------------------------------------- by subject
-
-def _cell(value: float, decimals: int) -> str:
-    return 'n/a' if value is None or math.isnan(value) else f'{value:.{decimals}f}'
-
-
-def _csv_count(value: float) -> str:
-    return '' if math.isnan(value) else str(int(value))
-
-
-def _exit_cell(code) -> str:
-    return '' if code is None else ('done' if code == 0 else f'exit {code}')
-
-
-def by_subject_markdown(rows, tlx_scales: tuple) -> str:
-    """Return the by-subject table (rows of :func:`hrc_bag.report.study.subject_rows`)."""
-    header = ['Subject', 'Case', 'Position', 'Practice episodes (human s)',
-              'Human-involved / training episodes', 'Evaluation episodes',
-              'Human time by input (s)', 'Slider error (m)', 'Pendulum error (rad)',
-              'Ball error (m)', 'Total error'] + [f'TLX {scale}' for scale in tlx_scales] + [
-              'Raw TLX', 'Condition', 'Session']
-    lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
-    for row in rows:
-        practice = 'none'
-        if row['practice_session_id']:
-            practice = (f"{_cell(row['practice_episodes'], 0)} "
-                        f"({_cell(row['practice_human_seconds'], 1)})")
-        times = '; '.join(f'{source} {row["human_seconds"][source]:.1f}'
-                          for source in source_columns([row]) if source in row['human_seconds'])
-        cells = [row['subject_id'], str(row['case']), str(row['position'] or '?'), practice,
-                 f"{_cell(row['human_involved_episodes'], 0)} / "
-                 f"{_cell(row['total_episodes'], 0)}",
-                 _cell(row['evaluation_episodes'], 0), times or 'n/a',
-                 _cell(row['slider_error'], 3), _cell(row['pendulum_error'], 3),
-                 _cell(row['ball_error'], 3), _cell(row['total_error'], 3)]
-        cells += [_cell(row['tlx'].get(scale, math.nan), 0) for scale in tlx_scales]
-        cells += [_cell(row['raw_tlx'], 1),
-                  _exit_cell(row['exit_code']) if row['kind'] == 'condition'
-                  else 'practice only', row['session_id'] or row['practice_session_id']]
-        lines.append('| ' + ' | '.join(cells) + ' |')
-    lines += ['', 'One row per condition a subject took part in (pseudonymous ids from the '
-              "study index; no names or notes). Position: the case's place in the subject's "
-              'counterbalanced order. Practice: episodes of the person alone before the '
-              'condition (its own bags, <session>-practice), counted apart, with their '
-              'engaged human seconds. Training episodes exclude evaluation and practice. '
-              'Human time: simulated seconds the human was engaged, by the input that drove '
-              "him, over the condition's episodes. Errors: mean over the evaluation "
-              'episodes (Table II "Performance"). TLX: the raw NASA-TLX (0-100, performance '
-              '0 = perfect) and its unweighted mean; n/a = not stored.']
-    return '\n'.join(lines) + '\n'
-
-
-def by_subject_csv(rows, tlx_scales: tuple) -> str:
-    """Return the by-subject table as CSV (empty cells where there is no value)."""
-    sources = source_columns(rows)
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    counts = ['practice_episodes', 'human_involved_episodes', 'total_episodes',
-              'evaluation_episodes']
-    writer.writerow(['subject_id', 'case', 'position', 'kind', 'session_id', 'exit_code',
-                     'practice_session_id', 'practice_exit_code'] + counts
-                    + ['practice_human_seconds']
-                    + [f'human_seconds_{source}' for source in sources] + list(ERROR_KEYS)
-                    + [f'tlx_{scale}' for scale in tlx_scales] + ['raw_tlx'])
-    for row in rows:
-        def code(value):
-            return '' if value is None else value
-        has_bag = bool(row['human_seconds']) or not math.isnan(row['total_episodes'])
-        writer.writerow(
-            [row['subject_id'], row['case'], row['position'], row['kind'], row['session_id'],
-             code(row['exit_code']), row['practice_session_id'],
-             code(row['practice_exit_code'])]
-            + [_csv_count(row[key]) for key in counts]
-            + [_csv_number(row['practice_human_seconds'])]
-            + [repr(float(row['human_seconds'].get(source, 0.0))) if has_bag else ''
-               for source in sources]
-            + [_csv_number(row[key]) for key in ERROR_KEYS]
-            + [_csv_number(row['tlx'].get(scale, math.nan)) for scale in tlx_scales]
-            + [_csv_number(row['raw_tlx'])])
     return buffer.getvalue()
