@@ -14,8 +14,11 @@ compares every type the bags carry, seeded random values, and reads the bytes ba
 a rosbags message. Fields left out take their zero value; a key that is not a field of the
 type (a typo) raises ValueError naming every such key. CDR bytes are passed through.
 
-Cost (``bench/serializer.py``): the engine's step with this serializer against the
-hand-written ``struct`` encoder it replaced, alternating in one run.
+Cost (``bench/serializer.py``: the engine's step CPU time with this serializer against the
+hand-written ``struct`` encoder it replaced, alternating in one run; 2026-12-04, 2 cores
+shared): 1.000 with SAC updating inside the episodes (7.8 ms a step), 1.021 (case 2) and
+1.010 (case 4) with the earlier episode-end learner (0.44 and 1.1 ms a step); about 5.5
+against 4.2 us a message. Well within 5% of the step, so no hand-written encoder stays.
 """
 
 import functools
