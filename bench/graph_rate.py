@@ -7,8 +7,8 @@
 Measures, within episodes (PPO updates between episodes excluded everywhere), in rounds that
 run each variant in turn so that a change of machine load hits them alike:
 
-1. bare: physics core + AgentCore + simulated human stepped in a loop (``offline.run_episode``):
-   the floor, no protocol, no messages, no bags;
+1. bare: the engine's loop (``hrc_engine.loop``: physics, step protocol, AgentCore, the human
+   node's core) alone: the floor, no messages, no bags;
 2. engine: the in-process engine (``hrc_engine``: step protocol, messages, bags written);
 3. graph: ``session`` (sim, agent, human as separate processes over DDS), no recorder, timed
    by a listener on /hrc/state in this process;
@@ -21,7 +21,7 @@ bare. The parameters are the session's (params/ of this checkout, else the insta
 ``--human-period`` (s, one or more): the sim's ``human_period`` for the engine and the graph
 (each value measured in turn, in every round). The human acts at that rate only while it is
 involved (case 2's first episodes are the robot's alone: use a case whose human acts from the
-start, 3-6). The bare loop (``offline.run_episode``) always lets the human act once a period.
+start, 3-6). The bare loop runs the parameters' own human_period.
 """
 
 import argparse
@@ -41,7 +41,6 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import run_episode
 from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.executables import executable_path
@@ -50,9 +49,12 @@ from hrc_common.proc_tree import cpu_between, thread_cpu_ns
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
 from hrc_engine.human import SimulatedHumanSide
+from hrc_engine.loop import EpisodeLoop, run_agent_episode
 from hrc_msgs.msg import TaskState
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
 from hrc_sim_node.sim_params import SimParams
+from hrc_sim_node.stepper import SimStepper
 
 
 def session_parameters(case: int, seed: int, episodes: int) -> dict:
@@ -63,25 +65,19 @@ def session_parameters(case: int, seed: int, episodes: int) -> dict:
 
 
 def bare_rate(case: int, episodes: int, seed: int) -> float:
-    """Return median steps/s of physics + AgentCore + simulated human in a plain loop."""
+    """Return median steps/s of the engine's loop with nothing recorded."""
     parameters = session_parameters(case, seed, episodes)
     parameters['agent']['checkpoint_dir'] = ''
     limits = SimLimits.of(from_dict(SimParams, parameters['sim']))
     core = AgentCore(from_dict(AgentParams, parameters['agent']), limits=limits)
-    human = SimulatedHumanSide(parameters['human'], limits)
-    human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
-    clock = {'stamp': 0}
-
-    def partner(state, subtasks):
-        clock['stamp'] += 200_000_000
-        return human.answer(core.episode, state, clock['stamp']).command
-
+    human = SimulatedHumanSide.from_parameters(parameters['human'], limits)
     rates = []
-    sim_params = from_dict(SimParams, parameters['sim'])
+    sim_params = from_dict(SimParams, dict(parameters['sim'], mode='lockstep'))
     with SliderPendulumBall(physics_params_of(sim_params)) as sim:
+        loop = EpisodeLoop(SimStepper(sim, StepProtocol(ProtocolSettings.of(sim_params))), human)
         for _ in range(episodes):
             start = time.perf_counter()
-            result = run_episode(core, sim, partner)
+            result = run_agent_episode(core, loop)
             rates.append(result.steps / (time.perf_counter() - start))
             if core.phase == 'updating':
                 core.update()

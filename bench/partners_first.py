@@ -25,12 +25,11 @@ import sys
 import torch
 
 from hrc_agent_node.checkpoint import read_checkpoint
-from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import PERSON_PERIODS, person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
+from hrc_engine.offline import evaluation_core, run_session
+from hrc_engine.partners import SimulatedHumanPartner
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
-from hrc_partners.partners import evaluation_core
 from hrc_partners.partners_first import unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
@@ -63,17 +62,15 @@ def sessions(run: pathlib.Path) -> list:
     return found
 
 
-def evaluate(checkpoint, profile, seed: int, episodes: int, period: str = 'human') -> float:
+def evaluate(checkpoint, profile, seed: int, episodes: int) -> float:
     """Return the mean total error of the checkpoint's frozen policy with ``profile``.
 
-    ``period``: how often the person acts (``hrc_agent_node.partners.PERSON_PERIODS``: the sim's
-    human_period, as the engine's person; ``control``: the control period, as this bench did
-    before issue 22's fix).
+    The person acts at the sim's human_period, as the engine's person.
     """
     physics = PhysicsParams()
     core = evaluation_core(checkpoint, seed, episodes)
     partner = SimulatedHumanPartner(profile, core.human_dof, seed,
-                                    person_period(SimLimits.of(physics), period))
+                                    SimLimits.of(physics).human_step)
     with SliderPendulumBall(physics) as sim:
         return float(run_session(core, sim, partner)['evaluation']['total_error'])
 
@@ -90,10 +87,6 @@ def main(argv=None) -> int:
                         help='cases evaluated offline (default: every case of the run)')
     parser.add_argument('--seeds', type=int, nargs='*', default=None,
                         help='only these seeds (default: every seed of the run)')
-    parser.add_argument('--person-period', choices=PERSON_PERIODS, default='human',
-                        help="how often the evaluated people act: human = the sim's "
-                        "human_period, as the engine's person (default); control = the "
-                        "control period (this bench before issue 22's fix)")
     parser.add_argument('--json', type=pathlib.Path, help='write every number here too')
     args = parser.parse_args(argv)
     torch.set_num_threads(1)
@@ -124,13 +117,12 @@ def main(argv=None) -> int:
             for entry in (entry for entry in found if entry['case'] == case):
                 person = sample_person(base, entry['seed'])
                 people = dict(person=person, **unlike_people(person))
-                own = evaluate(entry['checkpoint'], person, entry['seed'], args.episodes,
-                               args.person_period)
+                own = evaluate(entry['checkpoint'], person, entry['seed'], args.episodes)
                 entry['offline'] = {'person': own}
                 errors['person'].append(own)
                 for name in names[1:]:
                     error = evaluate(entry['checkpoint'], people[name], entry['seed'],
-                                     args.episodes, args.person_period)
+                                     args.episodes)
                     entry['offline'][name] = error
                     errors[name].append(error)
                     ratios[name].append(error / own)

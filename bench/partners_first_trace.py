@@ -4,7 +4,7 @@
 Runs case 7 or 8 as the experiment runner does (the study's settings, ``--set`` more): the
 pre-training of ``hrc_partners.partners_first.pretrain`` (robot alone, then the population),
 then the person's step with the session's person (person ``seed`` of the ``paper``
-population, ``hrc_agent_node.partners.SimulatedHumanPartner`` acting at the sim's
+population, ``hrc_engine.partners.SimulatedHumanPartner`` acting at the sim's
 ``human_period`` as the engine's person does) in the offline loop, and prints
 one line per episode: step, partner, kind (train / judge), the mean |error| of each subtask
 (m or rad) with a ``*`` where it exceeds its tolerance (``params/task_tree.yaml``), and the
@@ -23,17 +23,16 @@ import torch
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import run_episode
-from hrc_agent_node.partners import PERSON_PERIODS, SimulatedHumanPartner
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import (add_learning_option, compose, parse_overrides,
                                      SessionSettings)
+from hrc_engine.offline import partner_loop, run_episode
+from hrc_engine.partners import MixturePartner, parse_specs, SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners import partners_first
-from hrc_partners.partners import MixturePartner, parse_specs
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
 
@@ -44,9 +43,6 @@ def main(argv=None) -> int:
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.PARAM=VALUE')
     add_learning_option(parser)
-    parser.add_argument('--person-period', choices=PERSON_PERIODS, default=None,
-                        help="how often the training people act (default: the cases file's "
-                        'population block, person_period)')
     parser.add_argument('--person-episodes', type=int, default=12,
                         help="episodes of the person's step at most")
     args = parser.parse_args(argv)
@@ -62,7 +58,7 @@ def main(argv=None) -> int:
         if hasattr(core, 'tree') else {}
     settings = partners_first.population_settings(agent.cases_file)
     mixture = MixturePartner(parse_specs(settings.population()), core.human_dof, core.seed,
-                             limits, 1, period=args.person_period or settings.person_period)
+                             limits, 1)
     person = sample_person(load_profile('paper'), args.seed)
     own = SimulatedHumanPartner(person, core.human_dof, args.seed, limits.human_step)
     person_step = core.case.first_person_step
@@ -71,12 +67,16 @@ def main(argv=None) -> int:
     met = collections.Counter()
     with SliderPendulumBall(physics) as sim:
         core.set_limits(limits)
+        # each partner on its own loop, so each person's clock runs on (fatigue, rest)
+        loops = {name: partner_loop(core, sim, partner)
+                 for name, partner in (('mixture', mixture), ('own', own))}
         while core.phase not in (Phase.DONE, Phase.EVALUATION):
             step = core.progress.step_index
             population_step = core.training_step.partner == 'population'
             core.population_partner = population_step
             partner = mixture if population_step else own
-            result = run_episode(core, sim, partner)
+            result = run_episode(core, sim, partner,
+                                 loop=loops['mixture' if population_step else 'own'])
             if core.phase == 'updating':
                 core.update()
             who = mixture.spec.text if population_step else 'the person' \

@@ -12,12 +12,8 @@ no training used (100000 + k) and with other named profiles (``--profiles``, e.g
 people of another kind). Prints one row per agent: the mean total error of the evaluation
 episodes with each partner, and its ratio to the agent's error with its training partner(s).
 
-Every simulated person, in training and in evaluation, acts every ``--person-period``
-(``hrc_agent_node.partners.person_period``, as the study's partners): ``human`` (default) the
-sim's human_period, as the engine's and the graph's person; ``control`` the control period,
-which the evaluation people were told before (they were called every 0.02 s, so their delays,
-lags and integrator ran 10x fast; the training person has acted at the human's rate since the
-offline loop steps through the sim's protocol).
+Every simulated person, in training and in evaluation, acts at the sim's human_period, as the
+engine's and the graph's person (the offline loop is the engine's).
 """
 
 import argparse
@@ -26,44 +22,38 @@ import sys
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_session
-from hrc_agent_node.partners import PERSON_PERIODS, person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
+from hrc_engine.offline import make_partner, run_session
+from hrc_engine.partners import SimulatedHumanPartner
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 
-def train(case, seed, episodes, profile, population_every, preset, period='human'):
-    """Train one agent; return (its core, the training summary).
-
-    ``period``: how often the simulated person acts (PERSON_PERIODS).
-    """
+def train(case, seed, episodes, profile, population_every, preset):
+    """Train one agent; return (its core, the training summary)."""
     physics = PhysicsParams()
     core = AgentCore(with_overrides(
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
         evaluation_episodes=0, checkpoint_dir=''), limits=SimLimits.of(physics))
     partner = make_partner(core, seed=seed, kind=f'human:{profile}',
                            population_every=population_every,
-                           limits=SimLimits.of(physics), period=period)
+                           limits=SimLimits.of(physics))
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     return core, summary
 
 
-def evaluate(trained, person, population_every, seed, episodes, period='human'):
-    """Return the mean total error of ``trained``'s frozen policy with ``person``.
-
-    ``period``: how often the simulated person acts (PERSON_PERIODS).
-    """
+def evaluate(trained, person, population_every, seed, episodes):
+    """Return the mean total error of ``trained``'s frozen policy with ``person``."""
     physics = PhysicsParams()
     params = with_overrides(trained.params, evaluation_only=True, resume_from='(in memory)',
                             evaluation_episodes=episodes)
     evaluator = AgentCore(params)
     evaluator.load_state_dict(trained.state_dict(), policy_only=True)
     partner = SimulatedHumanPartner(person, evaluator.human_dof, seed,
-                                    person_period(SimLimits.of(physics), period),
+                                    SimLimits.of(physics).human_step,
                                     population_every)
     with SliderPendulumBall(physics) as sim:
         return run_session(evaluator, sim, partner)['evaluation']['total_error']
@@ -82,10 +72,6 @@ def main(argv=None) -> int:
     parser.add_argument('--evaluation-episodes', type=int, default=3)
     parser.add_argument('--profiles', nargs='*', default=[],
                         help='other named profiles to evaluate with (held out by kind)')
-    parser.add_argument('--person-period', choices=PERSON_PERIODS, default='human',
-                        help="how often every simulated person acts: human = the sim's "
-                             "human_period (as the study's partners), control = the control "
-                             'period (the evaluation people of this bench before)')
     args = parser.parse_args(argv)
 
     profile = load_profile(args.profile)
@@ -96,14 +82,12 @@ def main(argv=None) -> int:
     for seed in args.seeds:
         for label, every in (('one person', 0), ('population', args.population_every)):
             core, summary = train(args.case, seed, args.episodes, args.profile, every,
-                                  args.preset, args.person_period)
-            errors = {'profile': evaluate(core, profile, 0, seed, args.evaluation_episodes,
-                                          args.person_period),
+                                  args.preset)
+            errors = {'profile': evaluate(core, profile, 0, seed, args.evaluation_episodes),
                       'population': evaluate(core, profile, 1, seed + 5000,
-                                             args.evaluation_episodes, args.person_period)}
+                                             args.evaluation_episodes)}
             for name, person in held_out:
-                errors[name] = evaluate(core, person, 0, seed, args.evaluation_episodes,
-                                        args.person_period)
+                errors[name] = evaluate(core, person, 0, seed, args.evaluation_episodes)
             reference = errors['population' if every else 'profile']
             rows.append({'seed': seed, 'agent': label, 'episodes': summary['training_episodes'],
                          'converged': summary['converged'], 'errors': errors,

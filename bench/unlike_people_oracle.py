@@ -36,13 +36,13 @@ import yaml
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
-from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import person_period, SimulatedHumanPartner
 from hrc_agent_node.strategies import session_case
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import DEFAULT_LEARNING, load_learning
+from hrc_engine.offline import run_session
+from hrc_engine.partners import SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
@@ -75,7 +75,7 @@ def run_one(task: dict) -> dict:
                             **dict(study_settings(), **task['overrides']))
     core = AgentCore(params, limits=limits)
     partner = SimulatedHumanPartner(people[task['who']], core.human_dof, task['seed'],
-                                    person_period(limits, 'human'))
+                                    limits.human_step)
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     with tempfile.TemporaryDirectory(prefix='oracle-') as scratch:

@@ -48,6 +48,7 @@ from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
 from hrc_engine import messages
 from hrc_engine.human import SimulatedHumanSide
+from hrc_engine.loop import EpisodeLoop, run_agent_session
 from hrc_sim_node.commands import ACTORS
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
@@ -171,7 +172,8 @@ class InProcessSession:
                 f'checkpoint (python -m hrc_partners.partners_first --case {case.case_id}, '
                 'then --resume-from), or use hrc experiment / hrc session (graph), which '
                 'pre-train')
-        self.human = SimulatedHumanSide(self.parameters['human'], self.limits)
+        self.human = SimulatedHumanSide.from_parameters(self.parameters['human'], self.limits)
+        self.loop = EpisodeLoop(self.stepper, self.human, on_slice=self._slice_answered)
         self.clock = WallClock()
         self.run_dir = pathlib.Path(self.settings.runs_dir) / self.session_id
         checkpoint_root = self.agent_params.checkpoint_dir
@@ -202,10 +204,9 @@ class InProcessSession:
     def _announce(self, text: str) -> None:
         """Publish a SessionStatus as the agent does (and tell the human the roles)."""
         core = self.core
-        self.human.on_session(core.human_dof, core.human_involved, core.human_subtasks)
-        # The sim takes the roles from the same announcement: whether the human is involved
-        # decides whether a period is stepped slice by slice at the human's rate.
-        self.protocol.set_roles(core.robot_dof, core.human_involved)
+        # the human and the sim take the roles from the same announcement
+        self.loop.set_roles(core.robot_dof, core.human_dof, core.human_involved,
+                            core.human_subtasks)
         self._write('/hrc/session', messages.session_status(core, text, self.clock()))
 
     # -- the session ------------------------------------------------------------------------
@@ -217,8 +218,7 @@ class InProcessSession:
         core = self.core
         try:
             self._announce('session starting: ' + core.status_line())
-            while core.phase not in ('done', 'aborted'):
-                self._episode()
+            run_agent_session(core, self.loop, self)
             summary = core.evaluation_summary()
             self._save_checkpoint(FINAL_CHECKPOINT)
             self._announce('session done: ' + core.status_line())
@@ -234,73 +234,50 @@ class InProcessSession:
             if self.writer is not None else '', str(self.run_dir),
             dict(self.protocol.totals), self.episode_seconds)
 
-    def _episode(self) -> None:
-        """One episode: reset, the lockstep steps, the episode's end as the agent handles it.
-
-        Each control step as the lockstep graph takes it (hrc_sim_node.stepper): both actors
-        answer the period's state (the human only while involved); at the human's rate the
-        human then answers each slice state (only its wrench is published for those, as the
-        human node does) while the robot's answer holds for the period.
-        """
-        core, stepper = self.core, self.stepper
-        started = time.perf_counter()
-        plan = core.start_episode()
+    # -- what the loop tells (hrc_engine.loop.LoopObserver): the graph's messages ----------
+    def episode_starting(self, plan) -> None:
+        """Announce the episode; open its bag (the loop has given the roles)."""
+        self._episode_started = time.perf_counter()
         self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
-                       f'starting: ' + core.status_line())
-        advanced = stepper.start_episode(plan.episode, plan.seed)
+                       f'starting: ' + self.core.status_line())
         if self.writer is not None:
             self.writer.begin_episode(plan.episode)
-        self._publish_state(advanced)
-        while not advanced.episode_over:
-            state, stamp = advanced.state, advanced.stamp
-            # A human who sits out sends nothing (as the human node; the sim awaits no answer).
-            answer = (self.human.answer(plan.episode, state, stamp)
-                      if self.human.answers_states else None)
-            human_wrench = messages.wrench_on(answer.dof, answer.wrench) if answer else None
-            # The human's answer to the same state only when the core asks for it (same_step).
-            decision = core.act(advanced.observed,
-                                answer.command if core.needs_human_action else None)
-            robot_wrench = messages.wrench_on(core.robot_dof, decision.wrench)
-            self._write('/hrc/robot/cmd_wrench', messages.wrench_stamped(stamp, robot_wrench))
-            if decision.previous is not None:
-                self._write_step(decision.previous)
-            if answer is not None:
-                self._write('/hrc/human/action',
-                            messages.human_action(stamp, plan.episode, state.step, answer))
-                self._write('/hrc/human/cmd_wrench',
-                            messages.wrench_stamped(stamp, human_wrench))
-            advanced = stepper.run_period(
-                robot_wrench, human_wrench,
-                lambda middle, episode=plan.episode: self._answer_slice(episode, middle))
-            self._publish_state(advanced)
-            self.steps += 1
-        self.episode_seconds.append(time.perf_counter() - started)
-        self._finish_episode(advanced.observed, advanced.stamp)
 
-    def _answer_slice(self, episode: int, middle):
-        """Return the human's answer to a slice state (its wrench published, as the node does)."""
-        answer = self.human.answer(episode, middle.state, middle.stamp, middle.slice)
-        wrench = messages.wrench_on(answer.dof, answer.wrench)
-        self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(middle.stamp, wrench))
-        return wrench
-
-    def _publish_state(self, advanced) -> int:
+    def state(self, advanced) -> None:
         """Write the state of a control step (an hrc_sim_node.stepper.Advanced)."""
         self._stamps[advanced.state.step] = advanced.stamp
         self._write('/hrc/state', messages.task_state(
             advanced.state, self.protocol.episode, advanced.stamp, advanced.missing,
             human_applied=advanced.human_applied))
-        return advanced.stamp
+        if advanced.state.step:
+            self.steps += 1        # a control step ran
+        if advanced.episode_over:
+            self.episode_seconds.append(time.perf_counter() - self._episode_started)
+
+    def decided(self, advanced, decision, answer, robot_wrench) -> None:
+        """Write both actors' answers to a state, as the agent and the human node publish."""
+        stamp = advanced.stamp
+        self._write('/hrc/robot/cmd_wrench', messages.wrench_stamped(stamp, robot_wrench))
+        if decision.previous is not None:
+            self._write_step(decision.previous)
+        if answer is not None:
+            self._write('/hrc/human/action', messages.human_action(
+                stamp, self.loop.episode, advanced.state.step, answer))
+            self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(
+                stamp, messages.wrench_on(answer.dof, answer.wrench)))
+
+    def _slice_answered(self, stamp: int, wrench) -> None:
+        """Write the human's wrench answering a slice state (only that, as the node does)."""
+        self._write('/hrc/human/cmd_wrench', messages.wrench_stamped(stamp, wrench))
 
     def _write_step(self, record) -> None:
         self._write('/hrc/agent/step', messages.agent_step(record, self._stamps[record.step]))
 
-    def _finish_episode(self, final, stamp: int) -> None:
-        core = self.core
-        result = core.end_episode(final)
+    def episode_finished(self, result) -> None:
+        """Write the episode's last step and its summary."""
         if result.last_record is not None:
             self._write_step(result.last_record)
-        summary = messages.episode_summary(core, result, stamp)
+        summary = messages.episode_summary(self.core, result, self.loop.advanced.stamp)
         self._write('/hrc/episode', summary)
         self.episodes.append({key: value for key, value in summary.items() if key != 'header'})
         if not self.config.quiet:
@@ -309,10 +286,15 @@ class InProcessSession:
                   f'{result.episode_return:.2f}, total error '
                   f'{result.total_error:.4f}{", converged" if result.converged else ""}',
                   flush=True)
-        if core.phase == 'updating':
-            self._announce(f'updating the policy after episode {result.episode} '
-                           f'({core.buffered_samples} samples)')
-            core.update()
+
+    def updating(self, result) -> None:
+        """Announce the policy update, as the agent does before it."""
+        self._announce(f'updating the policy after episode {result.episode} '
+                       f'({self.core.buffered_samples} samples)')
+
+    def after_episode(self, result, update_stats) -> None:
+        """Save the latest checkpoint, announce, close the episode's bag."""
+        core = self.core
         self._save_checkpoint(LATEST_CHECKPOINT)
         if core.phase != 'done':
             self._announce(core.status_line())

@@ -8,33 +8,28 @@ is the command times the sim's ``max_force``/``max_torque``, and the simulated h
 sim's control period (``SimLimits``, given by the session as the node reads them from the sim).
 """
 
-from dataclasses import dataclass
-
+from hrc_engine.loop import HumanAnswer
 from hrc_joystick_node.human_core import core_from_parameters
-
-
-@dataclass(frozen=True)
-class HumanAnswer:
-    """The human's answer to one state."""
-
-    command: float          # normalized, [-1, 1]
-    wrench: float           # N or N*m on ``dof``
-    dof: str
-    source: int             # HumanAction.SOURCE_*
-    detail: str
-    engaged: bool
 
 
 class SimulatedHumanSide:
     """The human node's core (``input: sim``), driven by calls instead of messages."""
 
-    def __init__(self, parameters: dict, limits):
+    def __init__(self, core):
+        self.core = core            # a HumanCore with the sim's limits set
+
+    @classmethod
+    def from_parameters(cls, parameters: dict, limits) -> 'SimulatedHumanSide':
+        """Return the side of the human node's parameters (a dict) and the sim's limits."""
         if parameters.get('input', 'sim') not in ('sim', 'model', 'script'):
             raise ValueError(f"the in-process engine runs the simulated human, a cloned model "
                              f"or a scripted stick only (human.input 'sim', 'model' or "
                              f"'script'), got "
                              f"{parameters.get('input')!r}")
-        self.core = core_from_parameters(parameters, limits)
+        return cls(core_from_parameters(parameters, limits))
+
+    def start_episode(self, episode: int) -> None:
+        """Nothing to do: the core resets the simulated human at each new episode itself."""
 
     def on_session(self, dof: str, involved: bool, subtasks) -> None:
         """Take the roles a SessionStatus announces."""

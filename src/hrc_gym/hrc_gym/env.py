@@ -39,9 +39,9 @@ import gymnasium
 from gymnasium import spaces
 import numpy as np
 
-from hrc_common.contract import NS_PER_S
 from hrc_common.params import from_dict
 from hrc_common.session_plan import SessionSettings
+from hrc_engine.loop import PartnerSide
 from hrc_joystick_node.human_model import load_human_model
 from hrc_joystick_node.human_profile import load_profile
 from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, MODEL_PREFIX,
@@ -49,6 +49,20 @@ from hrc_gym.task import (check_render_mode, GymParams, HUMAN, make_human, MODEL
 from hrc_gym.session import session_keywords
 from hrc_sim_node.physics import PhysicsParams
 
+
+
+class _ModelPartner:
+    """A human model object (``act(state, subtasks)``, maybe ``reset(episode)``): a partner."""
+
+    def __init__(self, model):
+        self.model = model
+
+    def start_episode(self, episode: int) -> None:
+        if hasattr(self.model, 'reset'):
+            self.model.reset(episode)
+
+    def __call__(self, state, subtasks) -> float:
+        return float(self.model.act(state, list(subtasks)))
 
 
 def derived_seed(seed: int, stream: int) -> int:
@@ -88,12 +102,9 @@ class SliderPendulumBallEnv(gymnasium.Env):
         self.observation_space = spaces.Box(-10.0, 10.0, (self.task.observation_size,),
                                             np.float32)
         self._human_model = human_model
-        self.human = None
+        self.human = None         # the human side of the loop (hrc_engine.loop)
         self._human_ready = False
         self._episode = 0
-        self._states = 0          # states on the session clock (stamps, as the sim's)
-        self._stamp_ns = 0
-        self._period_ns = int(round(self.task.physics.params.control_period * NS_PER_S))
         self._return = 0.0
 
     @property
@@ -109,54 +120,24 @@ class SliderPendulumBallEnv(gymnasium.Env):
         if seed is not None or not self._human_ready:
             # A new person (no practice yet) and a new session clock for every seeded run.
             self._episode = 0
-            self._states = 0
             self._human_ready = True
+            task = self.task
             if self._human_model is not None:
-                self.human = self._human_model
+                # a model object acts once a control period, the rate it was recorded at
+                self.human = PartnerSide(_ModelPartner(self._human_model), task.limits,
+                                         hold_over_slices=True, detail='human model')
             else:
-                task = self.task
                 human_seed = derived_seed(seed if seed is not None
                                           else int(self.np_random.integers(SEED_LIMIT)), 1)
                 self.human = make_human(self.config.human, task.dofs[HUMAN], human_seed,
                                         task.limits, task.human_involved,
                                         task.subtasks[HUMAN])
+            task.set_human(self.human)
         else:
             self._episode += 1
-        if self._human_model is not None and hasattr(self.human, 'reset'):
-            self.human.reset(self._episode)
         self._return = 0.0
-        self.task.reset(int(self.np_random.integers(SEED_LIMIT)))
-        self._published()
+        self.task.reset(int(self.np_random.integers(SEED_LIMIT)), self._episode)
         return self.task.observation(ROBOT), {'step': 0}
-
-    def _published(self):
-        """Count a state on the session clock (the sim's stamps: one period per state)."""
-        self._stamp_ns = self._states * self._period_ns
-        self._states += 1
-
-    def _human_command(self) -> float:
-        state = self.task.state
-        if not self.task.human_involved or self.human is None:
-            return 0.0
-        if self._human_model is not None:
-            return float(self.human.act(state, self.task.subtasks[HUMAN]))
-        return float(self.human.answer(self._episode, state.step, self._stamp_ns,
-                                       state).command)
-
-    def _answer_slice(self, state, slice_index: int, held: float) -> float:
-        """Return the human's command for a state within the period (the human's rate).
-
-        The simulated human acts on it (the human node's core, as in the engines); a cloned
-        model acts once a control period, the rate it was recorded at, and holds (``held``).
-        """
-        if not self.task.human_involved or self.human is None:
-            return 0.0
-        if self._human_model is not None:
-            return held
-        slices = self.task.physics.params.human_slices
-        stamp = self._stamp_ns + slice_index * (self._period_ns // slices)
-        return float(self.human.answer(self._episode, state.step, stamp, state,
-                                       slice_index=slice_index).command)
 
     def step(self, action):
         """Advance one control period with the robot's command (the human acts alongside)."""
@@ -165,11 +146,7 @@ class SliderPendulumBallEnv(gymnasium.Env):
         if self.task.finished:
             raise RuntimeError('the episode is over: call reset()')
         command = float(np.clip(np.asarray(action, dtype=np.float64).reshape(-1)[0], -1.0, 1.0))
-        human_command = self._human_command()
-        self.task.advance({ROBOT: command, HUMAN: human_command},
-                          lambda state, slice_index: self._answer_slice(
-                              state, slice_index, human_command))
-        self._published()
+        human_command = self.task.advance(command)
         components, reward = self.task.reward(ROBOT)
         self._return += reward
         state = self.task.state

@@ -23,6 +23,7 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from hrc_common.params import from_dict, ParameterError
+from hrc_engine.loop import PartnerSide
 from hrc_gym.task import (check_render_mode, HUMAN, RENDER_MODES, ROBOT, SEED_LIMIT,
                           TaskParams, TaskRun)
 
@@ -44,6 +45,10 @@ class SliderPendulumBallParallelEnv(ParallelEnv):
             raise ParameterError(f'training_step {self.config.training_step} of case '
                                  f'{self.config.case} does not involve the human: both agents '
                                  f'need a step in which both act')
+        # the human agent's command of the step, held over the period's slices
+        self._human_command = 0.0
+        self.task.set_human(PartnerSide(lambda state, subtasks: self._human_command,
+                                        self.task.limits, detail='human agent'))
         self.render_mode = render_mode
         self.possible_agents = [ROBOT, HUMAN]
         self.agents = []
@@ -78,7 +83,9 @@ class SliderPendulumBallParallelEnv(ParallelEnv):
         commands = {agent: float(np.clip(np.asarray(actions.get(agent, 0.0),
                                                     dtype=np.float64).reshape(-1)[0], -1.0, 1.0))
                     for agent in self.agents}
-        state = self.task.advance(commands)
+        self._human_command = commands.get(HUMAN, 0.0)
+        self.task.advance(commands.get(ROBOT, 0.0))
+        state = self.task.state
         observations, rewards, terminations, truncations, infos = {}, {}, {}, {}, {}
         for agent in self.agents:
             components, reward = self.task.reward(agent)

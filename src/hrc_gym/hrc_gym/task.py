@@ -2,9 +2,9 @@
 
 Nothing here is a second implementation: :class:`TaskRun` only wires the cores the nodes use.
 
-* physics: ``hrc_sim_node.physics.SliderPendulumBall`` (PyBullet), stepped with the normalized
-  command of each degree of freedom, dispatched by the sim's ``protocol.per_dof`` and
-  ``protocol.roles``;
+* physics and stepping: ``hrc_sim_node.physics.SliderPendulumBall`` (PyBullet) stepped through
+  the engine's loop (``hrc_engine.loop.EpisodeLoop``: the sim's step protocol, the human
+  answering each state at the human's rate), the robot's command from outside;
 * roles, training steps, reward: ``hrc_agent_node`` (``params/cases.yaml`` resolved by
   ``strategies.load_cases``; the reward is ``TaskTree.reward`` of the step's subtasks on the
   state reached, eq. 2-5, exactly as ``AgentCore`` computes it);
@@ -27,12 +27,13 @@ from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import case_problem, SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
+from hrc_engine.human import SimulatedHumanSide
+from hrc_engine.loop import EpisodeLoop, PartnerSide
 from hrc_joystick_node.human_core import HumanCore, HumanParams
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_sim_node.commands import wrench_on
-from hrc_sim_node.protocol import HUMAN, ProtocolSettings, roles, ROBOT, StepProtocol
-from hrc_sim_node.stepper import SimStepper
+from hrc_sim_node.protocol import HUMAN, roles, ROBOT
 
 NO_HUMAN = 'none'
 POPULATION_PREFIX = 'population:'
@@ -94,17 +95,18 @@ def resolve_step(case, index: int):
 
 
 def make_human(spec: str, dof: str, seed: int, limits: SimLimits, involved: bool, subtasks):
-    """Return the human node's per-step core driving the human named by ``spec``, or None.
+    """Return the human side of the loop (``hrc_engine.loop``) named by ``spec``.
 
-    ``spec``: 'none' (returns None), a profile name, 'population:<profile>' (person number
-    ``seed`` of the population around that profile, ``hrc_joystick_node.population``) or
-    'model:<path>' (a cloned human model, the node's input ``model``). The core
+    ``spec``: 'none' (a human who answers zero), a profile name, 'population:<profile>'
+    (person number ``seed`` of the population around that profile,
+    ``hrc_joystick_node.population``) or 'model:<path>' (a cloned human model, the node's
+    input ``model``). The core
     (``HumanCore``) is the one the human node runs: it resets the person at each new episode
     and runs fatigue and rest on the stamps (simulation time) it is given; ``limits``: the
     physics' control period and limits, as the node reads them from the sim.
     """
     if spec == NO_HUMAN:
-        return None
+        return PartnerSide(None, limits)
     common = dict(dof=dof, involved=involved, seed=int(seed))
     if spec.startswith(MODEL_PREFIX):
         params = HumanParams(input='model', model_file=spec[len(MODEL_PREFIX):], **common)
@@ -119,7 +121,7 @@ def make_human(spec: str, dof: str, seed: int, limits: SimLimits, involved: bool
     # The node's input check: with input sim or model the selector takes that input (no
     # device, no /joy); until this first check the core answers zero.
     core.on_inputs(False, 'no device (environment)', False, 'no /joy (environment)')
-    return core
+    return SimulatedHumanSide(core)
 
 
 class TaskRun:
@@ -142,6 +144,8 @@ class TaskRun:
         self.subtasks = {ROBOT: self.step_spec.robot_subtasks,
                          HUMAN: self.step_spec.human_subtasks}
         self.physics = SliderPendulumBall(physics_params)
+        self.loop = None
+        self.set_human(PartnerSide(None, self.limits))
         self.state = None
         self._error_sums = {}
         self._states_reached = 0
@@ -161,48 +165,39 @@ class TaskRun:
         """Return the control steps of an episode (200)."""
         return self.physics.params.steps_per_episode
 
-    def reset(self, seed: int):
-        """Start an episode from the physics seeded with ``seed``; return the state."""
-        params = self.physics.params
-        protocol = StepProtocol(ProtocolSettings(
-            control_period=params.control_period, max_force=params.max_force,
-            max_torque=params.max_torque, robot_dof=self.dofs[ROBOT],
-            human_period=params.human_period))
-        protocol.set_roles(self.dofs[ROBOT], self.human_involved)
-        self.stepper = SimStepper(self.physics, protocol)
-        self.state = self.stepper.start_episode(0, int(seed)).state
+    def set_human(self, human) -> None:
+        """Take ``human``, a human side of the loop (``hrc_engine.loop``), on a new clock.
+
+        The states' stamps (the human's clock: fatigue and rest run on them) start at 0.
+        """
+        self.loop = EpisodeLoop.on_physics(self.physics, human, self.dofs[ROBOT])
+        self.loop.set_roles(self.dofs[ROBOT], self.dofs[HUMAN], self.human_involved,
+                            self.subtasks[HUMAN])
+
+    def reset(self, seed: int, episode: int = 0):
+        """Start episode ``episode`` from the physics seeded with ``seed``; return the state."""
+        self.state = self.loop.start(int(episode), int(seed)).state
         self._error_sums = {subtask_id: 0.0 for subtask_id in self.tree.subtasks}
         self._states_reached = 0
         return self.state
 
-    def advance(self, commands: dict, answer_slice=None):
-        """Apply {actor: normalized command} for one control period; return the state reached.
+    def advance(self, robot_command: float) -> float:
+        """Run one control period with the robot's normalized command; return the human's.
 
-        Through the sim's step protocol (``SimStepper.run_period``, as the engines): at the
-        human's rate (``human_period``) ``answer_slice(state, slice_index)`` gives the human's
-        normalized command for each state within the period; without it the human's command
-        holds for the period (an external agent acts once a step). A human that is not
-        involved in the step is held at 0 (as the sim does).
+        Through the engine's loop: the human side answers the period's state (and, at the
+        human's rate, each state within the period); a human that is not involved in the step
+        sends nothing and counts as 0 (as the sim does). The state reached is :attr:`state`.
         """
-        if not self.human_involved:
-            commands = dict(commands, **{HUMAN: 0.0})
-        scale = {actor: self.limits.full_scale(dof) for actor, dof in self.dofs.items()}
-        human = float(commands.get(HUMAN, 0.0))
-
-        def slice_wrench(middle):
-            value = human if answer_slice is None else float(
-                answer_slice(middle.state, middle.slice))
-            return wrench_on(self.dofs[HUMAN], value * scale[HUMAN])
-
-        advanced = self.stepper.run_period(
-            wrench_on(self.dofs[ROBOT], float(commands.get(ROBOT, 0.0)) * scale[ROBOT]),
-            wrench_on(self.dofs[HUMAN], human * scale[HUMAN]), slice_wrench)
+        answer = self.loop.answer()
+        robot = self.dofs[ROBOT]
+        advanced = self.loop.step(wrench_on(robot, robot_command * self.limits.full_scale(robot)),
+                                  answer)
         self.state = advanced.state
         self.human_applied = advanced.human_applied   # N or N*m, per slice of the period
         for subtask_id in self.tree.subtasks:
             self._error_sums[subtask_id] += self.tree.error(subtask_id, self.state)
         self._states_reached += 1
-        return self.state
+        return answer.command if answer is not None else 0.0
 
     def reward(self, actor: str) -> tuple:
         """Return (components by subtask id, total) of ``actor``'s reward on the state reached."""

@@ -174,11 +174,11 @@ def test_a_population_member_is_drawn_by_the_reset_seed():
     env = SliderPendulumBallEnv(case=6, human='population:paper')
     try:
         env.reset(seed=0)
-        first = env.human.profile
+        first = env.human.core.profile
         env.reset(seed=1)
-        second = env.human.profile
+        second = env.human.core.profile
         env.reset(seed=0)
-        assert env.human.profile == first and second != first
+        assert env.human.core.profile == first and second != first
         assert first.reaction_delay != second.reaction_delay
     finally:
         env.close()

@@ -16,7 +16,7 @@ seconds plus the rests between them (the simulated human's ``rest_between_episod
 
 The robot is a trained agent (a checkpoint per assignment: a robot on rotation for "person on
 translation", e.g. case 2; on translation for "person on rotation", e.g. case 1) or, only when
-asked for, the deterministic scripted PD controller of hrc_agent_node.partners standing in
+asked for, the deterministic scripted PD controller of hrc_engine.partners standing in
 for the robot (the fast tests use it and say so).
 """
 
@@ -25,20 +25,21 @@ from dataclasses import dataclass
 import math
 import typing
 
-from hrc_agent_node.partners import ScriptedPartner
 from hrc_common.contract import other_dof, SimLimits
 from hrc_common.params import with_overrides
+from hrc_engine.loop import EpisodeLoop, HumanAnswer, SOURCE_SIMULATED
+from hrc_engine.offline import evaluation_core
+from hrc_engine.partners import ScriptedPartner
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.sim_human import SimulatedHuman
+from hrc_sim_node.commands import wrench_on
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-from hrc_sim_node.protocol import per_dof, roles
 from hrc_study.statistics import mean_interval
 import numpy
 from scipy import stats
 
 from hrc_partners.crossplay import format_cell
-from hrc_partners.partners import evaluation_core
 
 DOFS = ('translation', 'rotation')
 OWN_SUBTASK = {'translation': 'slider', 'rotation': 'pendulum'}
@@ -104,23 +105,66 @@ class TrainedRobot:
         self.core.end_episode(state)
 
 
+class PersonSide:
+    """The calibrated person as the human side of the engine's loop (``hrc_engine.loop``).
+
+    ``person``: ``act(state, subtasks, now)`` (a SimulatedHuman built for the sim's human
+    period); asked at every state the human answers (the period's and, at the human's rate,
+    each slice state), on the calibration's clock: ``clock_start`` (s, rests between episodes
+    included) plus the state's time in the episode (its stamp) and one human step, the moment
+    the person's command applies.
+    """
+
+    def __init__(self, person, limits: SimLimits, clock_start: float):
+        self.person = person
+        self.limits = limits
+        self.clock_start = float(clock_start)
+        self.dof, self.subtasks = 'rotation', []
+        self.answers_states = True
+        self._first_stamp = None
+
+    def on_session(self, dof: str, involved: bool, subtasks) -> None:
+        """Take the roles of the assignment."""
+        self.dof, self.subtasks = dof, list(subtasks)
+
+    def start_episode(self, episode: int) -> None:
+        """Start the episode's clock at its first state."""
+        self._first_stamp = None
+
+    def answer(self, episode: int, state, stamp_ns: int, slice_index: int = 0) -> HumanAnswer:
+        """Return the person's answer to a (slice) state."""
+        if self._first_stamp is None:
+            self._first_stamp = stamp_ns
+        now = self.clock_start + (stamp_ns - self._first_stamp) * 1e-9 + self.limits.human_step
+        command = float(self.person.act(state, self.subtasks, now=now))
+        return HumanAnswer(command, command * self.limits.full_scale(self.dof), self.dof,
+                           SOURCE_SIMULATED, 'calibrated person', True)
+
+
 def team_episode(sim, robot, person, person_dof: str, seed: int, clock_start: float) -> tuple:
-    """Run one episode; return (team total error, the person's own-subtask error)."""
-    subtasks = [OWN_SUBTASK[person_dof], 'ball']
-    robot.start_episode(SimLimits.of(sim.params))
-    state = sim.reset(int(seed))
+    """Run one episode; return (team total error, the person's own-subtask error).
+
+    Through the engine's loop on ``sim``: the person (:class:`PersonSide`) answers each state
+    at the human's rate; the robot acts on the period's state with the person's answer.
+    """
+    limits = SimLimits.of(sim.params)
+    robot_dof = other_dof(person_dof)
+    loop = EpisodeLoop.on_physics(sim, PersonSide(person, limits, clock_start), robot_dof)
+    loop.set_roles(robot_dof, person_dof, True, [OWN_SUBTASK[person_dof], 'ball'])
+    robot.start_episode(limits)
+    advanced = loop.start(0, int(seed))
     team, own, steps = 0.0, 0.0, 0
-    period = sim.params.control_period
-    while not (state.truncated or state.terminated):
+    while not advanced.episode_over:
+        state = advanced.state
         team += abs(state.slider_position) + abs(state.pendulum_angle) + abs(state.ball_position)
         own += abs(getattr(state, 'slider_position' if person_dof == 'translation'
                            else 'pendulum_angle'))
         steps += 1
-        human = float(person.act(state, subtasks, now=clock_start + steps * period))
-        command = per_dof({'robot': robot.act(state, human), 'human': human},
-                          roles(other_dof(person_dof)))
-        state = sim.step_normalized(command['translation'], command['rotation'])
-    robot.end_episode(state)
+        answer = loop.answer()
+        command = min(1.0, max(-1.0, robot.act(advanced.observed, answer.command)))
+        advanced = loop.step(wrench_on(robot_dof, command * limits.full_scale(robot_dof)),
+                             answer)
+    robot.end_episode(advanced.observed)
     return team / max(steps, 1), own / max(steps, 1)
 
 
@@ -244,7 +288,7 @@ def calibrate(person_for, robots: typing.Dict[str, object], plan: CalibrationPla
 def simulated_person(profile, seed: int):
     """Return ``person_for(dof, limits)`` for a simulated person (one seed, both dofs)."""
     return lambda dof, limits: SimulatedHuman(profile, dof, seed=seed,
-                                              control_period=limits.control_period)
+                                              control_period=limits.human_step)
 
 
 def weaken(person, dof: str, factor: float):

@@ -41,7 +41,7 @@ def main(argv=None) -> int:
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without
     from hrc_partners import advisor  # lazy: torch (seconds), see above
-    from hrc_partners.partners import spec_problem  # lazy: torch, as above
+    from hrc_engine.partners import spec_problem  # lazy: torch, as above
 
     problems = []
     if args.episodes < 2:
@@ -94,7 +94,7 @@ def _positive(text: str) -> bool:
 
 def _person(spec: str, weak_dof: str, factor: str):
     from hrc_partners.advisor import weaken  # lazy: torch (via partners), as in main()
-    from hrc_partners.partners import parse_spec  # lazy: torch, as above
+    from hrc_engine.partners import parse_spec  # lazy: torch, as above
 
     parsed = parse_spec(spec)
     person = load_profile(parsed.name)

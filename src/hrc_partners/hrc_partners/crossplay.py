@@ -17,10 +17,11 @@ import pathlib
 import typing
 
 from hrc_common.params import ParameterError
+from hrc_engine.offline import evaluate
+from hrc_engine.partners import parse_specs, spec_problem
 from hrc_study.statistics import mean_interval
 import numpy
 
-from hrc_partners.partners import evaluate, parse_specs, spec_problem
 
 
 @dataclass(frozen=True)

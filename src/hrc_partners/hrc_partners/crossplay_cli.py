@@ -8,7 +8,7 @@
 Agents: ``NAME=CHECKPOINT[@TRAINING_PARTNER]`` (the training partner also comes from the
 ``.json`` that ``train_partners_agents`` writes beside the checkpoint; it is added as a column
 and each agent's drop is measured from it). Partners: ``profile:NAME``, ``person:NAME:K``,
-``population:NAME``, ``model:PATH`` (hrc_partners.partners). Writes ``matrix.json`` (every
+``population:NAME``, ``model:PATH`` (hrc_engine.partners). Writes ``matrix.json`` (every
 seed's error), ``matrix.md`` (mean [95 % interval] and drops) and ``heatmap.png`` to --out and
 prints the Markdown. On stderr, a line per cell with the time left (a bar on a terminal, plain
 lines when piped; none with --quiet). Exit 2 with every reason for bad input.
@@ -48,7 +48,7 @@ def main(argv=None) -> int:
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without
     from hrc_partners import crossplay  # lazy: torch, PyBullet (seconds): not for --help
-    from hrc_partners.partners import spec_problem  # lazy: torch, as above
+    from hrc_engine.partners import spec_problem  # lazy: torch, as above
 
     problems = []
     if args.episodes < 1:

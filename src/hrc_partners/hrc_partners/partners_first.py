@@ -2,9 +2,9 @@
 
 The ``partners_first`` strategy (``params/cases.yaml``) has three steps: the robot alone, the
 team task with a population of simulated people, the team task with the person. The first
-two need no person, so they run here, in one process (the offline loop of
-``hrc_agent_node.offline``: physics + partner + AgentCore, the same cores as the engine and
-the nodes), in minutes; :func:`pretrain` returns the checkpoint in which the strategy stands at
+two need no person, so they run here, in one process (``hrc_engine.offline``: the engine's
+loop with a partner as the human, the same cores as the engine and the nodes), in minutes;
+:func:`pretrain` returns the checkpoint in which the strategy stands at
 the person's step. The session with the person (the in-process engine, the experiment runner
 or the graph session) then starts from that checkpoint (agent ``resume_from``): its first
 episode judges the pre-trained policy with the person (the step's ``judge_first``), and the
@@ -18,16 +18,13 @@ with its slow and noisy people, may be a harder partner than the person.
 :func:`default_population`: persons
 ``POPULATION_FIRST_PERSON`` .. + ``persons_per_profile`` - 1 of the populations around the
 ``paper``, ``novice`` and ``skilled`` profiles (``hrc_joystick_node.population.sample_person``),
-one drawn at random for every episode (``hrc_partners.partners.MixturePartner``). Three
+one drawn at random for every episode (``hrc_engine.partners.MixturePartner``). Three
 profiles so that the robot meets slow and fast, noisy and precise people; person numbers from
 1000 on so that no training person is a person the experiment runner gives a session (its
 seed: person 0, 1, ... of the profile) nor the profile's own mean person (``person: -1``).
 The session's person is checked against the population: :func:`pretrain` refuses a
 population that holds it (:func:`person_spec_of` names it as a partner specification).
-The training people act at the sim's ``human_period``, as the session's person does
-(``person_period: human``); before issue 22's fix they were built for the control period
-while called at the human's rate, which ran their delays, lags and integrator 10x fast (case 7's
-population step then never met its condition; ``person_period: control`` reproduces that).
+The training people act at the sim's ``human_period``, as the session's person does.
 
 By hand (then start the session with the person as the last line says)::
 
@@ -46,17 +43,16 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file
-from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import PERSON_PERIODS
 from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict, param, ParameterError, validate, with_overrides
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_plan import compose, new_session_id, parse_overrides, SessionSettings
+from hrc_engine.loop import run_agent_session
+from hrc_engine.offline import partner_loop
+from hrc_engine.partners import MixturePartner, parse_specs
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.sim_params import SimParams
-
-from hrc_partners.partners import MixturePartner, parse_specs
 
 POPULATION_PROFILES = ('paper', 'novice', 'skilled')
 # People unlike the population, each one trait of a person pushed outside the population's
@@ -79,7 +75,7 @@ POPULATION_BUDGET = 60
 
 @dataclass
 class PopulationSettings:
-    """The pre-training's population (the people, the budget, how often they act).
+    """The pre-training's population (the people, the budget, the SAC schedule).
 
     The ``population`` block of the ``partners_first`` strategy in ``params/cases.yaml``, read
     by :func:`population_settings`.
@@ -93,11 +89,6 @@ class PopulationSettings:
                               "training person (the sessions' people are 0, 1, ...)", low=0)
     budget: int = param(POPULATION_BUDGET, 'Population episodes after which the population '
                         'step ends unmet (0: no limit but max_training_episodes)', low=0)
-    person_period: str = param('human', "How often a training person acts: human = the sim's "
-                               "human_period, as the session's person does; control = the "
-                               "control period (before issue 22's fix: the person's delays, "
-                               'lags and integrator ran 10x fast at human_period 0.02 s)',
-                               choices=PERSON_PERIODS)
     sac_updates_per_step: int = param(0, "SAC: critic gradient steps per transition in the "
                                       "pre-training (no person's time there: the sim's data "
                                       "is cheap, the gradient steps are ~95 % of its wall "
@@ -182,7 +173,6 @@ class PretrainResult:
     population: list = field(default_factory=list)   # the specifications drawn from
     partners_met: list = field(default_factory=list)  # the population episodes' partners
     wall_seconds: float = 0.0
-    person_period: str = 'human'    # how often the training people acted (PERSON_PERIODS)
     sac_updates_per_step: int = 0   # the pre-training's SAC gradient steps (0: the session's)
 
     def to_plain(self) -> dict:
@@ -193,7 +183,7 @@ class PretrainResult:
 def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
              population=None, profiles_file=None,
              population_budget: int = POPULATION_BUDGET,
-             person_period: str = 'human', sac_updates_per_step: int = 0) -> PretrainResult:
+             sac_updates_per_step: int = 0) -> PretrainResult:
     """Run a partners-first case up to the person's step; save and return its checkpoint.
 
     ``agent_params``: the session's AgentParams (case, seed, preset, learner, rules: the
@@ -202,9 +192,8 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     population holds it. ``population``: partner specifications (default
     :func:`default_population`), one drawn for every episode, seeded by the session seed.
     ``population_budget``: episodes of a population step after which it ends unmet
-    (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``). ``person_period``:
-    how often the training people act (``hrc_agent_node.partners.PERSON_PERIODS``; ``control``
-    reproduces the pre-training before issue 22's fix). ``sac_updates_per_step`` > 0: the SAC
+    (``AgentCore.skip_step``; 0: no limit but ``max_training_episodes``). The training people
+    act at the sim's human period. ``sac_updates_per_step`` > 0: the SAC
     learner's gradient steps per transition in the pre-training (the checkpoint's config keeps
     them, the session that resumes it uses its own); 0: the session's.
     """
@@ -221,18 +210,18 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
     if not core.case.has_population_steps:
         raise ValueError(f'case {core.case_id} ({core.strategy}) has no population step')
     core.population_partner = True
-    partner = MixturePartner(specs, core.human_dof, core.seed, limits, 1, profiles_file,
-                             person_period)
+    partner = MixturePartner(specs, core.human_dof, core.seed, limits, 1, profiles_file)
     met = []
     person_step = core.case.first_person_step
     population_met = True
     in_step = 0                     # episodes of the current population step
     with SliderPendulumBall(physics) as sim:
+        loop = partner_loop(core, sim, partner)     # one session clock for the people
         while core.phase not in (Phase.DONE, Phase.EVALUATION) \
                 and core.progress.step_index < person_step:
             step = core.progress.step_index
             population_step = core.training_step.partner == 'population'
-            run_session(core, sim, partner, max_episodes=1)
+            run_agent_session(core, loop, max_episodes=1)
             if population_step:
                 met.append(partner.spec.text)
                 in_step = in_step + 1 if core.progress.step_index == step else 0
@@ -249,7 +238,7 @@ def pretrain(agent_params, physics: PhysicsParams, checkpoint, person: str,
                           core.progress.step_index >= person_step
                           and core.activity_phase in (Phase.TRAINING, Phase.UPDATING),
                           population_met, person, population, met,
-                          time.perf_counter() - started, person_period,
+                          time.perf_counter() - started,
                           sac_updates_per_step if agent_params.algorithm == 'sac' else 0)
 
 
@@ -278,7 +267,7 @@ def prepare_person_session(parameters: dict, run_dir, population=None):
     result = pretrain(agent, physics, run_dir / PRETRAINED_CHECKPOINT,
                       person_spec_of(parameters['human']), population or settings.population(),
                       parameters['human'].get('profiles_file') or None, settings.budget,
-                      settings.person_period, settings.sac_updates_per_step)
+                      settings.sac_updates_per_step)
     (run_dir / PRETRAIN_RECORD).write_text(json.dumps(result.to_plain(), indent=2) + '\n')
     return {'resume_from': result.checkpoint,
             'max_training_episodes': result.episodes + agent.max_training_episodes}

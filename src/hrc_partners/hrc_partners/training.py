@@ -5,7 +5,7 @@
 
 For each seed, trains a case agent with the simulated human ``--profile`` itself (``one``) and
 with a new person of its population every episode (``population``), in one process
-(hrc_agent_node.offline: physics + partner + AgentCore, no ROS, one torch thread). Each agent is
+(hrc_engine.offline: the engine's loop with a partner, no ROS, one torch thread). Each agent is
 saved as ``<out>/<kind>-s<seed>.pt`` (the agent node's checkpoint format) with
 ``<kind>-s<seed>.json``: its training partner as a cross-play partner specification
 (``profile:paper`` or ``population:paper``), episodes, convergence, wall seconds.
@@ -18,42 +18,36 @@ import sys
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import run_session
-from hrc_agent_node.partners import person_period, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
+from hrc_engine.offline import run_session
+from hrc_engine.partners import MixturePartner, parse_spec, SimulatedHumanPartner, spec_problem
 from hrc_joystick_node.human_profile import load_profile
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-
-from hrc_partners.partners import MixturePartner, parse_spec, spec_problem
 from hrc_partners.training_args import build_parser
 
 
 def training_partner(core, seed: int, limits: SimLimits, profile: str, population_every: int,
-                     profiles_file=None, mixture=None, period: str = 'human') -> tuple:
+                     profiles_file=None, mixture=None) -> tuple:
     """Return (the partner :func:`train_agent` trains ``core`` with, its specification text).
 
-    ``period``: how often a simulated person acts (``hrc_agent_node.partners.PERSON_PERIODS``:
-    ``human`` the sim's human_period, as the offline loop calls it; ``control`` as before
-    issue 22's fix).
+    A simulated person acts at the sim's human period, as the offline loop calls it.
     """
     if mixture:
         trained_with = 'mixture:' + '+'.join(mixture)
         return (MixturePartner(parse_spec(trained_with).parts, core.human_dof, seed, limits,
-                               max(1, population_every), profiles_file, period), trained_with)
+                               max(1, population_every), profiles_file), trained_with)
     partner = SimulatedHumanPartner(load_profile(profile, profiles_file), core.human_dof,
-                                    seed, person_period(limits, period), population_every)
+                                    seed, limits.human_step, population_every)
     return partner, f'population:{profile}' if population_every else f'profile:{profile}'
 
 
 def train_agent(case: int, seed: int, episodes: int, profile: str, population_every: int,
-                preset: str, checkpoint, profiles_file=None, mixture=None,
-                period: str = 'human') -> dict:
+                preset: str, checkpoint, profiles_file=None, mixture=None) -> dict:
     """Train one agent offline, save its checkpoint; return its summary (JSON-able).
 
     ``mixture``: partner specifications to draw from every ``population_every`` episodes
-    (hrc_partners.partners.MixturePartner) instead of the ``profile`` or its population.
-    ``period``: how often a simulated person acts (:func:`training_partner`).
+    (hrc_engine.partners.MixturePartner) instead of the ``profile`` or its population.
     """
     physics = PhysicsParams()
     limits = SimLimits.of(physics)
@@ -61,7 +55,7 @@ def train_agent(case: int, seed: int, episodes: int, profile: str, population_ev
         AgentParams(), case=case, seed=seed, preset=preset, max_training_episodes=episodes,
         evaluation_episodes=0, checkpoint_dir='', torch_threads=1), limits=limits)
     partner, trained_with = training_partner(core, seed, limits, profile, population_every,
-                                             profiles_file, mixture, period)
+                                             profiles_file, mixture)
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, partner)
     save_checkpoint(core, checkpoint)

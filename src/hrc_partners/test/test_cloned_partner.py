@@ -1,4 +1,4 @@
-"""A cloned model as an offline partner acts at the rate it was cloned at (issue 22's leftovers).
+"""A cloned model as an offline partner acts at the rate it was cloned at.
 
 The offline loop calls a partner at the human's rate (the period's state, then each slice
 state); the model was cloned from recordings cut at the control period, so it acts on the
@@ -15,15 +15,15 @@ import torch
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import run_session as run_offline_session
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import compose_parameters, EngineConfig
 from hrc_engine.engine import run_session as run_engine_session
+from hrc_engine.offline import run_session as run_offline_session
+from hrc_engine.partners import ClonedPartner, make_partner, MixturePartner, parse_specs
 from hrc_joystick_node.human_core import core_from_parameters
-from hrc_joystick_node.human_model import build_network, ClonedHuman, save_human_model
-from hrc_partners.partners import ClonedPartner, make_partner, MixturePartner, parse_specs
+from hrc_joystick_node.human_model import build_network, save_human_model
 from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings
 from hrc_sim_node.sim_params import SimParams
@@ -106,35 +106,13 @@ def test_a_cloned_partner_acts_once_a_control_period_as_the_human_core_runs_it(m
     assert len(set(commands)) == EPISODES * STEPS
 
 
-def test_control_reproduces_the_old_partner_that_acted_at_every_call(model_file):
-    limits = limits_with(0.02)
-    old = ClonedHuman(model_file, 'rotation', control_period=limits.control_period)
-    expected = []
-    for episode, step, slice_index, _, state in moments(limits):
-        if step == 0 and slice_index == 0:
-            old.reset(episode)
-        expected.append(float(old.act(state, SUBTASKS)))
-    control = partner_commands(ClonedPartner(model_file, 'rotation', limits, 'control'), limits)
-    assert control == expected
-    assert partner_commands(ClonedPartner(model_file, 'rotation', limits), limits) != control
-    # one call a period (human_period = control_period): both give the same numbers
-    once = limits_with(limits.control_period)
-    assert once.human_slices == 1
-    assert partner_commands(ClonedPartner(model_file, 'rotation', once), once) == \
-        partner_commands(ClonedPartner(model_file, 'rotation', once, 'control'), once)
-
-
-def test_make_partner_and_the_mixture_pass_the_period_to_a_clone(model_file):
+def test_make_partner_and_the_mixture_hold_a_clone_over_the_slices(model_file):
     limits = limits_with(0.02)
     spec = parse_specs([f'model:{model_file}'])[0]
     assert make_partner(spec, 'rotation', 0, limits).calls_per_command == 10
-    assert make_partner(spec, 'rotation', 0, limits, period='control').calls_per_command == 1
-    for period, calls in (('human', 10), ('control', 1)):
-        mixture = MixturePartner([spec], 'rotation', 3, limits, period=period)
-        mixture.start_episode(0)
-        assert mixture.partner.calls_per_command == calls
-    with pytest.raises(ValueError, match="person period 'often'"):
-        ClonedPartner(model_file, 'rotation', limits, 'often')
+    mixture = MixturePartner([spec], 'rotation', 3, limits)
+    mixture.start_episode(0)
+    assert mixture.partner.calls_per_command == 10
 
 
 @pytest.mark.slow
@@ -155,17 +133,12 @@ def test_the_offline_loop_with_a_clone_runs_the_engines_session_with_input_model
     limits = SimLimits.of(physics)
     assert limits.human_slices == 10
 
-    def offline(period):
-        core = AgentCore(from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='')),
-                         limits=limits)
-        partner = ClonedPartner(model_file, core.human_dof, limits, period)
-        returns = []
-        with SliderPendulumBall(physics) as sim:
-            summary = run_offline_session(core, sim, partner, on_episode=lambda result, _:
-                                          returns.append(result.episode_return))
-        return returns, summary['evaluation']
-
-    returns, evaluation = offline('human')
+    core = AgentCore(from_dict(AgentParams, dict(parameters['agent'], checkpoint_dir='')),
+                     limits=limits)
+    partner = ClonedPartner(model_file, core.human_dof, limits)
+    returns = []
+    with SliderPendulumBall(physics) as sim:
+        summary = run_offline_session(core, sim, partner, on_episode=lambda result, _:
+                                      returns.append(result.episode_return))
     assert returns == [episode['episode_return'] for episode in engine.episodes]
-    assert evaluation == engine.evaluation
-    assert offline('control')[0] != returns
+    assert summary['evaluation'] == engine.evaluation

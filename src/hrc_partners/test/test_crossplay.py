@@ -7,7 +7,7 @@ from PIL import Image
 import pytest
 
 from hrc_partners import crossplay, crossplay_cli, training
-from hrc_partners.partners import parse_specs
+from hrc_engine.partners import parse_specs
 
 
 @pytest.mark.slow
@@ -66,7 +66,7 @@ def test_specs():
 def test_mixture_population_draws_profiles_people_and_clones(tmp_path):
     from hrc_common.contract import SimLimits
     from hrc_joystick_node.human_model import build_network, save_human_model
-    from hrc_partners.partners import MixturePartner, parse_spec
+    from hrc_engine.partners import MixturePartner, parse_spec
     from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
     config = {'history_steps': 2, 'hidden': [4], 'dof': 'translation', 'control_period': 0.2,

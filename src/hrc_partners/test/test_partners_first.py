@@ -15,16 +15,16 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.partners import person_seed, SimulatedHumanPartner
 from hrc_common.contract import EpisodeKind, SimLimits
 from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import SessionSettings
 from hrc_testing.sessions import easy_task_tree
 from hrc_engine.engine import compose_parameters, EngineConfig, run_session
+from hrc_engine.partners import (make_partner, MixturePartner, parse_specs, person_seed,
+                                 SimulatedHumanPartner)
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
-from hrc_partners.partners import make_partner, MixturePartner, parse_specs
 from hrc_partners.partners_first import (default_population, main, person_spec_of,
                                          population_settings, PopulationSettings,
                                          POPULATION_FIRST_PERSON, prepare_person_session,
@@ -182,28 +182,16 @@ def test_the_training_people_act_at_the_humans_rate_as_the_sessions_person(spec)
     direct = make_partner(parse_specs([spec])[0], 'rotation', 3, limits)
     direct.start_episode(0)
     assert direct.human.control_period == pytest.approx(limits.human_step)
-    old = MixturePartner(parse_specs([spec]), 'rotation', 3, limits, period='control')
-    old.start_episode(0)
-    assert old.partner.human.control_period == pytest.approx(limits.control_period)
-    with pytest.raises(ValueError, match="person period 'often'"):
-        MixturePartner(parse_specs([spec]), 'rotation', 3, limits, period='often')
 
 
-def test_a_training_person_acts_as_the_engines_person_and_control_as_before():
+def test_a_training_person_acts_as_the_engines_person():
     limits = SimLimits.of(PhysicsParams())
     person = sample_person(load_profile('paper'), 1000)
     seed = person_seed(5, 0)      # the MixturePartner's first draw's person seed
-    for period, seconds in (('human', limits.human_step), ('control', limits.control_period)):
-        mixture = MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5, limits,
-                                 period=period)
-        # the engine's person (human_core) for 'human'; the old pre-training's for 'control'
-        reference = SimulatedHumanPartner(person, 'rotation', seed, seconds)
-        assert _commands(mixture, 'rotation') == _commands(reference, 'rotation')
-    human = _commands(MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5, limits),
-                      'rotation')
-    control = _commands(MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5,
-                                       limits, period='control'), 'rotation')
-    assert human != control
+    mixture = MixturePartner(parse_specs(['person:paper:1000']), 'rotation', 5, limits)
+    # the engine's person (human_core): a SimulatedHuman built for the human period
+    reference = SimulatedHumanPartner(person, 'rotation', seed, limits.human_step)
+    assert _commands(mixture, 'rotation') == _commands(reference, 'rotation')
 
 
 def test_the_population_block_of_the_cases_file_mirrors_the_defaults(tmp_path):
@@ -212,12 +200,12 @@ def test_the_population_block_of_the_cases_file_mirrors_the_defaults(tmp_path):
     assert block == asdict(PopulationSettings())
     assert population_settings(params_dir() / 'cases.yaml').population() == default_population()
     cases['strategies']['partners_first']['population'] = dict(
-        block, profiles=[], budget=-1, person_period='sometimes')
+        block, profiles=[], budget=-1, first_person=-1)
     bad = tmp_path / 'cases.yaml'
     bad.write_text(yaml.safe_dump(cases))
     with pytest.raises(ValueError) as error:
         population_settings(bad)
-    for reason in ('budget: -1 is below the minimum 0', "person_period: 'sometimes'",
+    for reason in ('budget: -1 is below the minimum 0', 'first_person: -1 is below',
                    'profiles: a non-empty list'):
         assert reason in str(error.value)
     # the command line: exit 2, every reason, no traceback
@@ -250,10 +238,10 @@ def test_hrc_partners_train_meets_its_person_at_the_humans_rate():
     limits = SimLimits.of(PhysicsParams())
     core = AgentCore(with_overrides(AgentParams(), case=2, checkpoint_dir='', torch_threads=1),
                      limits=limits)
-    for period, seconds in (('human', limits.human_step), ('control', limits.control_period)):
-        partner, text = training_partner(core, 0, limits, 'paper', 0, period=period)
-        partner.start_episode(0)
-        assert partner.human.control_period == pytest.approx(seconds) and text == 'profile:paper'
+    partner, text = training_partner(core, 0, limits, 'paper', 0)
+    partner.start_episode(0)
+    assert partner.human.control_period == pytest.approx(limits.human_step)
+    assert text == 'profile:paper'
     mixture, text = training_partner(core, 0, limits, 'paper', 1, mixture=['population:novice'])
     mixture.start_episode(0)
     assert mixture.partner.human.control_period == pytest.approx(limits.human_step)

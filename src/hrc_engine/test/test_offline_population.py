@@ -4,8 +4,8 @@ import pytest
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_session
-from hrc_agent_node.partners import SimulatedHumanPartner
+from hrc_engine.offline import make_partner, run_session
+from hrc_engine.partners import SimulatedHumanPartner
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
 from hrc_joystick_node.human_profile import load_profile

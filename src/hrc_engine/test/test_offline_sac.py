@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 import torch
 
-from hrc_agent_node import offline
+from hrc_engine import offline
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import (CheckpointError, load_into, make_checkpoint,
                                        read_checkpoint, save_checkpoint)
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_episode
+from hrc_engine.offline import make_partner, run_episode
 from hrc_agent_node.sac import SAC, squashed_log_prob
 from hrc_common.contract import SimLimits
 from hrc_common.params import checked, ParameterError, with_overrides

@@ -15,7 +15,7 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import (CheckpointError, load_into, make_checkpoint,
                                        save_checkpoint)
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_session
+from hrc_engine.offline import make_partner, run_session
 from hrc_common.params import with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 

@@ -1,24 +1,24 @@
-"""A whole session in one process, without ROS: physics + partner + AgentCore + strategy.
+"""A whole session in one process with a partner, without ROS: the engine's loop, no bags.
 
-The same :class:`~hrc_agent_node.agent_core.AgentCore` calls as the agent node, in the same
-order (see agent_core.py), with the physics core stepped directly. It is the in-process
-baseline of the benchmark "full graph over DDS vs the same pure components in one process", the
-learning test's loop, and the tool for "episodes to convergence per case".
+The in-process loop of the engine (:mod:`hrc_engine.loop`: the sim's step protocol, the
+``AgentCore`` calls in the agent node's order) with an offline partner
+(:mod:`hrc_engine.partners`) as the human side instead of the human node's core, and
+nothing recorded. It is the learning tests' loop, the tool for "episodes to convergence per
+case", and the partner tools' (training with a population, evaluating a frozen agent with a
+partner, cross-play).
 
-A partner is a callable ``partner(state, subtasks) -> command in [-1, 1]`` on the human's
-degree of freedom (``ScriptedPartner``, or ``SimulatedHumanPartner``: hrc_joystick_node's
-simulated human, one person or a population). A partner with a ``start_episode(episode)``
-method is told each episode's index before it starts. When the current training step does not
-involve the human its command is 0 and it is not called.
+When the current training step does not involve the human the partner is not called (the
+human sends nothing; its command counts as 0).
 
 Command line::
 
-    python -m hrc_agent_node.offline --case 2 --preset tuned --episodes 60 --seed 0
-    python -m hrc_agent_node.offline --case 2 --preset tuned --partner human:paper \
+    python -m hrc_engine.offline --case 2 --episodes 60 --seed 0
+    python -m hrc_engine.offline --case 2 --partner human:paper \
         --population-every 1     # a new simulated person every episode (population training)
 """
 
 import argparse
+from dataclasses import fields
 import json
 import sys
 import time
@@ -26,93 +26,90 @@ import time
 import yaml
 
 from hrc_agent_node.agent_core import AgentCore
-from hrc_agent_node.checkpoint import load_into, save_checkpoint
+from hrc_agent_node.checkpoint import load_into, read_checkpoint, save_checkpoint
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.partners import person_period, ScriptedPartner, SimulatedHumanPartner
 from hrc_common.contract import SimLimits
-from hrc_common.params import with_overrides
+from hrc_common.params import from_dict, with_overrides
+from hrc_engine.loop import EpisodeLoop, LoopObserver, PartnerSide, run_agent_episode, \
+    run_agent_session
+from hrc_engine.partners import make_partner as partner_of_spec, ScriptedPartner, \
+    SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
-from hrc_sim_node.commands import wrench_on
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
-from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
-from hrc_sim_node.stepper import SimStepper
 
 
-def run_episode(core: AgentCore, sim, partner, on_step=None):
+def partner_loop(core: AgentCore, sim, partner) -> EpisodeLoop:
+    """Return the engine's loop on ``sim`` (a SliderPendulumBall) with ``partner`` as the human.
+
+    The sim's step protocol in lockstep with both actors, as the engine runs it; ``partner``
+    None: a human who answers zero.
+    """
+    return EpisodeLoop.on_physics(sim, PartnerSide(partner, SimLimits.of(sim.params)),
+                                  core.robot_dof)
+
+
+class _StepObserver(LoopObserver):
+    """Calls ``on_step(state, decision, human_action)`` after each decision."""
+
+    def __init__(self, on_step):
+        self.on_step = on_step
+
+    def decided(self, advanced, decision, answer, robot_wrench) -> None:
+        self.on_step(advanced.state, decision, answer.command if answer is not None else 0.0)
+
+
+def run_episode(core: AgentCore, sim, partner, on_step=None, loop: EpisodeLoop = None):
     """Run one episode of ``core`` on ``sim`` (a SliderPendulumBall); return its EpisodeResult.
 
-    The sim's step protocol in lockstep, as the in-process engine runs it
-    (``hrc_sim_node.stepper.SimStepper.run_period``): the partner answers the period's state
-    and, at the human's rate (``sim.params.human_period``), each state within the period; the
-    robot's action holds for the period. ``on_step(state, decision, human_action)`` is called
-    after each decision, if given (the partner's answer to the period's state).
+    ``on_step(state, decision, human_action)`` is called after each decision, if given (the
+    partner's answer to the period's state). ``loop``: the loop to run it on (default: a new
+    :func:`partner_loop`, whose clock starts at 0).
     """
-    plan = core.start_episode()
-    if hasattr(partner, 'start_episode'):
-        partner.start_episode(plan.episode)
-    params = sim.params
-    limits = SimLimits.of(params)
-    protocol = StepProtocol(ProtocolSettings(
-        control_period=params.control_period, max_force=params.max_force,
-        max_torque=params.max_torque, robot_dof=core.robot_dof,
-        human_period=params.human_period))
-    protocol.set_roles(core.robot_dof, plan.human_involved)
-    stepper = SimStepper(sim, protocol)
-    human_subtasks, human_dof = core.human_subtasks, core.human_dof
-    human_scale, robot_scale = limits.full_scale(human_dof), limits.full_scale(core.robot_dof)
+    loop = loop or partner_loop(core, sim, partner)
+    return run_agent_episode(core, loop, _StepObserver(on_step) if on_step else None)
 
-    def human_command(state) -> float:
-        if not plan.human_involved or partner is None:
-            return 0.0
-        return float(partner(state, human_subtasks))
 
-    advanced = stepper.start_episode(plan.episode, plan.seed)
-    while not advanced.episode_over:
-        state = advanced.state
-        human_action = human_command(state)
-        decision = core.act(advanced.observed,
-                            human_action if core.needs_human_action else None)
-        if on_step is not None:
-            on_step(state, decision, human_action)
-        advanced = stepper.run_period(
-            wrench_on(core.robot_dof, decision.action * robot_scale),
-            wrench_on(human_dof, human_action * human_scale),
-            lambda middle: wrench_on(human_dof, human_command(middle.state) * human_scale))
-    return core.end_episode(advanced.observed)
+class _SessionObserver(LoopObserver):
+    """The offline session's bookkeeping after each episode: checkpoint, report."""
+
+    def __init__(self, core, checkpoint_path, on_episode):
+        self.core = core
+        self.checkpoint_path = checkpoint_path
+        self.on_episode = on_episode
+        self.update_seconds = []
+        self.convergence = {}
+
+    def after_episode(self, result, stats) -> None:
+        if result.event in ('advanced', 'training_finished') and result.converged:
+            self.convergence[f'step{result.training_step}'] = self.core.total_episodes
+        if stats is not None:
+            self.update_seconds.append(stats['seconds'])
+        if self.checkpoint_path is not None:
+            save_checkpoint(self.core, self.checkpoint_path)
+        if self.on_episode is not None:
+            self.on_episode(result, stats)
 
 
 def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=None,
                 max_episodes=None) -> dict:
     """Run ``core`` until phase ``done`` (or ``max_episodes`` more episodes); return a summary.
 
-    After every episode: the PPO update when due, a checkpoint when ``checkpoint_path`` is
+    After every episode: the policy update when due, a checkpoint when ``checkpoint_path`` is
     given, then ``on_episode(result, update_stats)``. The core takes the control period and
     the limits from ``sim`` (a SliderPendulumBall), as the agent node takes the reset response's.
     """
     core.set_limits(SimLimits.of(sim.params))
     started = time.perf_counter()
-    update_seconds = []
-    convergence = {}
-    episodes_run = 0
-    while core.phase != 'done' and (max_episodes is None or episodes_run < max_episodes):
-        result = run_episode(core, sim, partner)
-        episodes_run += 1
-        if result.event in ('advanced', 'training_finished') and result.converged:
-            convergence[f'step{result.training_step}'] = core.total_episodes
-        stats = core.update() if core.phase == 'updating' else None
-        if stats is not None:
-            update_seconds.append(stats['seconds'])
-        if checkpoint_path is not None:
-            save_checkpoint(core, checkpoint_path)
-        if on_episode is not None:
-            on_episode(result, stats)
+    observer = _SessionObserver(core, checkpoint_path, on_episode)
+    run_agent_session(core, partner_loop(core, sim, partner), observer, max_episodes)
+    update_seconds = observer.update_seconds
     summary = {'case': core.case_id, 'strategy': core.strategy,
                'preset': core.preset, 'seed': core.seed,
                'training_episodes': core.total_episodes,
                'judging_episodes': core.judging_episodes,
                'human_involved_episodes': core.human_involved_episodes,
                'converged': core.converged,
-               'episodes_to_step_end': convergence,
+               'episodes_to_step_end': observer.convergence,
                'updates': len(update_seconds),
                'mean_update_seconds': (sum(update_seconds) / len(update_seconds)
                                        if update_seconds else 0.0),
@@ -122,7 +119,7 @@ def run_session(core: AgentCore, sim, partner, checkpoint_path=None, on_episode=
 
 
 def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str = 'scripted',
-                 population_every: int = 0, limits: SimLimits = None, period: str = 'human'):
+                 population_every: int = 0, limits: SimLimits = None):
     """Return the partner on the human's degree of freedom of ``core``'s case.
 
     ``limits``: the sim's control period and limits the partner acts with (default: those of
@@ -130,8 +127,8 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
 
     ``kind``: ``scripted`` (the PD partner, ``noise`` = std of its command) or
     ``human:<profile>`` (the simulated human of that profile; ``population_every`` N > 0 draws
-    a new person from the profile's population every N episodes; ``period``: how often that
-    person acts, :data:`~hrc_agent_node.partners.PERSON_PERIODS`).
+    a new person from the profile's population every N episodes; the person acts at the sim's
+    human period, as the engine's person).
     """
     if limits is None:
         limits = SimLimits.of(PhysicsParams())
@@ -141,7 +138,36 @@ def make_partner(core: AgentCore, noise: float = 0.0, seed: int = 0, kind: str =
     if not kind.startswith('human:'):
         raise ValueError(f"partner {kind!r}: expected 'scripted' or 'human:<profile>'")
     return SimulatedHumanPartner(load_profile(kind.split(':', 1)[1]), core.human_dof, seed,
-                                 person_period(limits, period), population_every)
+                                 limits.human_step, population_every)
+
+
+def evaluation_core(checkpoint, seed: int, episodes: int, overrides: dict = None):
+    """Return an AgentCore that evaluates ``checkpoint``'s frozen policy (``episodes``, seed)."""
+    config = read_checkpoint(checkpoint)['config']
+    settings = dict(seed=int(seed), evaluation_only=True, resume_from=str(checkpoint),
+                    evaluation_episodes=int(episodes), checkpoint_dir='', torch_threads=1)
+    settings.update(overrides or {})
+    # Checkpoints written before the sim's limits left AgentParams still hold max_force and
+    # max_torque among their params: those are the sim's now (run_session gives them).
+    known = {field.name for field in fields(AgentParams)}
+    trained = from_dict(AgentParams, {name: value for name, value in config['params'].items()
+                                      if name in known})
+    core = AgentCore(with_overrides(trained, **settings))
+    load_into(core, checkpoint, resume=False)
+    return core
+
+
+def evaluate(checkpoint, spec, seed: int, episodes: int, physics_overrides: dict = None,
+             profiles_file=None) -> float:
+    """Return the mean total error of ``checkpoint``'s frozen policy with ``spec`` (one seed).
+
+    ``spec``: a :class:`hrc_engine.partners.PartnerSpec`.
+    """
+    physics = with_overrides(PhysicsParams(), **(physics_overrides or {}))
+    core = evaluation_core(checkpoint, seed, episodes)
+    partner = partner_of_spec(spec, core.human_dof, seed, SimLimits.of(physics), profiles_file)
+    with SliderPendulumBall(physics) as sim:
+        return float(run_session(core, sim, partner)['evaluation']['total_error'])
 
 
 def main(argv=None) -> int:

@@ -12,7 +12,7 @@ import pytest
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_agent_node.offline import make_partner, run_session
+from hrc_engine.offline import make_partner, run_session
 from hrc_common.params import with_overrides
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
