@@ -17,9 +17,9 @@ type (a typo) raises ValueError naming every such key. CDR bytes are passed thro
 Cost (``bench/serializer.py``: the engine's step CPU time with this serializer against the
 hand-written ``struct`` encoder it replaced, alternating in one run; 2026-12-04, 2 cores
 shared): 1.000 and 1.023 in two runs with SAC updating inside the episodes (7.2-7.8 ms a
-step), 1.021 (case 2) and
-1.010 (case 4) with the earlier episode-end learner (0.44 and 1.1 ms a step); about 5.5
-against 4.2 us a message. Well within 5% of the step, so no hand-written encoder stays.
+step), 1.021 (case 2) and 1.010 (case 4) with the earlier episode-end learner (0.44 and
+1.1 ms a step); about 5.5 against 4.2 us a message. Within 5% of the step, so no
+hand-written encoder stays.
 """
 
 import functools
