@@ -252,11 +252,12 @@ def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(session
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     steps = graph_messages['/hrc/agent/step'][0]
     assert len(steps) == 40 and not steps[0]['deterministic']
-    # Two updates each: inside episode 0 (step 30) and at its end (10 samples); the earlier
-    # rule would have made one, at the end.
+    # Three updates each: inside episode 0 (step 30), at its end (10 samples), inside episode 1
+    # (step 30; the ppo configuration judges after every 2nd training episode, so episode 1
+    # trains too); training ends with episode 1 (--episodes 2), its last 10 samples dropped.
     for run_dir in (folder / 'graph', folder / 'engine'):
         final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
-        assert final['core']['ppo']['updates'] == 2, run_dir
+        assert final['core']['ppo']['updates'] == 3, run_dir
 
 
 @pytest.mark.slow
