@@ -13,11 +13,12 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader, cdr_peek, report
+from hrc_bag.boundaries import boundary_event
 from hrc_bag.format import (contract_description, EPISODE_RECORD, FileInfo, plain_values,
                             RawMessage, SESSION_RECORD)
 from hrc_bag.qos_yaml import dump_yaml
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.recording import EpisodeRecorder
 from hrc_bag.session_index import bag_metadata, dump_bag_metadata
 from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
 from hrc_testing.bag_traffic import SyntheticSession, type_name_of

@@ -57,6 +57,13 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar='FILE', help='a ROS 2 parameter file whose node sections '
                         'override params/*.yaml, e.g. the joystick_setup output (repeatable; '
                         '--set wins)')
+    add_person_options(parser)
+    add_process_options(parser)
+    return parser
+
+
+def add_person_options(parser: argparse.ArgumentParser) -> None:
+    """Add the flags of a session with a person: pages, questionnaire, practice, input."""
     parser.add_argument('--display', action='store_true',
                         help='also start the display node (hrc_live): the page for the person '
                         'on http://127.0.0.1:<port>/ and the console on /console '
@@ -94,6 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
                         help='realtime with --human device|joy|auto: wait this long for the input '
                         'before refusing to start (default 120 s)')
+
+
+def add_process_options(parser: argparse.ArgumentParser) -> None:
+    """Add the flags of how the session's processes run: domain, report, priority, timeout."""
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
     parser.add_argument('--no-report', dest='report', action='store_false',
@@ -104,7 +115,6 @@ def build_parser() -> argparse.ArgumentParser:
                         'not slow the control loop; 0 = same priority as the nodes')
     parser.add_argument('--timeout', type=float, default=0.0,
                         help='stop the session after this many wall seconds (0 = none)')
-    return parser
 
 
 def parse_args(argv=None):

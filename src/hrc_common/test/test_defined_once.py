@@ -8,7 +8,7 @@ import ast
 import pathlib
 import re
 
-from hrc_common.contract import case_table, paper_case_ids
+from hrc_common.cases import case_table, paper_case_ids
 from hrc_common.study_index import PAPER_CASES
 
 REPOSITORY = pathlib.Path(__file__).resolve().parents[3]

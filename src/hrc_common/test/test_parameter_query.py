@@ -11,7 +11,7 @@ import time
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters
 
-from hrc_common.nodes import LeanExecutor
+from hrc_common.executors import LeanExecutor
 from hrc_common.parameter_query import ParameterQuery
 
 

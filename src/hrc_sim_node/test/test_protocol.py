@@ -3,7 +3,8 @@
 from types import SimpleNamespace
 
 from hrc_sim_node.protocol import (MAX_EPISODE, per_dof, ProtocolError, ProtocolSettings,
-                                   roles, stamp_ns, StepProtocol, WarningThrottle)
+                                   roles, stamp_ns, StepProtocol)
+from hrc_sim_node.sim_log import WarningThrottle
 import pytest
 
 PERIOD_NS = 200_000_000
