@@ -71,14 +71,15 @@ import yaml
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
 from hrc_bag.boundaries import SessionSeen, StateSeen, SummarySeen
-from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem,
-                            file_mode, RawMessage, RecordingError,
-                            session_custom_data, SESSION_RECORD, session_record, SessionIndex,
+from hrc_bag.episode_file import EpisodeFile
+from hrc_bag.format import (describe_error, episode_file_stem, file_mode, RawMessage,
+                            RecordingError, session_custom_data, SESSION_RECORD, session_record,
                             TopicDescription, unused_path)
 from hrc_bag.qos_yaml import load_yaml
 from hrc_bag.reception_order import ReceptionOrder
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recovery import recover_file
+from hrc_bag.session_index import SessionIndex
 
 
 # metadata.yaml custom data: {episode: [file, ...]} of the episodes recorded more than once
