@@ -31,10 +31,8 @@ a transition is stored, which AgentCore does inside ``act()`` (before the next a
 and ``end_episode()``, so the steps where learning happens are defined by the episode alone
 (lockstep sessions, the graph and the in-process engine stay identical); ``episode_end`` = the
 gradient steps owed for an episode's transitions run in ``update()``, between episodes.
-In the agent node's realtime episodes (a person at a device) the owed steps of the ``step``
-schedule run in a learner thread instead (``sac_background``): the control step only stores the
-transition and acts, so learning never delays the person's loop; what the thread has not done
-by the episode's end runs in ``update()``.
+In the agent node's realtime episodes the owed steps of the ``step`` schedule run in a learner
+thread instead (``sac_background``): the control step only stores the transition and acts.
 
 All randomness (initialization, exploration noise, dropout masks, minibatch sampling, the
 policy's samples in the updates) comes from generators owned by :class:`SAC`, never from
