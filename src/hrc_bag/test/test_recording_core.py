@@ -406,7 +406,7 @@ def test_a_recorder_on_a_folder_with_an_unusable_metadata_yaml_lists_the_files_a
 def test_the_graph_is_asked_once_per_topic_and_file_not_per_message(tmp_path):
     """The topic's description (a ROS graph query in the node) only when a channel is made.
 
-    Before issue 24 the recorder asked for it at every message: at the human's rate (ten
+    Earlier the recorder asked for it at every message: at the human's rate (ten
     commands a step) that query was most of the recorder's CPU. The files are unchanged: the
     description is used only to register the channel.
     """

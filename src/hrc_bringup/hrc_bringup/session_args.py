@@ -10,7 +10,7 @@ from hrc_common.session_plan import (add_learning_option, NODES, new_session_id,
 from hrc_live.study import consent_problem, load_registry, StudyError
 import yaml
 
-# issue 25: the largest ROS_DOMAIN_ID: the RTPS port of domain d is 7400 + 250 d + offsets, and
+# The largest ROS_DOMAIN_ID: the RTPS port of domain d is 7400 + 250 d + offsets, and
 # 232 is the last id whose ports fit in 16 bits (ROS 2 docs, "The ROS_DOMAIN_ID").
 MAX_DOMAIN_ID = 232
 
@@ -154,7 +154,7 @@ def parse_args(argv=None):
         reasons.append('the session id must not contain the subject id (it names files)')
     if options.tlx and not options.display:
         reasons.append('--tlx needs --display (the questionnaire is on the page)')
-    # issue 25: an id outside DDS's range is refused before anything starts
+    # An id outside DDS's range is refused before anything starts
     if options.domain_id is not None and not 0 <= options.domain_id <= MAX_DOMAIN_ID:
         reasons.append(f'--domain-id {options.domain_id} is outside the range of DDS domain '
                        f'ids 0..{MAX_DOMAIN_ID} (higher ids give UDP ports above 65535)')

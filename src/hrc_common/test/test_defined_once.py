@@ -1,4 +1,4 @@
-"""Contracts written once (issue 20): no copy of the case table, control period or params lookup.
+"""Contracts written once: no copy of the case table, control period or params lookup.
 
 Scans the project's code that is not a test (packages, their benches, bench/, scripts/): a
 copy of a contract that appears again makes the test name the file and line.

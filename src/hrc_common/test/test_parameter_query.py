@@ -1,4 +1,4 @@
-"""ParameterQuery asks again when its request is never answered (issue 24's benchmark hang).
+"""ParameterQuery asks again when its request is never answered.
 
 In one graph start of about twenty the human node sent its request for the sim's limits and
 never got an answer: it waited forever and the sim counted every human command missing. Here

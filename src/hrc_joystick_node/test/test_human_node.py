@@ -252,7 +252,7 @@ def test_follows_the_session_roles_and_sends_nothing_when_not_involved(start_nod
 
     harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
     assert harness.spin_until(lambda: 'not involved' in process.output), process.output
-    # Sitting out: no answer at all (issue 24; the sim awaits the robot only then).
+    # Sitting out: no answer at all (the sim awaits the robot only then).
     silent = [task_state(0, step, slider_position=0.05) for step in range(2, 5)]
     for state in silent:
         harness.states.publish(state)

@@ -1,4 +1,4 @@
-"""The human's command at its own rate (issue 21): physics slices, protocol slices, the stepper.
+"""The human's command at its own rate: physics slices, protocol slices, the stepper.
 
 Pure cores (PyBullet, no ROS). A person's command that changes within a control period must
 change the physics within that period; with ``human_period = control_period`` everything is as
@@ -132,7 +132,7 @@ def test_a_human_who_sits_out_or_acts_once_a_period_steps_whole_periods_as_befor
 
 
 def test_a_human_who_sits_out_is_neither_awaited_nor_missing():
-    """Issue 24: the robot's answer alone steps a robot-alone period; nothing is missing."""
+    """The robot's answer alone steps a robot-alone period; nothing is missing."""
     protocol = lockstep(SLICED, human_involved=False)
     assert not protocol.awaits_human and protocol.awaited_actors() == ('robot',)
     protocol.start_episode(0)
