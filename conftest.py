@@ -99,17 +99,10 @@ def pytest_runtest_makereport(item, call):
 
 @pytest.fixture(scope='session')
 def rosbags_typestore():
-    """Return a rosbags typestore of ROS 2 Jazzy plus the installed hrc_msgs types."""
-    from ament_index_python.packages import get_package_share_directory
-    from rosbags.typesys import get_types_from_msg, get_typestore, Stores
+    """Return the serializer's rosbags typestore: ROS 2 Jazzy plus the installed hrc_msgs."""
+    from hrc_bag import serializer
 
-    typestore = get_typestore(Stores.ROS2_JAZZY)
-    types = {}
-    folder = pathlib.Path(get_package_share_directory('hrc_msgs')) / 'msg'
-    for path in sorted(folder.glob('*.msg')):
-        types.update(get_types_from_msg(path.read_text(), f'hrc_msgs/msg/{path.stem}'))
-    typestore.register(types)
-    return typestore
+    return serializer.typestore()
 
 
 @pytest.fixture

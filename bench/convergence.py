@@ -18,7 +18,7 @@ import yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 from hrc_common.params import with_overrides
 from hrc_engine.offline import make_partner, run_session
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall

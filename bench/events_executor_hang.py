@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Minimal reproduction: why the graph hung with every node on rclpy's EventsExecutor.
+"""Minimal reproduction: why the hrc nodes do not spin on rclpy's EventsExecutor.
 
     python bench/events_executor_hang.py          # from any directory, ~10 s
 
@@ -16,7 +16,9 @@ executor runs in its own process, killed (SIGKILL) after a few seconds if it doe
   process ends.
 
 So the executor's blocking wait without a timeout holds the interpreter (no other thread, no
-callback); hrc_common.nodes.spin turns it with a timeout ('events' in HRC_EXECUTOR).
+callback): an rclpy bug (Jazzy, rclpy 7.1). It also has no guard conditions, which the human
+node needs. Kept to check a newer rclpy before the executor is reconsidered (docs/engines.md,
+"The nodes' executor").
 """
 
 import subprocess

@@ -13,7 +13,7 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    human rate (``--human-periods``, default 0.2 and 0.02 s);
 3. graph: ms per control step of the ``session`` graph (sim, agent, human as processes over
    DDS) without and with the recorder, at each human rate, for each executor of the nodes
-   (``HRC_EXECUTOR``, hrc_common.nodes);
+   (``HRC_EXECUTOR``, hrc_common.executors);
 4. the share of the middleware's limit the graph reaches: graph step / (round trip x round
    trips per step + engine step), where a lockstep step takes 1 round trip with the human
    acting once a period and ``control_period / human_period`` round trips at the human's rate
@@ -26,8 +26,8 @@ Prints, measured in the same run (so that the machine's load hits every figure a
    update's learner thread, are left out in both runs; also split by process, and what each
    process spends more with the recorder), and the recorder process's own CPU (its
    last log line), for each recorder variant named
-   (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s;
-   ``per-message``, ``recorder.batch_period=0``, a callback per message as before issue 24).
+   (``--recorders``: ``batched``, the default, drains its subscriptions every 0.05 s; the
+   recorder with a callback per message is commit 8c1b998's ``per-message``).
 5. with ``--compose sim,human ...``: the graph with those nodes in one process
    (``HRC_COMPOSE``, hrc_bringup.compose_nodes) against the same graph with a process per node:
    a composition with the recorder runs with the (batched) recorder and is compared with the
@@ -58,7 +58,7 @@ PING = '/bench/ping'
 PONG = '/bench/pong'
 CONTROL_PERIOD_S = 0.2
 # recorder variant -> its `hrc session --set` overrides
-RECORDERS = {'batched': (), 'per-message': ('recorder.batch_period=0.0',)}
+RECORDERS = {'batched': ()}
 
 
 def echo(domain_id: int, executor_name: str) -> int:
@@ -66,7 +66,7 @@ def echo(domain_id: int, executor_name: str) -> int:
     import rclpy  # lazy: rclpy only in the ping-pong processes
     from geometry_msgs.msg import WrenchStamped  # lazy: as rclpy above
     from hrc_common import qos  # lazy: as rclpy above
-    from hrc_common.nodes import make_executor  # lazy: as rclpy above
+    from hrc_common.executors import make_executor  # lazy: as rclpy above
     from hrc_msgs.msg import TaskState  # lazy: as rclpy above
 
     rclpy.init(domain_id=domain_id)
@@ -95,7 +95,7 @@ def ping_pong(domain_id: int, executor_name: str, round_trips: int) -> float:
     import rclpy  # lazy: rclpy only in the ping-pong processes
     from geometry_msgs.msg import WrenchStamped  # lazy: as rclpy above
     from hrc_common import qos  # lazy: as rclpy above
-    from hrc_common.nodes import make_executor  # lazy: as rclpy above
+    from hrc_common.executors import make_executor  # lazy: as rclpy above
     from hrc_msgs.msg import TaskState  # lazy: as rclpy above
     from rclpy.context import Context  # lazy: as rclpy above
 
@@ -201,10 +201,10 @@ def main() -> int:
     parser.add_argument('--round-trips', type=int, default=2000)
     parser.add_argument('--human-periods', type=float, nargs='+', default=[0.2, 0.02])
     parser.add_argument('--executors', nargs='+', default=['lean', 'rclpy'],
-                        choices=('lean', 'rclpy', 'events'),
+                        choices=('lean', 'rclpy'),
                         help='executors of the nodes and of the ping-pong (HRC_EXECUTOR)')
     parser.add_argument('--graph-executors', nargs='+', default=None,
-                        choices=('lean', 'rclpy', 'events'),
+                        choices=('lean', 'rclpy'),
                         help='executors of the graph runs (default: --executors)')
     parser.add_argument('--recorders', nargs='+', default=['batched'],
                         choices=tuple(RECORDERS),

@@ -31,7 +31,7 @@ ratio::
     python bench/realtime_jitter.py --compare-learning --rounds 2
 
 ``--realtime-priority N`` runs the session's nodes on SCHED_FIFO at priority N
-(``HRC_REALTIME_PRIORITY``, hrc_common.nodes) and this listener's threads at the same priority,
+(``HRC_REALTIME_PRIORITY``, hrc_common.realtime) and this listener's threads at the same priority,
 so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
 
 Each run prints the settings it ran with (case, executor, human period, realtime priority, the
@@ -55,10 +55,10 @@ from rclpy.context import Context
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
 from hrc_common import qos, topics
-from hrc_common.nodes import (apply_realtime_priority, EXECUTOR_VARIABLE,
-                              REALTIME_PRIORITY_VARIABLE)
 from hrc_common.executables import executable_path
+from hrc_common.executors import EXECUTOR_VARIABLE
 from hrc_common.paths import params_dir
+from hrc_common.realtime import apply_realtime_priority, REALTIME_PRIORITY_VARIABLE
 from hrc_common.session_plan import add_learning_option, load_learning
 from hrc_msgs.msg import TaskState
 

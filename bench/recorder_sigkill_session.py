@@ -116,7 +116,12 @@ def trial(number: int, kill_after: float, finished: float, episodes: int, work: 
         node.destroy_node()
         rclpy.shutdown(context=context)
         log.close()
-    folder = pathlib.Path(work, 'bags', session_id)
+    return examine(pathlib.Path(work, 'bags', session_id), session_id, heard, kill_ns, finished)
+
+
+def examine(folder: pathlib.Path, session_id: str, heard: dict, kill_ns: int,
+            finished: float) -> dict:
+    """Return what the kill at ``kill_ns`` cost: the episodes heard ``finished`` s before it."""
     closed = bag_reader.read_bag_metadata_yaml(folder).get('relative_file_paths') or []
     problems = {}
     done = {episode: info for episode, info in heard.items()

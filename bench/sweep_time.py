@@ -23,7 +23,7 @@ import sys
 import tempfile
 import time
 
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 from hrc_common.executables import executable_path
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import EngineConfig, run_session

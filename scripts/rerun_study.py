@@ -46,7 +46,7 @@ import sys
 import time
 
 try:
-    from hrc_common.contract import case_ids
+    from hrc_common.cases import case_ids
     from hrc_bag.report import load_records
     from hrc_common.paths import params_dir
     from hrc_common.session_plan import DEFAULT_LEARNING, learning_names

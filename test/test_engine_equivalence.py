@@ -92,15 +92,13 @@ def run_both(tmp_path, domain_id: int, args: list, read_rosbag, env=None) -> tup
     return read_rosbag(graph_dir / 'bags' / 'same'), read_rosbag(engine_dir / 'bags' / 'same')
 
 
-def assert_same(graph_bag, engine_bag, episodes, human_sits_out_silent=True) -> dict:
+def assert_same(graph_bag, engine_bag, episodes) -> dict:
     """Assert every message of TOPICS equal episode by episode; return the graph's grouped."""
     graph_messages, engine_messages = by_episode(graph_bag), by_episode(engine_bag)
-    # A human who sits out a training step sends nothing (issue 24): the human's topics have
-    # the episodes where the human is involved only, in both (every episode with the sim's
-    # await_absent_human: human_sits_out_silent False).
+    # A human who sits out a training step sends nothing: the human's topics have the
+    # episodes where the human is involved only, in both.
     involved = [episode for episode in episodes
-                if graph_messages['/hrc/episode'][episode][0]['human_involved']
-                or not human_sits_out_silent]
+                if graph_messages['/hrc/episode'][episode][0]['human_involved']]
     for topic in TOPICS:
         wanted = involved if topic in HUMAN_TOPICS else list(episodes)
         assert sorted(graph_messages[topic]) == wanted, topic
@@ -155,13 +153,11 @@ SESSIONS = {
     'main': (ARGS, {}),
     **{f'case{case}': (['--case', str(case), *SHORT], {}) for case in OTHER_CASES},
     'update_inside': (UPDATE_INSIDE_ARGS, {}),
-    # the graph's nodes on rclpy's own SingleThreadedExecutor (as before issue 24)
+    # the graph's nodes on rclpy's own SingleThreadedExecutor (HRC_EXECUTOR's escape hatch)
     'scripted_stick': (['--case', '5', *SHORT, '--human', 'script', '--set',
                         'human.script_file={script}', '--set', 'human.enable_button=0'],
                        {'HRC_EXECUTOR': 'rclpy'}),
     'composed': (['--case', '5', *SHORT], {'HRC_COMPOSE': 'sim,human,recorder'}),
-    # the protocol before issue 24's change: the human answers zero while sitting out
-    'await_absent': (['--case', '2', *SHORT, '--set', 'sim.await_absent_human=true'], {}),
 }
 CONCURRENT_SESSIONS = 5     # at most this many at once (each graph is 4-5 processes)
 
@@ -228,19 +224,6 @@ def test_every_case_is_the_same_in_the_graph_and_the_engine(sessions, case):
 
 
 @pytest.mark.slow
-def test_await_absent_human_keeps_the_graph_and_the_engine_identical(sessions):
-    """The sim's setting for the protocol before issue 24: zeros while the human sits out."""
-    graph_bag, engine_bag, _ = outcome_of(sessions, 'await_absent')
-    graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2), human_sits_out_silent=False)
-    assert not graph_messages['/hrc/episode'][0][0]['human_involved']
-    alone = graph_messages['/hrc/human/action'][0]
-    assert len(alone) == 10 and all(action['command'] == 0.0 and not action['engaged']
-                                    for action in alone)
-    assert not any(state['human_command_missing'] for state in graph_messages['/hrc/state'][0])
-
-
-
-@pytest.mark.slow
 def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(sessions):
     """PPO with horizon 30: an update inside the first episode.
 
@@ -252,11 +235,12 @@ def test_updates_inside_episodes_keep_the_graph_and_the_engine_identical(session
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))
     steps = graph_messages['/hrc/agent/step'][0]
     assert len(steps) == 40 and not steps[0]['deterministic']
-    # Two updates each: inside episode 0 (step 30) and at its end (10 samples); the earlier
-    # rule would have made one, at the end.
+    # Three updates each: inside episode 0 (step 30), at its end (10 samples), inside episode 1
+    # (step 30; the ppo configuration judges after every 2nd training episode, so episode 1
+    # trains too); training ends with episode 1 (--episodes 2), its last 10 samples dropped.
     for run_dir in (folder / 'graph', folder / 'engine'):
         final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
-        assert final['core']['ppo']['updates'] == 2, run_dir
+        assert final['core']['ppo']['updates'] == 3, run_dir
 
 
 @pytest.mark.slow
@@ -268,9 +252,8 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(ses
     (every 0.06 s), so the slices of a period carry different commands.
 
     The graph's nodes run here on rclpy's own SingleThreadedExecutor (``HRC_EXECUTOR=rclpy``,
-    as before issue 24), bit for bit as the engine; the default, ``lean``
-    (hrc_common.nodes.LeanExecutor), is every other test of this file. ``events`` cannot run
-    the graph: the human node has a guard condition, which rclpy's EventsExecutor refuses.
+    the escape hatch), bit for bit as the engine; the default, ``lean``
+    (hrc_common.executors.LeanExecutor), is every other test of this file.
     """
     graph_bag, engine_bag, _ = outcome_of(sessions, 'scripted_stick')
     graph_messages = assert_same(graph_bag, engine_bag, (0, 1, 2))

@@ -28,7 +28,7 @@ def console_scripts():
 
 SCRIPTS = list(console_scripts())
 # The executables the README promises: the nodes (`ros2 run <package> <node>`) and the one
-# command line `hrc` (issue 20: every other command is a verb of it, no alias is left).
+# command line `hrc` (every other command is a verb of it, no alias is left).
 PROMISED = {('hrc_sim_node', 'sim_node'), ('hrc_agent_node', 'agent_node'),
             ('hrc_joystick_node', 'human_node'), ('hrc_bag', 'recorder_node'),
             ('hrc_bag', 'replay_node'), ('hrc_live', 'display_node'), ('hrc_bringup', 'hrc')}

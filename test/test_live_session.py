@@ -223,7 +223,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
                            for record in records.values()), records
     names = [path.name for path in tmp_path.rglob('*')]
     assert not [name for name in names if SUBJECT.lower() in name.lower()]
-    # Issue 25: with a subject id every output is owner-only, checkpoints and folders included.
+    # With a subject id every output is owner-only, checkpoints and folders included.
     modes = {str(path.relative_to(tmp_path)): path.stat().st_mode & 0o777
              for root in (tmp_path / 'runs', tmp_path / 'bags')
              for path in [root, *root.rglob('*')]}
@@ -259,7 +259,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
     assert len(session_records(bags)) > len(records)
 
 
-# --------------------------------------------------------------------------- issue 14
+# --------------------------------------------------------------------------- the person joins
 # Case 2 learns the task first: the robot alone (lockstep, no wall time waited), then the person
 # joins (realtime). A task tree with loose tolerances makes each training step converge after
 # `convergence_window` (1) episode, so both steps come quickly.
@@ -478,7 +478,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         assert watcher.wait(lambda: 'waiting for the person' in output(), 60), output()
         assert 'no program writes to it' in output() and 'Fix: plug the joystick in' in output()
         assert not watcher.statuses, 'no node may start before the input is there'
-        # Issue 25: the page is served from the start, its address printed.
+        # The page is served from the start, its address printed.
         address = re.search(r"the person's page: (http://127\.0\.0\.1:\d+/)", output())
         assert address and output().index("person's page") < output().index('waiting for'), \
             output()
@@ -519,7 +519,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
-    # What the person read, in order (issue 25): the lost joystick (never "stopped by the
+    # What the person read, in order: the lost joystick (never "stopped by the
     # operator", no FIFO detail), then the countdown of the resume, then their turn again.
     from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE
     banners = page_words.banners()
@@ -548,7 +548,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert HumanAction.SOURCE_SIMULATED not in {source for source, _ in sources}, sources
     assert sources[(HumanAction.SOURCE_DEVICE, True)] >= SHORT_STEPS, sources
     assert [s.episode for s in bag['/hrc/episode']] == list(range(len(summaries)))
-    # Each attempt of the interrupted episode is filed as itself (issue 25): the dropped one in
+    # Each attempt of the interrupted episode is filed as itself: the dropped one in
     # its own file, the complete re-run in <id>_ep<n>_attempt2.mcap, both in metadata.yaml;
     # the report counts the re-run and says so.
     from hrc_bag import bag_reader
@@ -576,7 +576,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
                for notice in report.notices), report.notices
 
 
-# --------------------------------------------------------------------------- issue 25
+# --------------------------------------------------------------------------- refusals
 def test_a_domain_id_outside_the_dds_range_is_refused_before_anything_starts(tmp_path, capsys):
     # In this process (the `hrc` command's entry point; a process of its own spends seconds on
     # imports only to refuse): a traceback would fail the test, as would a started session.

@@ -52,7 +52,7 @@ def test_env_sh_from_another_directory_gives_ros2_run():
 
 
 def test_the_shim_notice_comes_once_per_shell_and_env_sh_says_it_needs_bash():
-    """Issue 25: the notice came on every ``ros2`` call, and env.sh failed under ``sh``."""
+    """The notice came on every ``ros2`` call, and env.sh failed under ``sh``."""
     result = fresh_shell(f'ros2 pkg prefix hrc_live && ros2 pkg prefix hrc_sim_node && '
                          f'source {shlex.quote(str(ENV_SH))} && ros2 pkg prefix hrc_live && '
                          f'bash -c "ros2 pkg prefix hrc_live"')

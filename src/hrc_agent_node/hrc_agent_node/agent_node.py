@@ -301,7 +301,7 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         """Return the sim's clock for the next episode (ResetEpisode.clock_mode).
 
         The session's mode while the person acts; lockstep, without a break, while the robot
-        practises alone, so the person does not wait for it (issue 14, hrc_live).
+        practises alone, so the person does not wait for it (hrc_live).
         """
         return self.params.mode if self.core.human_involved else 'lockstep'
 

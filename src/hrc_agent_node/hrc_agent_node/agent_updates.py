@@ -31,19 +31,29 @@ class UpdateSchedule:
     @property
     def learner_mode(self) -> str:
         """Return 'synchronous' (update at once, deterministic) or 'background' (realtime)."""
+        if self.off_policy:
+            return 'background' if self.policy_learner.background is not None else 'synchronous'
         return self.learner.mode
 
     def set_learner_mode(self, mode: str) -> None:
         """Run the next updates synchronously or in the background (between episodes only).
 
-        The agent node runs its realtime episodes with ``background`` so an update inside an
-        episode never delays a control step; everything else is ``synchronous``.
+        The agent node runs its realtime episodes with ``background`` so learning inside an
+        episode never delays a control step (PPO: the update in a learner thread; SAC: its
+        per-step gradient steps in a learner thread, ``sac_background``); everything else is
+        ``synchronous``.
         """
         if self._log is not None:
             raise RuntimeError(f'episode {self.episode} is running: change the learner between '
                                'episodes')
-        if mode == self.learner.mode or self.off_policy:
-            return       # SAC learns inside act() itself (sac_update_at), never in a thread
+        if mode not in ('synchronous', 'background'):
+            raise ValueError(f"learner mode {mode!r} is not 'synchronous' or 'background'")
+        if self.off_policy:
+            self.policy_learner.set_background(mode == 'background', self.params.learner_niceness,
+                                               self.params.learner_switch_interval)
+            return
+        if mode == self.learner.mode:
+            return
         self._settle_learner()
         self.learner = make_learner(mode, self.ppo, self.params.learner_niceness,
                                     self.params.learner_switch_interval)

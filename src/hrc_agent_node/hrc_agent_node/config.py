@@ -112,13 +112,14 @@ class AgentParams:
                               'that step and bootstrapped from V of its state',
                          low=2, high=1000000)
     learner_niceness: int = param(
-        10, "Realtime episodes (PPO updates in the learner thread): how much lower the learner "
+        10, "Realtime episodes (the learner thread: PPO's updates, SAC's gradient steps): how "
+        "much lower the learner "
         "thread's scheduling priority (nice) is than the node's, so that on a machine with few "
         "cores the control steps of the sim, the person and the agent run first; 0 = the same "
         'priority', low=0, high=19)
     learner_switch_interval: float = param(
         REALTIME_SWITCH_INTERVAL_S, "Realtime episodes: the interpreter's thread switch "
-        'interval (s) while a PPO update runs in the learner thread, about the longest the '
+        'interval (s) while the learner thread runs, about the longest the '
         "control thread waits for the interpreter lock; 0 = leave Python's (5 ms unless "
         'HRC_REALTIME_PRIORITY set 0.5 ms)', low=0.0, high=0.1)
     minibatch_size: int = param(64, 'Minibatch size (Table I)', low=1, high=1000000)

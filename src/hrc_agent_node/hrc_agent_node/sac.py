@@ -30,8 +30,9 @@ When it learns (:attr:`SAC.update_schedule`): ``step`` = the owed gradient steps
 a transition is stored, which AgentCore does inside ``act()`` (before the next action is chosen)
 and ``end_episode()``, so the steps where learning happens are defined by the episode alone
 (lockstep sessions, the graph and the in-process engine stay identical); ``episode_end`` = the
-gradient steps owed for an episode's transitions run in ``update()``, between episodes (a
-realtime session's control steps are never delayed by learning).
+gradient steps owed for an episode's transitions run in ``update()``, between episodes.
+In the agent node's realtime episodes the owed steps of the ``step`` schedule run in a learner
+thread instead (``sac_background``): the control step only stores the transition and acts.
 
 All randomness (initialization, exploration noise, dropout masks, minibatch sampling, the
 policy's samples in the updates) comes from generators owned by :class:`SAC`, never from
@@ -39,11 +40,14 @@ torch's global generator, so a run is reproduced from its seed and restored from
 """
 
 import math
+import threading
 import time
 
 import numpy as np
 import torch
 from torch import nn
+
+from hrc_agent_node.sac_background import BackgroundSACLearning
 
 LOG_STD_MIN = -5.0
 LOG_STD_MAX = 2.0
@@ -251,6 +255,13 @@ class SAC:
         self.gradient_steps = 0      # critic gradient steps in total
         self.pending_updates = 0     # stored transitions whose gradient steps are owed
         self._since_report = _Totals()
+        # Held by every use of the networks, the optimizers and the replay buffer: a learner
+        # thread (sac_background) takes it per gradient step, the control thread to act.
+        self.lock = threading.RLock()
+        # Held while one owed transition is learned, by the thread or update(): update() waits
+        # on it so that no claimed transition is still being learned when it reports.
+        self._transition = threading.Lock()
+        self.background = None       # a BackgroundSACLearning while realtime episodes run
 
     def _make_critic(self) -> CriticEnsemble:
         config = self.config
@@ -274,6 +285,10 @@ class SAC:
 
         Q is the ensemble's mean estimate (dropout off) of the action taken, for the records.
         """
+        with self.lock:
+            return self._act(observation, deterministic)
+
+    def _act(self, observation, deterministic: bool) -> tuple:
         obs = torch.as_tensor(np.asarray(observation, dtype=np.float32)).unsqueeze(0)
         mean, log_std = self.actor.mean_and_log_std(obs)
         if deterministic:
@@ -295,11 +310,16 @@ class SAC:
         fixed factor: a running normalization, as PPO's, would leave transitions of different
         scales side by side in the replay buffer).
         """
-        self.replay.add(observation, action, reward * self.config.sac_reward_scale,
-                        next_observation, terminated)
-        if self.ready:   # transitions stored before learning starts owe no gradient steps
-            self.pending_updates += 1
-        if self.update_schedule == 'step':
+        with self.lock:
+            self.replay.add(observation, action, reward * self.config.sac_reward_scale,
+                            next_observation, terminated)
+            if self.ready:   # transitions stored before learning starts owe no gradient steps
+                self.pending_updates += 1
+        if self.update_schedule != 'step':
+            return
+        if self.background is not None:
+            self.background.wake()       # the learner thread takes the owed steps
+        else:
             self._learn_pending()
 
     @property
@@ -333,24 +353,53 @@ class SAC:
 
     def clear_replay(self) -> None:
         """Forget every stored transition (a new reward makes them wrong) and owed steps."""
-        self.replay.clear()
-        self.pending_updates = 0
+        with self.lock:
+            self.replay.clear()
+            self.pending_updates = 0
+
+    def set_background(self, on: bool, niceness: int = 0, switch_interval: float = 0.0):
+        """Take the owed steps of the ``step`` schedule in a learner thread (``on``) or not.
+
+        Between episodes only (the agent node: realtime episodes in the background). Turned
+        off, the thread stops after its current step; the steps it still owed run in the next
+        :meth:`update`.
+        """
+        if on and self.background is None and self.update_schedule == 'step':
+            self.background = BackgroundSACLearning(self, niceness, switch_interval)
+        elif not on and self.background is not None:
+            self.background, running = None, self.background
+            running.stop()
 
     # ------------------------------------------------------------------ learning
 
     def _learn_pending(self) -> None:
-        """Per owed transition: ``sac_updates_per_step`` critic steps, then one actor step."""
-        if not self.ready:
-            return
-        start = time.perf_counter()
-        for _ in range(self.pending_updates):
+        """Take the owed gradient steps (all of them), the learner thread's in flight included."""
+        while self.learn_one_owed():
+            pass
+        with self._transition:     # a transition the learner thread claimed is learned now
+            pass
+
+    def learn_one_owed(self) -> bool:
+        """Per owed transition: ``sac_updates_per_step`` critic steps, then one actor step.
+
+        Claims one owed transition and learns from it, holding :attr:`lock` one gradient step
+        at a time (so an ``act`` waits at most one step); returns False when none was owed.
+        """
+        with self._transition:
+            with self.lock:
+                if not self.ready or self.pending_updates == 0:
+                    return False
+                self.pending_updates -= 1
+            start = time.perf_counter()
             for _ in range(self.config.sac_updates_per_step):
-                self._critic_step(self.replay.sample(self.config.sac_batch_size,
-                                                     self.update_generator))
-            self._actor_step(self.replay.sample(self.config.sac_batch_size,
-                                                self.update_generator)['observations'])
-        self.pending_updates = 0
-        self._since_report.seconds += time.perf_counter() - start
+                with self.lock:
+                    self._critic_step(self.replay.sample(self.config.sac_batch_size,
+                                                         self.update_generator))
+            with self.lock:
+                self._actor_step(self.replay.sample(self.config.sac_batch_size,
+                                                    self.update_generator)['observations'])
+                self._since_report.seconds += time.perf_counter() - start
+        return True
 
     def _critic_step(self, batch: dict) -> None:
         config = self.config
@@ -401,6 +450,10 @@ class SAC:
 
     def state_dict(self) -> dict:
         """Return networks, optimizers, generators and the replay buffer (for checkpoints)."""
+        with self.lock:
+            return self._state_dict()
+
+    def _state_dict(self) -> dict:
         return {'actor': self.actor.state_dict(), 'critic': self.critic.state_dict(),
                 'target_critic': self.target_critic.state_dict(),
                 'log_temperature': self.log_temperature.detach().clone(),

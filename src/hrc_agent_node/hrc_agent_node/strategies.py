@@ -52,7 +52,7 @@ declares converged is the one evaluated afterwards.
 
 from dataclasses import dataclass
 
-from hrc_common.contract import check_case_table
+from hrc_common.cases import check_case_table
 from hrc_common.params import from_dict
 
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
@@ -152,7 +152,7 @@ def cases_from_dict(document, tree) -> dict:
     """Resolve the parsed cases document against ``tree``; raise CasesError with every reason.
 
     The file's shape (case ids, strategy names, robot_action) is the contract's
-    (``hrc_common.contract.check_case_table``); what is checked here is the strategies' steps
+    (``hrc_common.cases.check_case_table``); what is checked here is the strategies' steps
     against the tree.
     """
     actions = list(tree.actions)

@@ -1,10 +1,9 @@
 """The background learner yields to the control thread: lower nice, short switch interval.
 
-On the 2-core machine a PPO update inside a realtime episode competed with the control steps
-on equal terms (issue 22's realtime target: the period's p99 jitter with updates 1.23x the one
-without). The learner thread now lowers its own priority and shortens the interpreter's switch
-interval while it runs; 0 for both is the behaviour before, and the agent's defaults carry the
-new settings to it.
+On the 2-core machine a PPO update inside a realtime episode would compete with the control
+steps on equal terms: the learner thread lowers its own priority and shortens the
+interpreter's switch interval while it runs (0 for both: neither), and the agent's defaults
+carry the settings to it.
 """
 
 import os

@@ -1,4 +1,4 @@
-"""The hrc bag format: episode MCAP files, their records, metadata.yaml (pure, no rclpy).
+"""The hrc bag format's vocabulary: names, records, QoS metadata (pure, no rclpy).
 
 This is the layer every bag tool imports (the recorder's routing policy in ``recording.py``,
 ``recovery.py``, the in-process writer ``session_writer.py``, replay and the report); it
@@ -6,12 +6,12 @@ imports none of them. What one session folder holds (``<output_dir>/<session_id>
 
     metadata.yaml                 rosbag2 bag metadata (version 9, storage mcap), rewritten
                                   atomically each time an episode file is closed; it lists
-                                  closed files only
+                                  closed files only (:mod:`hrc_bag.session_index`)
     <session_id>_ep0000.mcap      one MCAP file per episode (episode_file_stem) ...
     <session_id>_end.mcap         messages after the last episode (only if there are any)
 
-Each MCAP file (:class:`EpisodeFile`) has profile ``ros2``, zstd chunks, every index,
-statistics and summary offsets, and holds:
+Each MCAP file (:class:`hrc_bag.episode_file.EpisodeFile`) has profile ``ros2``, zstd chunks,
+every index, statistics and summary offsets, and holds:
 
 * one ``ros2msg`` schema per message type: the type's .msg text with its dependencies
   (:mod:`hrc_bag.msgdefs`, the layout rosbag2 writes);
@@ -29,12 +29,12 @@ statistics and summary offsets, and holds:
 A file holding personal data (a session configuration with a non-empty ``subject_id`` or
 ``notes``) is created owner-only (0600), and so is a metadata.yaml that names them.
 
-Writing messages without rclpy (the in-process engine): :class:`MessageEncoder` turns a plain
-mapping or an object with the message's attributes (a dataclass) into the CDR bytes rclpy
-would publish (mcap-ros2-support's encoder, with the .msg definitions of the installed
-packages), and :func:`offered_profile` / :func:`contract_description` give the QoS metadata a
-live publisher would have offered. :class:`hrc_bag.session_writer.SessionWriter` puts these
-together into the writer API the engine uses; its bags are the recorder node's bags.
+Writing messages without rclpy (the in-process engine): :func:`hrc_bag.serializer.encode`
+turns a plain mapping or an object with the message's attributes (a dataclass) into the CDR
+bytes rclpy would publish, and :func:`offered_profile` / :func:`contract_description` give
+the QoS metadata a live publisher would have offered.
+:class:`hrc_bag.session_writer.SessionWriter` puts these together into the writer API the
+engine uses; its bags are the recorder node's bags.
 """
 
 import collections
@@ -45,18 +45,13 @@ import errno
 import functools
 import importlib.metadata
 import json
-import os
 import pathlib
 import typing
 
-from hrc_common.contract import (atomic_write, DOF_NAME, NS_PER_S, PERSONAL_FILE_MODE,
-                                 PUBLIC_FILE_MODE)
-from mcap.writer import CompressionType, IndexType, Writer
-from mcap_ros2._dynamic import serialize_dynamic
-import yaml
+from hrc_common.contract import DOF_NAME, NS_PER_S, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
 
 from hrc_bag import cdr_peek, msgdefs
-from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
+from hrc_bag.qos_yaml import dump_yaml
 
 BAG_VERSION = 9                 # rosbag2 metadata version written (ROS 2 Jazzy)
 STORAGE_IDENTIFIER = 'mcap'
@@ -70,10 +65,6 @@ METADATA_FILE = 'metadata.yaml'
 END_FILE_SUFFIX = '_end'
 # keys of a session configuration whose values identify or describe a person
 PERSONAL_KEYS = ('subject_id', 'notes')
-
-COMPRESSIONS = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4,
-                'none': CompressionType.NONE}
-DEFAULT_CHUNK_SIZE = 262144     # B
 
 # What rmw reports for an unset duration of an offered profile (RMW_DURATION_INFINITE).
 _INFINITE = {'sec': 9223372036, 'nsec': 854775807}
@@ -187,101 +178,6 @@ def contract_description(type_name: str, reliable: bool = True, transient_local:
     return TopicDescription(type_name, (offered_profile(reliable, transient_local,
                                                         deadline_ns),),
                             type_hash(type_name))
-
-
-def topic_metadata(topic: str, description: TopicDescription) -> dict:
-    """Return the rosbag2 ``topic_metadata`` mapping of a topic (metadata version 9)."""
-    return {
-        'name': topic,
-        'type': description.type_name,
-        'serialization_format': MESSAGE_ENCODING,
-        'offered_qos_profiles': [dict(profile) for profile in description.offered_qos_profiles],
-        'type_description_hash': description.type_description_hash,
-    }
-
-
-def topic_entries(info: FileInfo) -> list:
-    """Return the (topic, TopicDescription, message count) entries of one file."""
-    return [(topic, info.topics[topic], count) for topic, count in info.topic_counts.items()]
-
-
-def description_key(topic: str, description: TopicDescription) -> tuple:
-    """Return what makes two topic entries of metadata.yaml the same entry."""
-    return (topic, description.type_name, dump_profiles(description.offered_qos_profiles),
-            description.type_description_hash)
-
-
-def bag_metadata(files: list, entries: list, custom_data: dict) -> dict:
-    """Return rosbag2's ``rosbag2_bagfile_information`` for ``files`` (FileInfo, in order).
-
-    ``entries`` are (topic, TopicDescription, message count). A topic whose publishers offered
-    other QoS profiles in another file gets an entry per variant, so that readers which match
-    a file's channels to metadata.yaml's topics (rosbags) find every message.
-    """
-    non_empty = [info for info in files if info.message_count]
-    start = min((info.start for info in non_empty), default=0)
-    end = max((info.end for info in non_empty), default=0)
-    return {
-        'version': BAG_VERSION,
-        'storage_identifier': STORAGE_IDENTIFIER,
-        'duration': {'nanoseconds': end - start},
-        'starting_time': {'nanoseconds_since_epoch': start},
-        'message_count': sum(info.message_count for info in files),
-        'topics_with_message_count': [
-            {'topic_metadata': topic_metadata(topic, description), 'message_count': count}
-            for topic, description, count in sorted(entries, key=lambda entry: entry[0])],
-        'compression_format': '',           # chunks are compressed inside the MCAP files
-        'compression_mode': '',
-        'relative_file_paths': [info.name for info in files],
-        'files': [{'path': info.name,
-                   'starting_time': {'nanoseconds_since_epoch': info.start},
-                   'duration': {'nanoseconds': info.end - info.start},
-                   'message_count': info.message_count} for info in files],
-        'custom_data': {str(key): str(value) for key, value in custom_data.items()} or None,
-        'ros_distro': os.environ.get('ROS_DISTRO', 'jazzy'),
-    }
-
-
-# metadata.yaml's two lists that grow with every closed file. The whole document was dumped
-# again at every close: the pure-Python YAML representer over every file so far, 4.8 ms at 100
-# files and 14 ms at 300 (quadratic over a session, 12% of the recorder's Python in a
-# 30-episode session); each file's lines are dumped once now and joined.
-GROWING_LISTS = ('relative_file_paths', 'files')
-
-
-def dump_bag_metadata(files: list, entries: list, custom_data: dict, cache: dict) -> str:
-    """Return metadata.yaml's text: ``dump_yaml`` of ``bag_metadata``, the same text.
-
-    ``cache`` (a dict the caller keeps between calls) holds each file's lines of the two lists
-    that grow with the session, dumped once each; the rest is dumped every time.
-    """
-    information = bag_metadata(files, entries, custom_data)
-    placeholders = {key: f'HRCGROWINGLIST{index}' for index, key in enumerate(GROWING_LISTS)}
-    lists = {key: information[key] for key in GROWING_LISTS}
-    information.update(placeholders)
-    text = dump_yaml({'rosbag2_bagfile_information': information})
-    for key in GROWING_LISTS:
-        if not lists[key]:
-            lines = f'  {key}: []\n'
-        else:
-            items = []
-            for info, item in zip(files, lists[key]):
-                cache_key = (key, info.name, info.start, info.end, info.message_count)
-                if cache_key not in cache:
-                    # a sequence inside a mapping is written without indentation of its own
-                    # ("  files:" then "  - path: ..."): the item's lines indented by two
-                    cache[cache_key] = ''.join('  ' + line for line in
-                                               dump_yaml([item]).splitlines(keepends=True))
-                items.append(cache[cache_key])
-            lines = f'  {key}:\n' + ''.join(items)
-        text = text.replace(f'  {key}: {placeholders[key]}\n', lines, 1)
-    return text
-
-
-def custom_data_of(information: dict) -> dict:
-    """Return the custom_data mapping of a rosbag2 metadata dict (or {})."""
-    custom = information.get('custom_data') if isinstance(information, dict) else None
-    return dict(custom) if isinstance(custom, dict) else {}
 
 
 # -- the session record ----------------------------------------------------------------------
@@ -430,222 +326,7 @@ class HumanInputTally:
                 'control_period': '' if period is None else repr(period)}
 
 
-# -- one MCAP file ---------------------------------------------------------------------------
-
-class EpisodeFile:
-    """One MCAP file being written: profile ros2, chunked, compressed, indexed, statistics.
-
-    ``name`` is the name metadata.yaml and the embedded rosbag2 record give the file (default:
-    the name of ``path``; recovery writes a temporary file under its final name). ``mode``:
-    the file's permissions (0600 for personal data), whatever the umask.
-    """
-
-    def __init__(self, path, compression: str = 'zstd', chunk_size: int = DEFAULT_CHUNK_SIZE,
-                 metadata: typing.Optional[dict] = None, name: str = '',
-                 mode: int = PUBLIC_FILE_MODE):
-        self.path = pathlib.Path(path)
-        self.name = name or self.path.name
-        self._schemas = {}                  # type name -> schema id
-        self._channels = {}                 # topic -> channel id
-        self.topics = {}                    # topic -> TopicDescription
-        self.topic_counts = collections.Counter()
-        self.message_count = 0
-        self.start = 0
-        self.end = 0
-        self.closed = False
-        self.human = HumanInputTally()
-        try:
-            # O_EXCL: never overwrite a file of an earlier recording
-            descriptor = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
-            os.fchmod(descriptor, mode)
-            self._stream = os.fdopen(descriptor, 'wb')
-            self._writer = Writer(self._stream, chunk_size=chunk_size,
-                                  compression=COMPRESSIONS[compression],
-                                  index_types=IndexType.ALL, use_chunking=True,
-                                  use_statistics=True, use_summary_offsets=True)
-            self._writer.start(profile=PROFILE, library=f'hrc_bag/{package_version()}')
-            for record_name, record in (metadata or {}).items():
-                self._writer.add_metadata(record_name,
-                                          {str(k): str(v) for k, v in record.items()})
-            self._stream.flush()
-        except OSError as error:
-            raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
-
-    def write(self, message: RawMessage, description) -> None:
-        """Append one message (registering its schema and channel on first use).
-
-        ``description``: the topic's TopicDescription, or a callable returning it, called only
-        when the topic's channel is registered (the recorder asks the ROS graph for it, which
-        costs far more than writing a message).
-        """
-        try:
-            channel_id = self._channels.get(message.topic)
-            if channel_id is None:
-                channel_id = self._add_channel(
-                    message.topic, description() if callable(description) else description)
-            self._writer.add_message(channel_id, log_time=message.log_time,
-                                     data=message.data, publish_time=message.publish_time,
-                                     sequence=message.sequence & 0xFFFFFFFF)
-        except OSError as error:
-            raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
-        self.topic_counts[message.topic] += 1
-        if message.type_name == cdr_peek.HUMAN_ACTION_TYPE:
-            self.human.add_cdr(message.data)
-        if self.message_count == 0:
-            self.start = self.end = message.log_time
-        self.start = min(self.start, message.log_time)
-        self.end = max(self.end, message.log_time)
-        self.message_count += 1
-
-    def _add_channel(self, topic: str, description: TopicDescription) -> int:
-        schema_id = self._schemas.get(description.type_name)
-        if schema_id is None:
-            definition = (description.message_definition
-                          or msgdefs.full_definition(description.type_name))
-            schema_id = self._writer.register_schema(description.type_name, SCHEMA_ENCODING,
-                                                     definition.encode())
-            self._schemas[description.type_name] = schema_id
-        metadata = {'offered_qos_profiles': dump_profiles(description.offered_qos_profiles),
-                    'topic_type_hash': description.type_description_hash}
-        channel_id = self._writer.register_channel(topic, MESSAGE_ENCODING, schema_id, metadata)
-        self._channels[topic] = channel_id
-        self.topics[topic] = description
-        return channel_id
-
-    def flush(self) -> None:
-        """Close the open chunk and push it to the file (survives a SIGKILL from now on)."""
-        try:
-            self._writer.flush()
-        except OSError as error:
-            raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
-
-    def info(self) -> FileInfo:
-        """Return what metadata.yaml lists about this file."""
-        return FileInfo(self.name, self.start, self.end, self.message_count,
-                        dict(self.topic_counts), dict(self.topics))
-
-    def close(self, custom_data: typing.Optional[dict] = None,
-              episode_record: typing.Optional[dict] = None) -> FileInfo:
-        """Finish the file (rosbag2 record, summary, indexes, footer), fsync, return its info.
-
-        ``episode_record``: more fields of the ``hrc_episode`` record (the recorder's attempt
-        of the episode: ``attempt``, ``attempt_files``, ``last_step``, ``finished``).
-        """
-        info = self.info()
-        try:
-            self._writer.flush()
-            self._writer.add_metadata(EPISODE_RECORD, {
-                'message_count': str(self.message_count), **self.human.record(),
-                **{str(key): str(value) for key, value in (episode_record or {}).items()}})
-            own_metadata = bag_metadata([info], topic_entries(info), custom_data or {})
-            self._writer.add_metadata(ROSBAG2_RECORD,
-                                      {'serialized_metadata': dump_yaml(own_metadata)})
-            self._writer.finish()
-            self._stream.flush()
-            os.fsync(self._stream.fileno())
-            self._stream.close()
-        except OSError as error:
-            self.abandon()
-            raise RecordingError(f'cannot finish {self.path}: {describe_error(error)}') from error
-        self.closed = True
-        return info
-
-    def abandon(self) -> None:
-        """Close the file handle without finishing (after a write error)."""
-        self.closed = True
-        try:
-            self._stream.close()
-        except OSError:
-            pass
-
-
-# -- metadata.yaml ---------------------------------------------------------------------------
-
-class SessionIndex:
-    """The session folder's metadata.yaml: the closed files of the session, in order.
-
-    An existing metadata.yaml (an earlier recorder of the same session) is continued; one
-    that cannot be used (unreadable, not YAML, not a mapping, wrong shape) is set aside:
-    ``problem`` says why, and the files it listed are listed again by whoever finds them
-    (the recorder's recovery lists every MCAP file it finds unlisted).
-    """
-
-    def __init__(self, folder, custom_data: dict, mode: int = PUBLIC_FILE_MODE):
-        self.folder = pathlib.Path(folder)
-        self.path = self.folder / METADATA_FILE
-        self.custom_data = dict(custom_data)
-        self.mode = mode
-        self.files = []
-        self.problem = ''
-        self._entries = {}                  # description_key -> [topic, description, count]
-        self._file_lines = {}               # dump_bag_metadata's cache of each file's lines
-        if self.path.is_file():
-            try:
-                self._load()
-            except (OSError, UnicodeDecodeError, ValueError, KeyError, TypeError,
-                    AttributeError) as error:
-                self.problem = f'{self.path} cannot be used ({error}): rebuilt from the files'
-                self.files, self._entries = [], {}
-
-    def _load(self) -> None:
-        """Continue a session an earlier recorder started (its closed files stay listed)."""
-        try:
-            document = load_yaml(self.path.read_text())
-        except yaml.YAMLError as error:
-            raise ValueError(f'not YAML: {str(error).splitlines()[0]}') from None
-        if document is None:
-            return
-        if not isinstance(document, dict):
-            raise ValueError(f'a {type(document).__name__}, not a mapping')
-        information = document.get('rosbag2_bagfile_information', {}) or {}
-        if not isinstance(information, dict):
-            raise ValueError('rosbag2_bagfile_information is not a mapping')
-        for entry in information.get('topics_with_message_count', []) or []:
-            metadata = entry['topic_metadata']
-            profiles = metadata.get('offered_qos_profiles') or []
-            if isinstance(profiles, str):
-                profiles = load_yaml(profiles) or []
-            description = TopicDescription(metadata['type'], tuple(profiles),
-                                           metadata.get('type_description_hash', ''))
-            self._count(metadata['name'], description, int(entry['message_count']))
-        for entry in information.get('files', []) or []:
-            start = int(entry['starting_time']['nanoseconds_since_epoch'])
-            self.files.append(FileInfo(str(entry['path']), start,
-                                       start + int(entry['duration']['nanoseconds']),
-                                       int(entry['message_count']), {}, {}))
-        self.custom_data = {**custom_data_of(information), **self.custom_data}
-
-    def _count(self, topic: str, description: TopicDescription, count: int) -> None:
-        key = description_key(topic, description)
-        entry = self._entries.setdefault(key, [topic, description, 0])
-        entry[2] += count
-
-    def listed(self, name: str) -> bool:
-        """Return True when the file ``name`` is listed already."""
-        return any(info.name == name for info in self.files)
-
-    def append(self, info: FileInfo) -> None:
-        """List a closed file (without rewriting metadata.yaml)."""
-        self.files.append(info)
-        for topic, description, count in topic_entries(info):
-            self._count(topic, description, count)
-
-    def add(self, info: FileInfo) -> None:
-        """List a closed file and rewrite metadata.yaml."""
-        self.append(info)
-        self.write()
-
-    def write(self) -> None:
-        """Rewrite metadata.yaml atomically."""
-        entries = [tuple(entry) for entry in self._entries.values()]
-        text = dump_bag_metadata(self.files, entries, self.custom_data, self._file_lines)
-        try:
-            atomic_write(self.path, text, self.mode)
-        except OSError as error:
-            raise RecordingError(f'cannot write {self.path}: {describe_error(error)}') from error
-
-
-# -- encoding messages without rclpy ---------------------------------------------------------
+# -- messages as plain values ---------------------------------------------------------------
 
 def plain_values(message):
     """Return a message (mapping, dataclass, rclpy or rosbags message) as plain values."""
@@ -663,51 +344,3 @@ def plain_values(message):
     if isinstance(message, (list, tuple)) or type(message).__name__ in ('array', 'ndarray'):
         return [plain_values(item) for item in message]
     return message
-
-
-
-class MessageEncoder:
-    """Serialize messages given as plain values to CDR, as rclpy would publish them.
-
-    ``encode(type_name, message)`` takes a mapping (``{'header': {'stamp': {'sec': 1,
-    'nanosec': 0}, 'frame_id': 'world'}, 'episode': 3, ...}``) or any object with the
-    message's fields as attributes (a dataclass, a rosbags or rclpy message). Fields left out
-    take their zero value; a name that is not a field of the type (a typo) raises ValueError.
-    The bytes equal rclpy's except for the padding bytes, which are zero here.
-    """
-
-    def __init__(self):
-        self._encoders = {}
-
-    def _encoder(self, type_name: str):
-        encoder = self._encoders.get(type_name)
-        if encoder is None:
-            package, name = msgdefs.split_type_name(type_name)
-            full_name = f'{package}/msg/{name}'
-            encoders = serialize_dynamic(full_name, msgdefs.full_definition(full_name))
-            encoder = self._encoders[type_name] = encoders[full_name]
-        return encoder
-
-    def encode(self, type_name: str, message) -> bytes:
-        """Return the CDR bytes of ``message`` (a mapping or an object) of ``type_name``."""
-        if isinstance(message, (bytes, bytearray, memoryview)):
-            return bytes(message)
-        if isinstance(message, dict):
-            check_fields(type_name, message)
-        return bytes(self._encoder(type_name)(message))
-
-
-def check_fields(type_name: str, message: dict, path: str = '') -> None:
-    """Raise ValueError naming every key of ``message`` that is not a field of the type."""
-    package, _ = msgdefs.split_type_name(type_name)
-    fields = {name: kind for kind, name in msgdefs.fields(type_name)}
-    unknown = sorted(set(message) - set(fields))
-    if unknown:
-        raise ValueError(f'{type_name}: no field {", ".join(path + name for name in unknown)} '
-                         f'(fields: {", ".join(fields)})')
-    for name, value in message.items():
-        field_type = fields[name].split('[', 1)[0].split('<=', 1)[0]
-        if isinstance(value, dict) and field_type not in msgdefs.PRIMITIVE_TYPES:
-            if '/' not in field_type:
-                field_type = f'{package}/{field_type}'
-            check_fields(field_type, value, f'{path}{name}.')

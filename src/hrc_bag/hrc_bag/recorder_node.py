@@ -2,11 +2,10 @@
 
 Subscribes (raw CDR, no deserialization except the three topics that mark episode boundaries)
 to the configured topics and hands every message to :class:`hrc_bag.recording.EpisodeRecorder`,
-which owns the files. By default (``batch_period`` > 0) the recording subscriptions are hidden
-from the executor (:class:`hrc_common.nodes.DrainedNode`): a message does not wake the recorder;
-a timer takes every waiting message of every subscription each ``batch_period`` and hands them
-over in one batch (TaskState's episode boundaries read from its bytes, not deserialized). With
-``batch_period`` 0 each message is a callback of the recorder's executor, as before issue 24.
+which owns the files. The recording subscriptions are hidden from the executor
+(:class:`hrc_common.nodes.DrainedNode`): a message does not wake the recorder; a timer takes
+every waiting message of every subscription each ``batch_period`` and hands them over in one
+batch (TaskState's episode boundaries read from its bytes, not deserialized).
 The /hrc topics are subscribed at start with their contract QoS (so the first state of a
 session is not missed); other topics once a publisher reveals their type, with a QoS adapted to
 the publishers' offers (as rosbag2 does). Each channel carries the publishers'
@@ -34,8 +33,8 @@ import yaml
 from hrc_bag.qos_yaml import profile_to_dict
 from hrc_bag.format import RawMessage, RecordingError, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import (boundary_event, boundary_event_of_cdr, BOUNDARY_TYPES,
-                               EpisodeRecorder)
+from hrc_bag.boundaries import boundary_event_of_cdr
+from hrc_bag.recording import EpisodeRecorder
 
 EXECUTABLE = 'recorder_node'
 SUMMARY = ('Record the hrc topics into one rosbag2-compatible MCAP file per episode under '
@@ -74,9 +73,8 @@ class RecorderNode(DrainedNode):
         config, config_text = self._load_session_config(self.params.session_config)
         self._subscriptions_by_topic = {}
         self._waiting = []                  # topics whose type is not known yet
-        # batched: the recording subscriptions are not the executor's (a message does not wake
-        # this process); _drain takes their messages
-        self._batched = self.params.batch_period > 0
+        # the recording subscriptions are not the executor's (a message does not wake this
+        # process); _drain takes their messages
         self._drained = []                  # (subscription, topic, type name, deserialize)
         self.core = EpisodeRecorder(
             self.params, self._describe_topic, session_config=config,
@@ -97,12 +95,8 @@ class RecorderNode(DrainedNode):
                                    f'{self._waiting}')
             self._discovery_timer = self.create_timer(self.params.discovery_period,
                                                       self._discover)
-        if self._batched:
-            self._tick_timer = self.create_timer(
-                min(self.params.batch_period, self.params.flush_period / 2), self._drain)
-        else:
-            self._tick_timer = self.create_timer(min(0.05, self.params.flush_period / 2),
-                                                 self.core.tick)
+        self._tick_timer = self.create_timer(
+            min(self.params.batch_period, self.params.flush_period / 2), self._drain)
         # How many publishers each recording subscription has matched, said when it changes: a
         # writer this node has not matched yet (discovery across a lossy link can lag the rest
         # of the graph) is a topic missing from the bag, and the log is where a lab sees it.
@@ -125,34 +119,15 @@ class RecorderNode(DrainedNode):
 
     def _subscribe(self, topic: str, type_name: str, qos: QoSProfile) -> None:
         message_type = message_class(type_name)
-        # only the messages that mark episode boundaries are deserialized
-        marks_boundaries = type_name in BOUNDARY_TYPES
         resolved = self.resolve_topic_name(topic)
-        if self._batched:
-            subscription = self.create_drained_subscription(message_type, topic, qos, raw=True)
-            self._subscriptions_by_topic[topic] = subscription
-            self._drained.append((subscription, resolved, type_name, functools.partial(
-                deserialize_message, message_type=message_type)))
-            self.get_logger().info(
-                f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
-                f'{qos.durability.name.lower()}, drained every {self.params.batch_period:g} s)')
-            return
-
-        def on_message(data, info):
-            log_time = info.get('received_timestamp') or time.time_ns()
-            message = RawMessage(resolved, type_name, data, log_time,
-                                 info.get('source_timestamp') or log_time,
-                                 info.get('publication_sequence_number') or 0)
-            event = (boundary_event(type_name, deserialize_message(data, message_type))
-                     if marks_boundaries else None)
-            self.core.record(message, event)
-
-        self._subscriptions_by_topic[topic] = self.create_subscription(
-            message_type, topic, on_message, qos, raw=True,
-            event_callbacks=hrc_qos.NO_SUBSCRIPTION_EVENTS)  # fewer wait-set entities
+        subscription = self.create_drained_subscription(message_type, topic, qos, raw=True)
+        self._subscriptions_by_topic[topic] = subscription
+        # only the messages that mark episode boundaries are deserialized (boundary_event_of_cdr)
+        self._drained.append((subscription, resolved, type_name, functools.partial(
+            deserialize_message, message_type=message_type)))
         self.get_logger().info(
             f'recording {resolved} ({type_name}, {qos.reliability.name.lower()}, '
-            f'{qos.durability.name.lower()})')
+            f'{qos.durability.name.lower()}, drained every {self.params.batch_period:g} s)')
 
     def _take_waiting(self) -> list:
         """Return (RawMessage, event) of every message waiting in the recording subscriptions.
@@ -233,7 +208,7 @@ class RecorderNode(DrainedNode):
     def close(self) -> None:
         """Take what is still waiting, close the open episode file (called on shutdown)."""
         try:
-            if self._batched and self.core.failed is None:
+            if self.core.failed is None:
                 try:
                     batch = self._take_waiting()
                 except Exception as error:  # RCLError/InvalidHandle once the context is gone

@@ -55,9 +55,9 @@ class RecorderParams:
         1000, 'history depth of the recording subscriptions', low=1, high=100000)
     batch_period: float = param(
         0.05, 'the recording subscriptions are drained this often (s), all their waiting '
-        'messages in one batch, instead of an executor turn and a callback per message (the '
-        "recorder's cost, issue 24); at least twice per flush_period; 0: a callback per "
-        'message, as before issue 24', low=0.0, high=1.0)
+        'messages in one batch (not an executor turn and a callback per message: the '
+        "recorder's cost); at least twice per flush_period; longer costs less CPU and adds to "
+        'what a SIGKILL can lose of the open episode', low=0.001, high=1.0)
     discovery_period: float = param(
         0.5, 'period (s) of the graph check for topics of not yet known type', low=0.05,
         high=10.0)

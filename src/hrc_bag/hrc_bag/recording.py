@@ -10,7 +10,8 @@ layer, :mod:`hrc_bag.format`. Layout of a session (``<output_dir>/<session_id>/`
     <session_id>_ep0001_attempt2.mcap   a second attempt of episode 1 (see below)
     <session_id>_end.mcap         messages after the last episode (only if there are any)
 
-Episode boundaries (the rule; the node turns messages into the events used here):
+Episode boundaries (the rule; the node turns messages into the events of
+:mod:`hrc_bag.boundaries`):
 
 * A file opens at the first ``/hrc/state`` (TaskState) of an episode not recorded yet.
 * Each message goes to the file of its episode: the ``episode`` field of TaskState,
@@ -42,13 +43,10 @@ Episode boundaries (the rule; the node turns messages into the events used here)
   ``<session_id>_end.mcap``.
 
 Messages are handled in the order DDS received them (their log time), after ``reorder_window``
-seconds: the node takes its subscriptions' messages topic after topic (in batches,
-:meth:`EpisodeRecorder.record_batch`; or rclpy's executor one message per subscription in turn),
-so a recorder that lags behind gets a topic's messages later than another topic's received
-after them. A file due to close closes before the next message is handled, so the files do not
-depend on how many messages are handled together. When it lags more than that (a loaded
-machine), the wait follows the lag (1.5 times the largest of the last second), so an episode
-file is not closed before its messages queued in DDS are in.
+seconds or longer while the recorder lags (:mod:`hrc_bag.reception_order`); the node hands
+them over in batches (:meth:`EpisodeRecorder.record_batch`). A file due to close closes before
+the next message is handled, so the files do not depend on how many messages are handled
+together.
 
 Crash safety: the open chunk is closed at least every ``flush_period`` seconds (and whenever it
 exceeds ``chunk_size``), and written to the file, so a SIGKILL loses at most that much plus the
@@ -63,59 +61,27 @@ the recorder with a clear message.
 import collections
 from dataclasses import dataclass
 import datetime
-import heapq
-import itertools
 import pathlib
 import time
 import typing
 
-from hrc_common.contract import (EPISODE_SUMMARY_TYPE, FINISHED_PHASES, id_problem, NS_PER_S,
-                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE)
+from hrc_common.contract import FINISHED_PHASES, id_problem
 import yaml
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
-from hrc_bag.format import (describe_error, EpisodeFile, episode_file_stem,
-                            file_mode, plain_values, RawMessage, RecordingError,
-                            session_custom_data, SESSION_RECORD, session_record, SessionIndex,
+from hrc_bag.boundaries import SessionSeen, StateSeen, SummarySeen
+from hrc_bag.episode_file import EpisodeFile
+from hrc_bag.format import (describe_error, episode_file_stem, file_mode, RawMessage,
+                            RecordingError, session_custom_data, SESSION_RECORD, session_record,
                             TopicDescription, unused_path)
 from hrc_bag.qos_yaml import load_yaml
+from hrc_bag.reception_order import ReceptionOrder
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recovery import recover_file
+from hrc_bag.session_index import SessionIndex
 
 
-@dataclass(frozen=True)
-class StateSeen:
-    """A TaskState was received."""
-
-    episode: int
-    step: int
-    final: bool                             # terminated or truncated
-
-
-@dataclass(frozen=True)
-class SummarySeen:
-    """An EpisodeSummary was received."""
-
-    episode: int
-    session_id: str
-
-
-@dataclass(frozen=True)
-class SessionSeen:
-    """A SessionStatus was received (``status``: its fields as plain Python values)."""
-
-    status: dict
-
-
-# the wait for late messages follows the executor's lag of the last second, times 1.5, up to
-# 5 s (a log time older than that comes from another clock, e.g. a test's synthetic times)
-LAG_MEMORY_NS = NS_PER_S            # 1 s
-LAG_FACTOR = 1.5
-LAG_LIMIT_NS = 5 * NS_PER_S         # 5 s
-
-# the types whose messages mark episode boundaries (the node deserializes only these)
-BOUNDARY_TYPES = (TASK_STATE_TYPE, EPISODE_SUMMARY_TYPE, SESSION_STATUS_TYPE)
 # metadata.yaml custom data: {episode: [file, ...]} of the episodes recorded more than once
 ATTEMPTS_KEY = 'hrc.episode_attempts'
 
@@ -124,34 +90,6 @@ def attempt_stem(session_id: str, episode: int, attempt: int) -> str:
     """Return the file name (without .mcap) of ``attempt`` (1, 2, ...) of ``episode``."""
     stem = episode_file_stem(session_id, episode)
     return stem if attempt <= 1 else f'{stem}_attempt{attempt}'
-
-
-def boundary_event(type_name: str, message):
-    """Return the event a message of ``type_name`` means for the episode files (or None)."""
-    if type_name == TASK_STATE_TYPE:
-        return StateSeen(int(message.episode), int(message.step),
-                         bool(message.terminated or message.truncated))
-    if type_name == EPISODE_SUMMARY_TYPE:
-        return SummarySeen(int(message.episode), str(message.session_id))
-    if type_name == SESSION_STATUS_TYPE:
-        return SessionSeen(plain_values(message))
-    return None
-
-
-def boundary_event_of_cdr(type_name: str, data: bytes, deserialize: typing.Callable):
-    """Return the event of a message given as CDR bytes (or None), deserializing only if needed.
-
-    A TaskState (one every step) is read from its bytes (:func:`hrc_bag.cdr_peek.task_state`);
-    the rare EpisodeSummary and SessionStatus, and a TaskState whose layout the reader does
-    not know, are deserialized with ``deserialize(data)``.
-    """
-    if type_name == TASK_STATE_TYPE:
-        peeked = cdr_peek.task_state(data)
-        if peeked is not None:
-            return StateSeen(*peeked)
-    if type_name in BOUNDARY_TYPES:
-        return boundary_event(type_name, deserialize(data))
-    return None
 
 
 @dataclass
@@ -195,11 +133,8 @@ class EpisodeRecorder:
         self._recorder_parameters = dict(recorder_parameters or {})
         self._log = logger
         self._clock = clock
-        self._wall_clock = wall_clock       # ns since the epoch, the clock of the log times
-        self._reorder = []                  # heap of (log time, arrival, message, event)
-        self._arrivals = itertools.count()
-        # (arrival ns, lag ns) of the last LAG_MEMORY_NS, lags decreasing: a sliding maximum
-        self._lags = collections.deque()
+        # wall_clock: ns since the epoch, the clock of the log times
+        self._reception = ReceptionOrder(params.reorder_window, wall_clock)
         self.session_id = params.session_id or str(self.session_config.get('session_id', ''))
         self.folder = None
         self.index = None
@@ -408,15 +343,7 @@ class EpisodeRecorder:
         log-time order: the executor takes one message per subscription in turn, so when the
         recorder lags, a topic's messages reach it later than another's received after them.
         """
-        if self.failed is not None:
-            raise self.failed
-        heapq.heappush(self._reorder, (message.log_time, next(self._arrivals), message, event))
-        now = self._wall_clock()
-        lag = now - message.log_time
-        while self._lags and self._lags[-1][1] <= lag:
-            self._lags.pop()
-        self._lags.append((now, lag))
-        self.tick()
+        self.record_batch([(message, event)])
 
     def record_batch(self, messages: list) -> None:
         """Record ``(message, event)`` pairs taken together, with one release at the end.
@@ -426,44 +353,16 @@ class EpisodeRecorder:
         the reorder window when it arrives could be placed differently, and in the batch it
         takes its place in log-time order among the batch's others.
 
-        The executor's lag is counted once per batch, as the lag of its oldest message (every
-        message of the batch was taken at the same moment, so that lag is the batch's largest).
+        The executor's lag is counted once per batch (:class:`ReceptionOrder`).
         """
         if self.failed is not None:
             raise self.failed
-        if messages:
-            oldest = messages[0][0].log_time
-            for message, event in messages:
-                heapq.heappush(self._reorder,
-                               (message.log_time, next(self._arrivals), message, event))
-                oldest = min(oldest, message.log_time)
-            now = self._wall_clock()
-            lag = now - oldest
-            while self._lags and self._lags[-1][1] <= lag:
-                self._lags.pop()
-            self._lags.append((now, lag))
+        self._reception.add(messages)
         self.tick()
 
-    def waiting_window(self, now: int) -> int:
-        """Return how long (ns) a message waits for others: reorder_window or the lag.
-
-        When the executor falls behind (a loaded machine), the messages it hands over now
-        were received up to ``lag`` ago, and those of other topics received as early may
-        still be queued: the wait grows to LAG_FACTOR times the largest lag of the last
-        LAG_MEMORY_NS (at most LAG_LIMIT_NS), and shrinks back when the recorder caught up.
-        """
-        while self._lags and self._lags[0][0] < now - LAG_MEMORY_NS:
-            self._lags.popleft()
-        lag = self._lags[0][1] if self._lags else 0
-        return max(int(self.params.reorder_window * NS_PER_S),
-                   min(int(LAG_FACTOR * lag), LAG_LIMIT_NS))
-
     def _release(self, everything: bool = False) -> None:
-        """Handle the waiting messages received more than waiting_window ago."""
-        now = self._wall_clock()
-        threshold = now - self.waiting_window(now)
-        while self._reorder and (everything or self._reorder[0][0] <= threshold):
-            _, _, message, event = heapq.heappop(self._reorder)
+        """Handle the waiting messages that are due (ReceptionOrder.due), in log-time order."""
+        for message, event in self._reception.due(everything):
             self._handle(message, event)
             # a file due to close (at once after its EpisodeSummary, by default) closes before
             # the next message is handled, however many are released together: the files do

@@ -12,8 +12,9 @@ import pathlib
 
 from hrc_bag.bag_reader import scan_records
 from hrc_bag.qos_yaml import load_yaml
-from hrc_bag.format import (describe_error, EPISODE_RECORD, EpisodeFile, FileInfo,
-                            RawMessage, RecordingError, ROSBAG2_RECORD, TopicDescription)
+from hrc_bag.episode_file import EpisodeFile
+from hrc_bag.format import (describe_error, EPISODE_RECORD, FileInfo, RawMessage,
+                            RecordingError, ROSBAG2_RECORD, TopicDescription)
 
 
 def _description(channel, schemas) -> TopicDescription:

@@ -23,8 +23,9 @@ Usage::
     writer.close()                          # what came after the last episode: _end.mcap
 
 * ``write(topic, message, log_time_ns, type_name=None, publish_time_ns=None)``: ``message`` is
-  a mapping, an object with the fields as attributes (a dataclass), or CDR bytes; the type of
-  the /hrc topics is known (``TOPIC_TYPES``), other topics need ``type_name``. Messages written
+  a mapping, an object with the fields as attributes (a dataclass), or CDR bytes, encoded by
+  :func:`hrc_bag.serializer.encode`; the type of the /hrc topics is known (``TOPIC_TYPES``),
+  other topics need ``type_name``. Messages written
   while no episode is open wait in memory and open the next episode's file (as the recorder
   does with the SessionStatus announcing an episode); the last SessionStatus written goes
   into the ``hrc_session`` record of the files opened after it.
@@ -43,10 +44,13 @@ import typing
 from hrc_common import contract, qos_table
 from hrc_common import topics as hrc_topics
 
-from hrc_bag.format import (DEFAULT_CHUNK_SIZE, EpisodeFile, episode_file_stem, file_mode,
-                            FileInfo, MessageEncoder, offered_profile, plain_values, RawMessage,
-                            RecordingError, session_custom_data, SESSION_RECORD,
-                            session_record, SessionIndex, TopicDescription, type_hash, unused_path)
+from hrc_bag import serializer
+from hrc_bag.episode_file import DEFAULT_CHUNK_SIZE, EpisodeFile
+from hrc_bag.format import (episode_file_stem, file_mode, FileInfo, offered_profile,
+                            plain_values, RawMessage, RecordingError, session_custom_data,
+                            SESSION_RECORD, session_record, TopicDescription, type_hash,
+                            unused_path)
+from hrc_bag.session_index import SessionIndex
 
 # The type of each topic of the graph (by default name).
 TOPIC_TYPES = hrc_topics.TYPES
@@ -79,7 +83,6 @@ class SessionWriter:
         self.compression = compression
         self.chunk_size = chunk_size
         self._descriptions = dict(descriptions) if descriptions is not None else None
-        self._encoder = MessageEncoder()
         self._mode = file_mode(self.config)
         self.folder = pathlib.Path(output_dir) / session_id
         try:
@@ -121,7 +124,7 @@ class SessionWriter:
             raise ValueError(f'{topic}: give the type_name of a topic outside the contract')
         if type_name == contract.SESSION_STATUS_TYPE and not isinstance(message, bytes):
             self.last_status = plain_values(message)
-        raw = RawMessage(topic, type_name, self._encoder.encode(type_name, message),
+        raw = RawMessage(topic, type_name, serializer.encode(type_name, message),
                          int(log_time), int(log_time if publish_time is None else publish_time),
                          sequence)
         if self._file is None:

@@ -13,12 +13,13 @@ from rosbags.rosbag2 import Reader
 import yaml
 
 from hrc_bag import bag_reader, cdr_peek, report
-from hrc_bag.format import (bag_metadata, contract_description, dump_bag_metadata,
-                            EPISODE_RECORD, FileInfo, MessageEncoder, plain_values, RawMessage,
-                            SESSION_RECORD)
+from hrc_bag.boundaries import boundary_event
+from hrc_bag.format import (contract_description, EPISODE_RECORD, FileInfo, plain_values,
+                            RawMessage, SESSION_RECORD)
 from hrc_bag.qos_yaml import dump_yaml
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.recording import EpisodeRecorder
+from hrc_bag.session_index import bag_metadata, dump_bag_metadata
 from hrc_bag.session_writer import contract_descriptions, SessionWriter, TOPIC_TYPES
 from hrc_testing.bag_traffic import SyntheticSession, type_name_of
 
@@ -198,18 +199,6 @@ def test_default_descriptions_are_the_contract_offers():
     assert contract_descriptions() == {
         topic: contract_description(TOPIC_TYPES[topic], *offer)
         for topic, offer in OFFERS.items()}
-
-
-def test_the_encoder_refuses_unknown_fields_and_takes_objects():
-    encoder = MessageEncoder()
-    with pytest.raises(ValueError, match='no field header.stamp.secs'):
-        encoder.encode('hrc_msgs/msg/HumanAction',
-                       {'header': {'stamp': {'secs': 1}}, 'episode': 1})
-    with pytest.raises(ValueError, match='no field epsiode'):
-        encoder.encode('hrc_msgs/msg/HumanAction', {'epsiode': 1})
-    status = SessionStatus(episode=4, session_id='x', robot_subtasks=['slider'])
-    assert encoder.encode('hrc_msgs/msg/SessionStatus', status) == encoder.encode(
-        'hrc_msgs/msg/SessionStatus', plain_values(status))
 
 
 @pytest.mark.parametrize('frame_id, detail', [('', ''), ('world', 'x'), ('abc', '/dev/input/js0')])

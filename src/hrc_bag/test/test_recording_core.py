@@ -15,7 +15,8 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, boundary_event_of_cdr, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event, boundary_event_of_cdr
+from hrc_bag.recording import EpisodeRecorder
 from hrc_testing.bag_traffic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
                                      SyntheticSession, type_name_of)
 
@@ -405,7 +406,7 @@ def test_a_recorder_on_a_folder_with_an_unusable_metadata_yaml_lists_the_files_a
 def test_the_graph_is_asked_once_per_topic_and_file_not_per_message(tmp_path):
     """The topic's description (a ROS graph query in the node) only when a channel is made.
 
-    Before issue 24 the recorder asked for it at every message: at the human's rate (ten
+    Earlier the recorder asked for it at every message: at the human's rate (ten
     commands a step) that query was most of the recorder's CPU. The files are unchanged: the
     description is used only to register the channel.
     """
@@ -437,13 +438,13 @@ def test_the_graph_is_asked_once_per_topic_and_file_not_per_message(tmp_path):
 
 
 def test_batches_give_the_files_of_one_message_at_a_time(tmp_path):
-    """The node drains its subscriptions in batches (issue 24): the files, message for message.
+    """The node drains its subscriptions in batches: the files, message for message.
 
     The same stream (a synthetic session: statuses between episodes, states, commands, steps,
-    summaries) with the same log times goes in one message at a time (the recorder before
-    issue 24: each TaskState deserialized) and in batches of 50 (each taken 1 ms after its
-    last message arrived; TaskState read from its bytes). A file due to close (at once after
-    its EpisodeSummary) closes before the next message of a batch is handled.
+    summaries) with the same log times goes in one message at a time (``record``, as the
+    synthetic sessions do: each TaskState deserialized) and in batches of 50 (each taken 1 ms
+    after its last message arrived; TaskState read from its bytes). A file due to close (at
+    once after its EpisodeSummary) closes before the next message of a batch is handled.
     """
     stream = []
     session = SyntheticSession(sink=lambda topic, message: stream.append((topic, message)),

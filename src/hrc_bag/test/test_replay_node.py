@@ -220,7 +220,7 @@ def test_a_session_with_an_unusable_metadata_yaml_is_played_from_its_files(tmp_p
 
 
 def test_corrupt_empty_and_file_less_inputs_are_refused_with_the_reason(tmp_path):
-    """Issue 25: these passed the magic check and replayed nothing with exit 0."""
+    """These passed the magic check and replayed nothing with exit 0."""
     import io
     import os
 

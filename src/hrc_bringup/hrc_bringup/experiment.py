@@ -43,7 +43,7 @@ import multiprocessing
 import time
 
 from hrc_common import paths
-from hrc_common.contract import case_problem
+from hrc_common.cases import case_problem
 from hrc_common.session_plan import package_version, parse_overrides, SessionSettings
 from hrc_common.time_left import TimeLeft
 

@@ -6,7 +6,7 @@ sweep's modules load them); ``hrc_bringup.experiment.parse_args`` checks the val
 
 import argparse
 
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 from hrc_common.session_plan import add_learning_option
 
 ENGINES = ('inprocess', 'graph')

@@ -10,7 +10,7 @@ from hrc_common.session_plan import (add_learning_option, NODES, new_session_id,
 from hrc_live.study import consent_problem, load_registry, StudyError
 import yaml
 
-# issue 25: the largest ROS_DOMAIN_ID: the RTPS port of domain d is 7400 + 250 d + offsets, and
+# The largest ROS_DOMAIN_ID: the RTPS port of domain d is 7400 + 250 d + offsets, and
 # 232 is the last id whose ports fit in 16 bits (ROS 2 docs, "The ROS_DOMAIN_ID").
 MAX_DOMAIN_ID = 232
 
@@ -57,6 +57,13 @@ def build_parser() -> argparse.ArgumentParser:
                         metavar='FILE', help='a ROS 2 parameter file whose node sections '
                         'override params/*.yaml, e.g. the joystick_setup output (repeatable; '
                         '--set wins)')
+    add_person_options(parser)
+    add_process_options(parser)
+    return parser
+
+
+def add_person_options(parser: argparse.ArgumentParser) -> None:
+    """Add the flags of a session with a person: pages, questionnaire, practice, input."""
     parser.add_argument('--display', action='store_true',
                         help='also start the display node (hrc_live): the page for the person '
                         'on http://127.0.0.1:<port>/ and the console on /console '
@@ -94,6 +101,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--input-wait', type=float, default=120.0, metavar='S',
                         help='realtime with --human device|joy|auto: wait this long for the input '
                         'before refusing to start (default 120 s)')
+
+
+def add_process_options(parser: argparse.ArgumentParser) -> None:
+    """Add the flags of how the session's processes run: domain, report, priority, timeout."""
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID of the session (default: the environment)')
     parser.add_argument('--no-report', dest='report', action='store_false',
@@ -104,7 +115,6 @@ def build_parser() -> argparse.ArgumentParser:
                         'not slow the control loop; 0 = same priority as the nodes')
     parser.add_argument('--timeout', type=float, default=0.0,
                         help='stop the session after this many wall seconds (0 = none)')
-    return parser
 
 
 def parse_args(argv=None):
@@ -144,7 +154,7 @@ def parse_args(argv=None):
         reasons.append('the session id must not contain the subject id (it names files)')
     if options.tlx and not options.display:
         reasons.append('--tlx needs --display (the questionnaire is on the page)')
-    # issue 25: an id outside DDS's range is refused before anything starts
+    # An id outside DDS's range is refused before anything starts
     if options.domain_id is not None and not 0 <= options.domain_id <= MAX_DOMAIN_ID:
         reasons.append(f'--domain-id {options.domain_id} is outside the range of DDS domain '
                        f'ids 0..{MAX_DOMAIN_ID} (higher ids give UDP ports above 65535)')

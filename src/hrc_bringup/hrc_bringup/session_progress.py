@@ -9,7 +9,7 @@ from hrc_common.nodes import DrainedNode, take_waiting
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
 
 # The human's actions (one per step, up to ~500 steps/s in lockstep) are taken in batches every
-# ACTION_DRAIN_PERIOD_S instead of an executor turn each (issue 24: the runner's turn per action
+# ACTION_DRAIN_PERIOD_S instead of an executor turn each (the runner's turn per action
 # was ~0.5 ms of CPU per step, a sixth of a lockstep session's); the reader keeps the newest
 # ACTION_HISTORY, so no change of source is missed below ACTION_HISTORY / ACTION_DRAIN_PERIOD_S
 # actions per second.
@@ -78,7 +78,7 @@ class Progress:
                 and phase_label(status.phase, '') in ('evaluation', 'done')
                 and (self.status is None or phase_label(self.status.phase, '') in (
                     'training', 'updating', 'paused'))):
-            self._verdict_due = status    # issue 25: said once the episodes are in
+            self._verdict_due = status    # said once the episodes are in
         self.status = status
         self._settle_verdict()
         self._track_person_time(status)
@@ -109,7 +109,7 @@ class Progress:
         self._say_if_not_converged(status)
 
     def _say_if_not_converged(self, status):
-        """Say when training ended without the robot converging (issue 25), with the numbers."""
+        """Say when training ended without the robot converging, with the numbers."""
         training = [summary for summary in self.episodes if not summary.evaluation]
         if training and training[-1].converged:
             return

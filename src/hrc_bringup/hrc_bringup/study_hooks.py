@@ -10,7 +10,7 @@ import yaml
 
 
 def owner_only(settings: SessionSettings, parameters: dict) -> None:
-    """Make every output of a session with a subject id owner-only (issue 25).
+    """Make every output of a session with a subject id owner-only.
 
     The umask set at the start makes new files 0600 and folders 0700; a few writers set their
     mode themselves (hrc_common.contract.atomic_write: 0644 by default, e.g. the checkpoints),

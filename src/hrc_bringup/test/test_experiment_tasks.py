@@ -5,7 +5,7 @@ import pathlib
 
 from hrc_bringup import experiment, session_args
 from hrc_bringup.experiment_task import graph_arguments
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 from hrc_common.session_plan import SessionSettings
 
 

@@ -1,6 +1,6 @@
 """The link watchdog of the input guard when the person joins after the robot learned alone.
 
-The human node sends nothing while the person sits out a training step (issue 24), so the
+The human node sends nothing while the person sits out a training step, so the
 watchdog's silence must be counted from the person's joining, not from the first state of
 the session: the first state of the person's first episode comes before their first answer.
 """

@@ -77,7 +77,7 @@ def test_a_runner_that_first_sees_the_session_done_still_says_the_test_episodes_
 
 
 def test_the_human_actions_are_taken_in_batches_and_every_change_of_source_is_said(capsys):
-    """The runner reads /hrc/human/action without an executor turn per action (issue 24).
+    """The runner reads /hrc/human/action without an executor turn per action.
 
     Its executor never waits on that subscription (a turn per action was ~0.5 ms of the
     runner's CPU per lockstep step); a timer takes what arrived, in order, so every change of

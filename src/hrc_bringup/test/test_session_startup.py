@@ -1,6 +1,6 @@
 """The session runner starts the nodes without loading torch, unless the case pre-trains.
 
-Measured (issue 24, quiet machine): importing the runner took 1.7 s, 1.4 s of it torch (the
+Measured (quiet machine): importing the runner took 1.7 s, 1.4 s of it torch (the
 partners-first pre-training, imported for every case), before a single node was launched. Only
 cases 7 and 8 pre-train in the runner's process.
 """

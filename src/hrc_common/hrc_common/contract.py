@@ -42,10 +42,8 @@ Ids
     one rule everywhere they enter), ``check_id``,
     ``make_session_id(case, seed, now, timestamped=True)`` ('case{N}-seed{S}-{YYYYmmdd-HHMMSS}',
     or 'case{N}-seed{S}' inside an experiment).
-Cases (``params/cases.yaml``, the only place they are defined)
-    ``CaseSpec``, ``CaseTableError``, ``load_case_table(path=None)``,
-    ``check_case_table(document)`` -> (table, problems), ``case_table()`` (cached default),
-    ``case_ids()``, ``case_problem(case)`` -> reason or None, ``cases_file_path()``.
+Cases
+    :mod:`hrc_common.cases` (``params/cases.yaml``, the only place they are defined).
 Files
     ``atomic_write(path, data, mode=0o644)``; ``PERSONAL_FILE_MODE`` (0o600) for files that
     hold a subject id or notes.
@@ -54,15 +52,10 @@ Files
 from dataclasses import dataclass
 import datetime
 import enum
-import functools
 import math
 import os
 import re
 import tempfile
-
-import yaml
-
-from hrc_common.paths import params_file
 
 # --------------------------------------------------------------------------- phases
 
@@ -265,7 +258,7 @@ def off_axis_components(wrench, dof: str) -> dict:
 # The interpreter's thread switch interval (s) for realtime control: a thread that holds the GIL
 # (the agent's learner thread in a PPO update) is asked to hand it over after this long instead
 # of Python's default 5 ms, which the control thread would otherwise wait for. Used by the
-# realtime-priority option of every node (hrc_common.nodes) and as the default of the agent's
+# realtime-priority option of every node (hrc_common.realtime) and as the default of the agent's
 # learner_switch_interval (hrc_agent_node.config).
 REALTIME_SWITCH_INTERVAL_S = 0.0005
 
@@ -285,11 +278,9 @@ class SimLimits:
     max_torque: float       # N*m, full-scale torque on the pendulum's hinge
     human_period: float = 0.0   # s: the human's command is applied this often; 0 = unknown
     #                             (the reset response does not carry it: the robot needs none)
-    await_absent_human: bool = False   # the sim awaits the human's (zero) answers also while
-    #                             they sit out a training step (SimParams.await_absent_human)
 
     NAMES = ('control_period', 'max_force', 'max_torque')   # as the sim's parameters
-    OPTIONAL_NAMES = ('human_period', 'await_absent_human')  # the sim's, not in every source
+    OPTIONAL_NAMES = ('human_period',)   # the sim's, not in every source
 
     @classmethod
     def of(cls, source) -> 'SimLimits':
@@ -331,9 +322,7 @@ class SimLimits:
     def describe(self) -> str:
         """Return one line for logs."""
         return (f'control period {self.control_period:g} s, max_force {self.max_force:g} N, '
-                f'max_torque {self.max_torque:g} N*m'
-                + (', the human answers while sitting out (await_absent_human)'
-                   if self.await_absent_human else ''))
+                f'max_torque {self.max_torque:g} N*m')
 
 
 # --------------------------------------------------------------------------- message types
@@ -414,131 +403,6 @@ def make_session_id(case: int, seed: int, now: datetime.datetime = None,
         return f'case{case}-seed{seed}'
     now = now or datetime.datetime.now()
     return f'case{case}-seed{seed}-{now:%Y%m%d-%H%M%S}'
-
-
-# --------------------------------------------------------------------------- cases
-
-CASES_FILE_NAME = 'cases.yaml'
-
-
-class CaseTableError(ValueError):
-    """The cases file is missing or not of the expected shape."""
-
-
-@dataclass(frozen=True)
-class CaseSpec:
-    """A paper case: a strategy and the role assignment (the human drives the other DOF)."""
-
-    case_id: int
-    strategy: str
-    robot_dof: str
-    human_dof: str
-    # A step of its strategy trains with a simulated population (``partner: population``, the
-    # partners-first strategy this project adds): not one of the paper's cases.
-    population_steps: bool = False
-
-
-def cases_file_path() -> str:
-    """Return the default cases file path: ``cases.yaml`` of ``hrc_common.paths.params_dir()``."""
-    return str(params_file(CASES_FILE_NAME))
-
-
-def load_case_table(path=None) -> dict:
-    """Return {case id: CaseSpec} from a cases file (default: ``cases_file_path()``).
-
-    Checks the shape (``check_case_table``); every problem is reported at once in one
-    CaseTableError.
-    """
-    path = path or cases_file_path()
-    try:
-        with open(path, 'rb') as stream:
-            document = yaml.safe_load(stream)
-    except OSError as error:
-        raise CaseTableError(f'cannot read cases file {path}: {error.strerror}') from None
-    except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise CaseTableError(f'cases file {path} is not YAML: {error}') from None
-    table, problems = check_case_table(document)
-    if problems:
-        raise CaseTableError(f'cases file {path}: ' + '; '.join(problems))
-    return table
-
-
-def check_case_table(document) -> tuple:
-    """Return ({case id: CaseSpec} of the well-formed cases, [every problem]) of a parsed file.
-
-    The shape: a mapping with ``strategies`` (a mapping of strategy names; what a strategy
-    holds is the agent's, ``hrc_agent_node.strategies``) and ``cases`` (a non-empty mapping of
-    positive integer ids to {strategy: a key of strategies, robot_action: a DOF}).
-    """
-    if not isinstance(document, dict):
-        return {}, [f'expected a mapping with strategies and cases, got '
-                    f'{type(document).__name__}']
-    strategies = document.get('strategies')
-    cases = document.get('cases')
-    problems = []
-    if not isinstance(strategies, dict):
-        problems.append('strategies must be a mapping of strategy names')
-        strategies = {}
-    if not isinstance(cases, dict) or not cases:
-        problems.append('cases must be a non-empty mapping of case ids')
-        cases = {}
-    table = {}
-    for case_id, entry in cases.items():
-        if isinstance(case_id, bool) or not isinstance(case_id, int) or case_id < 1:
-            problems.append(f'case id {case_id!r} must be a positive integer')
-            continue
-        if not isinstance(entry, dict):
-            problems.append(f'case {case_id}: expected a mapping, got {type(entry).__name__}')
-            continue
-        unknown = sorted(set(entry) - {'strategy', 'robot_action'}, key=str)
-        if unknown:
-            problems.append(f'case {case_id}: unknown keys {unknown}')
-        strategy = entry.get('strategy')
-        robot = entry.get('robot_action')
-        known_strategy = isinstance(strategy, str) and strategy in strategies
-        if not known_strategy:
-            problems.append(f'case {case_id}: unknown strategy {strategy!r}; defined: '
-                            f'{sorted(strategies, key=str)}')
-        if robot not in DOFS:
-            problems.append(f'case {case_id}: robot_action {robot!r} is not an action; the '
-                            f'actions: {list(DOFS)}')
-        elif known_strategy:
-            steps = strategies[strategy].get('steps') if isinstance(strategies[strategy],
-                                                                    dict) else None
-            population = any(isinstance(step, dict) and step.get('partner') == 'population'
-                             for step in (steps if isinstance(steps, list) else ()))
-            table[case_id] = CaseSpec(case_id, strategy, robot, other_dof(robot), population)
-    return dict(sorted(table.items())), problems
-
-
-@functools.lru_cache(maxsize=None)
-def case_table() -> dict:
-    """Return the default case table (loaded once)."""
-    return load_case_table()
-
-
-def case_ids() -> tuple:
-    """Return the ids of the defined cases, ascending."""
-    return tuple(case_table())
-
-
-def paper_case_ids() -> tuple:
-    """Return the ids of the paper's cases of params/cases.yaml, ascending (1..6 in the file).
-
-    A paper case: its strategy has no step with a simulated population (partners first, cases
-    7-8, is this project's addition). The one definition for whatever studies, sweeps or
-    figures "the paper's six cases".
-    """
-    return tuple(case_id for case_id, spec in case_table().items()
-                 if not spec.population_steps)
-
-
-def case_problem(case) -> str:
-    """Return why ``case`` is not a defined case id, or None if it is."""
-    ids = case_ids()
-    if isinstance(case, bool) or not isinstance(case, int) or case not in ids:
-        return f'case must be one of {min(ids)}..{max(ids)}, got {case!r}'
-    return None
 
 
 # --------------------------------------------------------------------------- files

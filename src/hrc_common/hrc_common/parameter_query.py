@@ -16,8 +16,8 @@ from rclpy.parameter import parameter_value_to_python
 # s: a request without an answer this long is asked again. A service's answer can be lost: the
 # client sees the service as ready once its request reaches it, but the service may not have
 # matched the client's response reader yet (its response is then dropped), and a service
-# restarted in between never answers the old request. Seen once in ~20 graph starts under load
-# (issue 24's benchmark): the human node then waited for the sim's limits forever.
+# restarted in between never answers the old request. Seen once in ~20 graph starts under load:
+# the human node then waited for the sim's limits forever.
 ANSWER_TIMEOUT_S = 2.0
 
 

@@ -19,8 +19,8 @@ import subprocess
 
 import yaml
 
-from hrc_common.contract import (atomic_write, case_problem, case_table, id_problem,
-                                 make_session_id, PERSONAL_FILE_MODE)
+from hrc_common.cases import case_problem, case_table
+from hrc_common.contract import atomic_write, id_problem, make_session_id, PERSONAL_FILE_MODE
 from hrc_common.params import field_problems, param
 from hrc_common.paths import params_dir as default_params_dir
 

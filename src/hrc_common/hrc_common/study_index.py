@@ -8,7 +8,7 @@ two packages, so it lives here (hrc_bag sits below hrc_live). The rest of the st
 
 from dataclasses import dataclass
 
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 
 INDEX_FILE = 'index.yaml'
 SESSION_KINDS = ('practice', 'condition')

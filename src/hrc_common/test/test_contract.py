@@ -8,9 +8,9 @@ import sys
 import pytest
 
 from hrc_common import contract
-from hrc_common.contract import (atomic_write, case_problem, case_table, CaseTableError,
-                                 check_id, id_problem, load_case_table, make_session_id,
-                                 other_dof, Phase, phase_label, ROTATION, TRANSLATION)
+from hrc_common.cases import case_problem, case_table, CaseTableError, load_case_table
+from hrc_common.contract import (atomic_write, check_id, id_problem, make_session_id, other_dof,
+                                 Phase, phase_label, ROTATION, TRANSLATION)
 
 
 def test_phases_equal_the_message_constants():

@@ -1,4 +1,4 @@
-"""Contracts written once (issue 20): no copy of the case table, control period or params lookup.
+"""Contracts written once: no copy of the case table, control period or params lookup.
 
 Scans the project's code that is not a test (packages, their benches, bench/, scripts/): a
 copy of a contract that appears again makes the test name the file and line.
@@ -8,7 +8,7 @@ import ast
 import pathlib
 import re
 
-from hrc_common.contract import case_table, paper_case_ids
+from hrc_common.cases import case_table, paper_case_ids
 from hrc_common.study_index import PAPER_CASES
 
 REPOSITORY = pathlib.Path(__file__).resolve().parents[3]

@@ -1,4 +1,4 @@
-"""LeanExecutor (hrc_common.nodes): rclpy's callbacks in rclpy's order, with less work a turn.
+"""LeanExecutor (hrc_common.executors): rclpy's callbacks in rclpy's order, with less work a turn.
 
 One process, one context per test (rclpy_context): a node is served by the LeanExecutor and by
 rclpy's SingleThreadedExecutor in turn, and both must call the same callbacks in the same order;
@@ -14,8 +14,9 @@ import pytest
 from std_msgs.msg import Int32
 from std_srvs.srv import Trigger
 
-from hrc_common.nodes import (EXECUTOR_VARIABLE, executor_problem, LeanExecutor,
-                              make_executor, run_node)
+from hrc_common.executors import (EXECUTOR_VARIABLE, executor_problem, LeanExecutor,
+                                  make_executor)
+from hrc_common.nodes import run_node
 
 QUEUE = 10
 
@@ -165,7 +166,7 @@ def test_an_unknown_executor_is_a_bad_parameter_with_its_reason(monkeypatch, cap
                     args=['some_node'])
     assert code == 2
     error = capsys.readouterr().err
-    assert "HRC_EXECUTOR='fast' is not one of lean, rclpy, events" in error
+    assert "HRC_EXECUTOR='fast' is not one of lean, rclpy" in error
     assert 'Traceback' not in error
 
 
@@ -195,27 +196,6 @@ def test_the_wait_set_is_built_once_not_every_turn(rclpy_context, monkeypatch):
     assert len(builds) == 2
     executor.shutdown()
     node.destroy_node()
-
-
-def test_events_refuses_a_node_with_a_guard_condition(ros_domain_id, monkeypatch, capsys):
-    """EventsExecutor: a node with a guard condition is refused before it spins (exit code 2).
-
-    rclpy's EventsExecutor raises 'Guard conditions not supported' in the middle of spinning
-    (the human node has one); the refusal says why, with no traceback.
-    """
-    import rclpy
-
-    def node_with_a_guard():
-        node = rclpy.create_node('guarded')
-        node.create_guard_condition(lambda: None)
-        return node
-
-    monkeypatch.setenv(EXECUTOR_VARIABLE, 'events')
-    code = run_node(node_with_a_guard, 'guarded_node', 'summary', args=['guarded_node'])
-    error = capsys.readouterr().err
-    assert code == 2, error
-    assert 'EventsExecutor has no guard conditions' in error and "'guarded'" in error
-    assert 'Traceback' not in error
 
 
 def test_a_stop_while_a_node_is_being_made_is_a_stop_not_a_traceback(ros_domain_id, capsys):

@@ -1,4 +1,4 @@
-"""ParameterQuery asks again when its request is never answered (issue 24's benchmark hang).
+"""ParameterQuery asks again when its request is never answered.
 
 In one graph start of about twenty the human node sent its request for the sim's limits and
 never got an answer: it waited forever and the sim counted every human command missing. Here
@@ -11,7 +11,7 @@ import time
 from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import GetParameters
 
-from hrc_common.nodes import LeanExecutor
+from hrc_common.executors import LeanExecutor
 from hrc_common.parameter_query import ParameterQuery
 
 

@@ -55,7 +55,7 @@ def test_every_reason_is_reported_at_once():
 
 
 def test_a_cross_field_reason_shows_beside_the_field_reasons():
-    # Issue 11: a check() reason (e.g. the agent's session id) only showed once every single
+    # A check() reason (e.g. the agent's session id) only showed once every single
     # field was fixed; now all at once.
     reasons = validate(ExampleParams(mode='realtime', period=0.02, episodes=-3))
     assert 'episodes: -3 is below the minimum 0' in reasons

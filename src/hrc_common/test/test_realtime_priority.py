@@ -1,4 +1,4 @@
-"""The opt-in realtime scheduling of node processes (HRC_REALTIME_PRIORITY, issue 24)."""
+"""The opt-in realtime scheduling of node processes (HRC_REALTIME_PRIORITY)."""
 
 import errno
 import os
@@ -8,8 +8,10 @@ import textwrap
 
 import pytest
 
-from hrc_common.nodes import (apply_realtime_priority, REALTIME_PRIORITY_VARIABLE,
-                              REALTIME_SWITCH_INTERVAL_S, realtime_priority_of, run_nodes)
+from hrc_common.contract import REALTIME_SWITCH_INTERVAL_S
+from hrc_common.nodes import run_nodes
+from hrc_common.realtime import (apply_realtime_priority, REALTIME_PRIORITY_VARIABLE,
+                                 realtime_priority_of)
 
 
 def test_off_by_default_and_values_checked():
@@ -81,7 +83,7 @@ def test_bad_value_refused_before_start_with_exit_code_2(monkeypatch, capsys):
 # when the priority is applied run on SCHED_FIFO, a thread started afterwards does not.
 CHILD = textwrap.dedent("""
     import os, sys, threading
-    from hrc_common.nodes import apply_realtime_priority
+    from hrc_common.realtime import apply_realtime_priority
     done = threading.Event()
     before = threading.Thread(target=done.wait); before.start()
     line = apply_realtime_priority(7)

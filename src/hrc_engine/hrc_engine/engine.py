@@ -46,7 +46,7 @@ from hrc_common.params import from_dict
 from hrc_common.paths import params_dir as default_params_dir
 from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
-from hrc_engine import cdr, messages
+from hrc_engine import messages
 from hrc_engine.human import SimulatedHumanSide
 from hrc_engine.loop import EpisodeLoop, run_agent_session
 from hrc_sim_node.commands import ACTORS
@@ -190,20 +190,16 @@ class InProcessSession:
         _, config_path = write_session_files(self.settings, self.parameters, self.run_dir,
                                              self.config.params_dir or None)
         text = config_path.read_text()
-        self._types = dict(TOPIC_TYPES)
         self.writer = SessionWriter(self.settings.bags_dir, self.session_id,
                                     session_config=yaml.safe_load(text),
                                     session_config_text=text,
                                     descriptions=topic_descriptions())
 
     def _write(self, topic: str, message: dict) -> None:
-        if self.writer is None:
-            return
-        if topic == '/hrc/session':
-            # as plain values: the writer keeps the last one for the hrc_session record
+        if self.writer is not None:
+            # as plain values: the writer encodes them (hrc_bag.serializer) and keeps the last
+            # SessionStatus for the hrc_session record
             self.writer.write(topic, message, self.clock())
-        else:
-            self.writer.write(topic, cdr.encode(self._types[topic], message), self.clock())
 
     def _announce(self, text: str) -> None:
         """Publish a SessionStatus as the agent does (and tell the human the roles)."""

@@ -28,6 +28,8 @@ import yaml
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, read_checkpoint, save_checkpoint
 from hrc_agent_node.config import AgentParams
+from hrc_common.paths import params_dir
+from hrc_common.session_plan import add_learning_option, load_learning
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, with_overrides
 from hrc_engine.loop import EpisodeLoop, LoopObserver, PartnerSide, run_agent_episode, \
@@ -176,8 +178,9 @@ def main(argv=None) -> int:
                                                  '(physics + scripted PD partner), no ROS.')
     parser.add_argument('--case', type=int, default=1)
     parser.add_argument('--seed', type=int, default=0)
-    parser.add_argument('--preset', default='paper')
-    parser.add_argument('--episodes', type=int, default=60, help='max training episodes')
+    add_learning_option(parser)
+    parser.add_argument('--episodes', type=int, default=0,
+                        help="max training episodes (default: the learning configuration's)")
     parser.add_argument('--evaluation-episodes', type=int, default=3)
     parser.add_argument('--partner', default='scripted',
                         help='scripted (PD partner) or human:<profile> (simulated human)')
@@ -194,12 +197,18 @@ def main(argv=None) -> int:
                         help='other AgentParams overrides (YAML values)')
     args = parser.parse_args(argv)
 
+    try:
+        learning = load_learning(params_dir(), args.learning)
+    except ValueError as error:
+        print(f'offline: {error}', file=sys.stderr)
+        return 2
+    if args.episodes > 0:
+        learning['max_training_episodes'] = args.episodes
     overrides = {name: yaml.safe_load(value) for name, value in
                  (item.split('=', 1) for item in args.set)}
-    params = with_overrides(AgentParams(), case=args.case, seed=args.seed, preset=args.preset,
-                            max_training_episodes=args.episodes,
+    params = with_overrides(AgentParams(), case=args.case, seed=args.seed,
                             evaluation_episodes=args.evaluation_episodes,
-                            torch_threads=args.threads, **overrides)
+                            torch_threads=args.threads, **dict(learning, **overrides))
     physics_params = PhysicsParams()
     core = AgentCore(params, limits=SimLimits.of(physics_params))
     if args.resume:

@@ -118,37 +118,6 @@ def test_bad_input_exits_2_with_the_reason(argv, reason, tmp_path, capsys):
     assert reason in capsys.readouterr().err
 
 
-def test_the_fast_encoder_gives_rclpys_bytes_up_to_the_padding():
-    from geometry_msgs.msg import WrenchStamped
-    from hrc_bag.format import plain_values
-    from hrc_engine import cdr
-    from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
-    from rclpy.serialization import deserialize_message, serialize_message
-
-    state = TaskState(episode=3, step=7, slider_position=0.1, applied_torque=-0.3,
-                      truncated=True)
-    state.header.frame_id, state.header.stamp.sec, state.header.stamp.nanosec = 'world', 5, 9
-    step = AgentStep(episode=1, step=2, action=0.5, subtask_ids=['T2_1', 'T1_1'],
-                     reward_components=[0.1, 0.2], reward=0.3, deterministic=True)
-    empty = AgentStep(subtask_ids=[], reward_components=[])
-    summary = EpisodeSummary(session_id='abc', case_id=2, episode=4, steps=200, converged=True)
-    status = SessionStatus(session_id='x', robot_subtasks=['a', 'bb'], phase=2, message='hi')
-    action = HumanAction(episode=1, step=2, command=-0.3, dof=1, source=2,
-                         source_detail='paper', engaged=True)
-    wrench = WrenchStamped()
-    wrench.wrench.torque.x = 0.25
-    for message, type_name in ((state, 'hrc_msgs/msg/TaskState'),
-                               (step, 'hrc_msgs/msg/AgentStep'),
-                               (empty, 'hrc_msgs/msg/AgentStep'),
-                               (summary, 'hrc_msgs/msg/EpisodeSummary'),
-                               (status, 'hrc_msgs/msg/SessionStatus'),
-                               (action, 'hrc_msgs/msg/HumanAction'),
-                               (wrench, 'geometry_msgs/msg/WrenchStamped')):
-        data = cdr.encode(type_name, plain_values(message))
-        assert len(data) == len(serialize_message(message)), type_name
-        assert deserialize_message(data, type(message)) == message, type_name
-
-
 def test_the_engine_takes_the_one_session_configuration():
     """EngineConfig keeps the engine's own run options beside a SessionSettings, no copy."""
     own = {field.name for field in dataclasses.fields(EngineConfig)}

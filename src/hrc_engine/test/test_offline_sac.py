@@ -209,9 +209,9 @@ def test_a_new_reward_empties_the_replay_buffer():
 
 def test_offline_case_2_session_with_sac_writes_a_checkpoint(tmp_path, capsys):
     path = tmp_path / 'sac.pt'
-    code = offline.main(['--case', '2', '--preset', 'tuned', '--episodes', '2',
+    code = offline.main(['--case', '2', '--learning', 'sac', '--episodes', '2',
                          '--evaluation-episodes', '1', '--quiet', '--checkpoint', str(path),
-                         '--set', 'algorithm=sac', 'sac_hidden_size=16', 'sac_batch_size=16',
+                         '--set', 'sac_hidden_size=16', 'sac_batch_size=16',
                          'sac_updates_per_step=1', 'sac_learning_starts=100'])
     assert code == 0
     summary = json.loads(capsys.readouterr().out)

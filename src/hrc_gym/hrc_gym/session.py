@@ -4,10 +4,11 @@
 and ``sim.*`` overrides (:class:`hrc_common.session_plan.SessionSettings`, the configuration
 ``hrc session``, the in-process engine and the experiment take): the physics is the session's
 sim (``params/sim.yaml`` with the overrides, composed by ``session_plan.compose``), the human
-the session's profile (``--profile`` or ``--set human.profile``), and the first ``reset()``
-without a seed is seeded with the session's seed. The environment's own keywords
-(``training_step``, ``preset``, ``observe_rates``) stay keywords; ``case`` and ``human`` come
-from one place only: given both ways they are refused.
+the session's profile (``--profile`` or ``--set human.profile``), the reward the preset of the
+session's learning configuration (``session.learning``: ``params/learning/<name>.yaml``), and
+the first ``reset()`` without a seed is seeded with the session's seed. The environment's own
+keywords (``training_step``, ``observe_rates``) stay keywords; ``case``, ``human`` and
+``preset`` come from one place only: given both ways they are refused.
 """
 
 from dataclasses import replace
@@ -33,8 +34,9 @@ def session_keywords(session: SessionSettings, keywords: dict, physics_params) -
         f'session: expected a SessionSettings, got {type(session).__name__}']
     if reasons:
         raise ParameterError('session rejected: ' + '; '.join(reasons), reasons)
-    for name, source in (('case', 'session.case'), ('human', 'session.human_profile or '
-                                                            "overrides['human.profile']")):
+    for name, source in (('case', 'session.case'),
+                         ('human', "session.human_profile or overrides['human.profile']"),
+                         ('preset', "session.learning's reward preset")):
         if name in keywords:
             reasons.append(f'{name}: given by the session ({source}); pass it once')
     if physics_params is not None:
@@ -49,5 +51,5 @@ def session_keywords(session: SessionSettings, keywords: dict, physics_params) -
     # record False: no recorder section to compose (an environment records nothing)
     parameters = compose(replace(session, record=False), params_dir())
     sim = from_dict(SimParams, parameters['sim'])
-    return (dict(keywords, case=session.case, human=parameters['human']['profile']),
-            physics_params_of(sim))
+    return (dict(keywords, case=session.case, human=parameters['human']['profile'],
+                 preset=parameters['agent']['preset']), physics_params_of(sim))

@@ -25,7 +25,8 @@ from hrc_agent_node.observation import applied_command, observation_of
 from hrc_agent_node.config import AgentParams, CASES_FILE_NAME, share_file, TREE_FILE_NAME
 from hrc_agent_node.strategies import load_cases, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
-from hrc_common.contract import case_problem, SimLimits
+from hrc_common.cases import case_problem
+from hrc_common.contract import SimLimits
 from hrc_common.params import checked, param, ParameterError, with_overrides
 from hrc_engine.human import SimulatedHumanSide
 from hrc_engine.loop import EpisodeLoop, PartnerSide

@@ -234,8 +234,9 @@ def test_a_session_gives_the_case_the_seed_the_profile_and_the_physics():
     """The one session configuration drives the environment as the keywords do."""
     actions = [np.array([np.sin(0.1 * k)], dtype=np.float32) for k in range(200)]
     by_keywords = SliderPendulumBallEnv(case=6, human='novice', preset='tuned')
+    # the default learning configuration (sac) rewards with the tuned preset
     session = SessionSettings(case=6, seed=7, human_profile='novice')
-    by_session = SliderPendulumBallEnv(session=session, preset='tuned')
+    by_session = SliderPendulumBallEnv(session=session)
     try:
         assert by_session.config == by_keywords.config
         assert by_session.task.physics.params == PhysicsParams()   # params/sim.yaml's
@@ -253,6 +254,13 @@ def test_a_session_gives_the_case_the_seed_the_profile_and_the_physics():
         assert env.config.human == 'skilled' and env.config.case == 2
     finally:
         env.close()
+    # the session's learning configuration gives the reward preset
+    for learning, preset in (('sac', 'tuned'), ('ppo', 'graded'), ('paper', 'paper')):
+        env = SliderPendulumBallEnv(session=SessionSettings(case=2, learning=learning))
+        try:
+            assert env.config.preset == preset, learning
+        finally:
+            env.close()
 
 
 def test_a_session_and_keywords_saying_the_same_thing_are_refused_with_every_reason():
@@ -262,9 +270,11 @@ def test_a_session_and_keywords_saying_the_same_thing_are_refused_with_every_rea
     assert 'seed must be >= 0' in str(caught.value)
     with pytest.raises(ParameterError) as caught:
         SliderPendulumBallEnv(session=SessionSettings(overrides={'agent.horizon': 20}),
-                              case=3, human='paper', physics_params=PhysicsParams())
+                              case=3, human='paper', physics_params=PhysicsParams(),
+                              preset='graded')
     for reason in ('case: given by the session', 'human: given by the session',
-                   'physics_params: given by the session', "overrides 'agent.horizon'"):
+                   'preset: given by the session', 'physics_params: given by the session',
+                   "overrides 'agent.horizon'"):
         assert reason in str(caught.value)
 
 

@@ -15,8 +15,8 @@ What it decides, per state (not the last of its episode, which needs no answer):
 * the same state again (same episode and step): the same answer, ``repeated`` true, and the
   simulated human is not advanced twice;
 * the human not involved in this training step: no answer is sent at all
-  (:attr:`HumanCore.answers_states` false: the sim neither awaits nor applies one, issue 24;
-  true with the sim's ``await_absent_human``); asked, zero, ``engaged`` false, source ``none``;
+  (:attr:`HumanCore.answers_states` false: the sim neither awaits nor applies one); asked,
+  zero, ``engaged`` false, source ``none``;
 * otherwise the active input (:class:`~hrc_joystick_node.inputs.InputSelector`): the stick of
   the device or ``/joy`` (deadzone, inversion, deadman), the simulated human (reset at each new
   episode or when a step does not follow the last one; its clock is the state's stamp, so
@@ -287,10 +287,9 @@ class HumanCore:
         not await them then (``hrc_sim_node.protocol.StepProtocol.awaits_human``, from the same
         announcement): answering every state with zero was two of a lockstep step's five
         messages in the robot-alone episodes. The simulated human is not advanced by such
-        states either way, so the session's numbers are the same. With the sim's
-        ``await_absent_human`` (carried in its limits) it answers them with zero, as before.
+        states either way, so the session's numbers are the same.
         """
-        return self.involved or bool(self.limits and self.limits.await_absent_human)
+        return self.involved
 
     def answer(self, episode: int, step: int, stamp_ns: int, state,
                sticks: typing.Optional[dict] = None, slice_index: int = 0) -> HumanAnswer:

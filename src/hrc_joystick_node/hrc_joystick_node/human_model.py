@@ -1,7 +1,7 @@
 """A human model cloned from recordings, loaded as a human input (``input: model``); no rclpy.
 
 This module is the loading hook and the file format; training the model from bags is separate
-work (issue 15). A checkpoint is a ``.pt`` file written by :func:`save_human_model` and holding
+work. A checkpoint is a ``.pt`` file written by :func:`save_human_model` and holding
 only plain containers and tensors, so it loads with ``torch.load(weights_only=True)`` (no code
 can run from the file)::
 

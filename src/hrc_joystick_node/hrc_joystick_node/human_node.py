@@ -13,11 +13,10 @@ stamp, so the lockstep sim can match them to the step. The sim owns its control 
 limits: the node reads them at start from the sim's parameter service (node ``sim_node``); a
 state that arrives before they are known is answered when they come. While the session says
 the human is not involved (the robot learns alone) it answers nothing: the sim does not await
-the human then (issue 24; until then it answered every such state with zero, which the sim's
-``await_absent_human``, read with its limits, brings back). When the
-session is aborted (phase ``aborted``) it sends a zero command at once, answering the newest
-state, and zero for anything after. The joystick device is sampled (drained without blocking)
-when each state arrives, so the command is the stick's position at that moment.
+the human then. When the session is aborted (phase ``aborted``) it sends a zero command at
+once, answering the newest state, and zero for anything after. The joystick device is sampled
+(drained without blocking) when each state arrives, so the command is the stick's position at
+that moment.
 
 It publishes the input status on ``/hrc/human/input`` (diagnostic_msgs/DiagnosticStatus,
 reliable, transient local, depth 1) at every change and every second: ``level`` OK / WARN /
@@ -190,10 +189,6 @@ class HumanNode(Node):
         waiting, self._state_before_limits = self._state_before_limits, None
         if waiting is not None:
             self.on_state(waiting)
-        elif limits.await_absent_human and self._state_while_out is not None:
-            # a state that came while the human sat out, before the limits said they answer
-            held, self._state_while_out = self._state_while_out, None
-            self.on_state(held)
 
     def wait_for_sim(self, now: float) -> None:
         """Ask the sim for its limits until it answers; say every 10 s that we wait."""
@@ -384,9 +379,7 @@ class HumanNode(Node):
             if self.core.involved:
                 self._state_before_limits = message   # the newest: answered once the sim says
             else:
-                # kept as below; answered once the sim's limits come if they say that a human
-                # who sits out answers (await_absent_human, on_sim_limits)
-                self._state_while_out = message
+                self._state_while_out = message   # kept as below
             return
         if not self.core.answers_states:
             # Sitting out this training step: the sim awaits nothing of the human. Kept in

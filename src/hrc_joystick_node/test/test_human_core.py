@@ -129,23 +129,6 @@ def test_roles_not_involved_and_abort():
     assert core.abort_answer() is None
 
 
-def test_with_the_sims_await_absent_human_it_answers_while_sitting_out():
-    """The protocol before issue 24 (the sim's setting, in its limits): zero answers."""
-    import dataclasses
-
-    core = HumanCore(HumanParams(input='sim', profile='skilled'), PROFILES)
-    core.on_inputs(False, '', False, '')
-    core.on_session('translation', False, [])
-    core.set_limits(LIMITS)
-    assert not core.answers_states
-    core.set_limits(dataclasses.replace(LIMITS, await_absent_human=True))
-    assert core.answers_states
-    answer = core.answer(0, 2, stamp(0, 2), State(slider_position=0.05))
-    assert (answer.command, answer.engaged, answer.source) == (0.0, False, ZERO)
-    core.on_session('translation', False, [], aborted=True)
-    assert core.abort_answer().stamp_ns == stamp(0, 2)
-
-
 def test_a_joystick_drives_it_and_its_loss_holds_zero_and_asks_for_a_pause():
     params = HumanParams(input='device', device='/dev/input/js0', enable_button=0,
                          deadzone=0.0)

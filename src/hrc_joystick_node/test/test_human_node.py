@@ -252,7 +252,7 @@ def test_follows_the_session_roles_and_sends_nothing_when_not_involved(start_nod
 
     harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
     assert harness.spin_until(lambda: 'not involved' in process.output), process.output
-    # Sitting out: no answer at all (issue 24; the sim awaits the robot only then).
+    # Sitting out: no answer at all (the sim awaits the robot only then).
     silent = [task_state(0, step, slider_position=0.05) for step in range(2, 5)]
     for state in silent:
         harness.states.publish(state)
@@ -282,38 +282,6 @@ def test_follows_the_session_roles_and_sends_nothing_when_not_involved(start_nod
     assert harness.spin_until(lambda: key in harness.actions and key in harness.wrenches), \
         process.output
     assert harness.actions[key].engaged and 'its announcement came after' in process.output
-
-
-def test_with_the_sims_await_absent_human_it_answers_zero_while_sitting_out(start_node,
-                                                                             harness):
-    """The protocol before issue 24, as a setting of the sim read from its parameters.
-
-    The sim's parameters come only after a state of a robot-alone step: that state is answered
-    once they say a human who sits out answers (as before issue 24, when every state that came
-    before the limits was answered with them).
-    """
-    sim_name = 'sim_' + harness.prefix[len('/test_'):]
-    process = harness.start(start_node, params_file=PARAMS / 'human.yaml',
-                            parameters={'input': 'sim', 'profile': 'skilled', 'seed': 1},
-                            sim_node=sim_name)
-    harness.wait_for_human_node(process)
-    harness.session.publish(make_session(SessionStatus.DOF_TRANSLATION, False, [], 1))
-    assert harness.spin_until(lambda: 'not involved' in process.output), process.output
-    early = task_state(0, 1, slider_position=0.05)
-    harness.states.publish(early)
-    harness.spin_until(lambda: False, 0.5)
-    assert stamp_key(early.header.stamp) not in harness.actions, 'no limits yet'
-    assert harness.serve_sim_parameters(SimLimits(
-        control_period=0.2, max_force=4.0, max_torque=0.5, await_absent_human=True)) == sim_name
-    key = stamp_key(early.header.stamp)
-    assert harness.spin_until(lambda: key in harness.actions and key in harness.wrenches), \
-        process.output
-    assert 'answers while sitting out' in process.output
-    assert harness.actions[key].command == 0.0 and not harness.actions[key].engaged
-    action, wrench = harness.step(task_state(0, 2, slider_position=0.05), process)
-    assert (action.command, action.engaged, action.source) == (0.0, False,
-                                                              HumanAction.SOURCE_NONE)
-    assert (wrench.wrench.force.z, wrench.wrench.torque.x) == (0.0, 0.0)
 
 
 def test_joy_input_over_dds_with_deadman_deadline_and_return(start_node, harness):

@@ -111,8 +111,8 @@ def console_document(snapshot: Snapshot) -> dict:
     source = {'source': 'unknown', 'detail': 'no human command received yet', 'age_s': None,
               'engaged': False, 'healthy': False}
     if session is not None and not session.human_involved:
-        # the human node sends nothing while the person sits out (issue 24; zeros with the
-        # sim's await_absent_human): say why, whichever
+        # the human node sends nothing while the person sits out (older sessions' bags hold
+        # zeros then): say why, whichever
         source = {'source': 'none', 'age_s': None, 'engaged': False, 'healthy': False,
                   'detail': 'not involved in this training step: the robot learns alone, '
                             'nothing of the person is applied'}

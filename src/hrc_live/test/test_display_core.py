@@ -60,7 +60,7 @@ def test_the_robot_learning_alone_asks_the_person_to_wait():
 
 
 def test_the_console_says_the_human_sends_nothing_while_the_robot_learns_alone():
-    """Issue 24: no HumanAction comes then; the console says why, not "no command yet"."""
+    """No HumanAction comes then; the console says why, not "no command yet"."""
     model = model_in_episode(human_involved=False, human_subtasks=(), training_step=0)
     model.on_human(HumanView('sim', 'paper', True, 0.3, received=0.5))   # an earlier step's
     document = console_document(model.snapshot(now=3.5))
@@ -210,7 +210,7 @@ def test_console_reports_input_health_errors_and_totals():
     assert words.tone == 'stop' and words.banner.startswith('The joystick is disconnected')
 
 
-# --------------------------------------------------------------------------- issue 25
+# --------------------------------------------------------------------------- a lost joystick
 def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_each():
     model = model_in_episode()                        # episode 6 at step 12, the person acts
     # The runner stops the agent for the lost joystick: the agent says "aborted" first.

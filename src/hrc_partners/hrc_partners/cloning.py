@@ -10,11 +10,11 @@ to the stick command in [-1, 1]. :func:`features` builds exactly the inputs
 sim applied in the period after each state (``EpisodeTrace.applied``: at the human's own rate,
 one per slice, e.g. ten at 0.02 s), each a training pair with that state's inputs; ``command``
 -- the ``HumanAction`` answering the state (the person's first command of the period), as
-before issue 21's targets (with one command per period, as recorded at ``human_period`` 0.2 s,
-both are the same). The clone acts once a control period and holds its command over the
-slices (``ClonedHuman``), so in least squares it learns the mean of what the person applied
-in the period, not the snapshot at its start; the held-out error is measured against the same
-targets.
+before the human acted at their own rate (with one command per period, as recorded at
+``human_period`` 0.2 s, both are the same). The clone acts once a control period and holds
+its command over the slices (``ClonedHuman``), so in least squares it learns the mean of
+what the person applied in the period, not the snapshot at its start; the held-out error is
+measured against the same targets.
 
 Modelling choices (not facts): a deterministic policy fitted by mean squared error (the
 person's motor noise and lapses are not modelled: the clone is their mean response, so it is

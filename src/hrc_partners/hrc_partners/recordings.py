@@ -17,8 +17,8 @@ every command applied in the period (``human_applied``, N or N*m, in time order)
 ``EpisodeTrace.applied`` holds them normalized by the session's full scale (``max_force`` /
 ``max_torque`` of its sim parameters; the defaults 2 N and 0.5 N*m when a session does not
 record them): what the person really did in the period after the state. A step without them
-(the episode's last, a session recorded before issue 21, a period whose human command was
-missing and so applied as zero) keeps the ``HumanAction`` command alone.
+(the episode's last, a session recorded before the human's own rate (0aecc4c), a period
+whose human command was missing and so applied as zero) keeps the ``HumanAction`` command alone.
 """
 
 from dataclasses import dataclass, field

@@ -14,7 +14,7 @@ import typing
 from hrc_common.contract import BODY_COLOURS
 
 if typing.TYPE_CHECKING:   # annotations only: physics imports this module
-    from hrc_sim_node.physics import PhysicsParams, PhysicsState
+    from hrc_sim_node.physics_params import PhysicsParams, PhysicsState
 
 
 # Cross sections of the visual bodies (m); they do not enter the dynamics except BEAM_HEIGHT,

@@ -16,8 +16,7 @@ timers. The rules (docs/architecture.md, "The step protocol"):
   and are reported); with no expected actor the sim runs free (:meth:`StepProtocol.free_run`).
   A command with another stamp is stale: ignored, counted, reported.
 * The human counts only while involved (:attr:`StepProtocol.awaits_human`): a human who sits
-  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing
-  (``await_absent_human``: awaited and expected always, as before issue 24).
+  out a training step is neither awaited (lockstep) nor missing (realtime), and sends nothing.
 * ``realtime``: a wall timer calls :meth:`StepProtocol.on_tick` every control period; each
   actor's kept command is applied unless older than ``command_timeout`` (wall s). The kept
   command is the one answering the newest state of the running episode, not the latest
@@ -37,7 +36,7 @@ import typing
 
 from hrc_common.contract import DOFS, NS_PER_S, other_dof, ROTATION, SimLimits, TRANSLATION
 from hrc_sim_node.commands import ACTORS, Command, HUMAN, read_command, ROBOT
-from hrc_sim_node.physics import PhysicsParams
+from hrc_sim_node.physics_params import PhysicsParams
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME
 
 _PHYSICS_DEFAULTS = PhysicsParams()
@@ -79,25 +78,6 @@ def per_dof(values: dict, dof_of: dict) -> dict:
 def roles(robot_dof: str) -> dict:
     """Return {robot: its dof, human: the other}."""
     return {ROBOT: robot_dof, HUMAN: other_dof(robot_dof)}
-
-
-class WarningThrottle:
-    """At most one warning per ``period`` (s) for each kind; says how many were suppressed."""
-
-    def __init__(self, period: float):
-        self.period = period
-        self._last = {}                  # kind -> (time of the last warning, suppressed since)
-
-    def admit(self, kind: str, now: float) -> typing.Optional[str]:
-        """Return None to suppress, else a suffix ('' or ' (N more like this in ...)')."""
-        last, suppressed = self._last.get(kind, (None, 0))
-        if last is not None and now - last < self.period:
-            self._last[kind] = (last, suppressed + 1)
-            return None
-        self._last[kind] = (now, 0)
-        if suppressed:
-            return f' ({suppressed} more like this in the last {now - last:.1f} s)'
-        return ''
 
 
 @dataclass
@@ -149,7 +129,6 @@ class ProtocolSettings:
     robot_dof: str = TRANSLATION
     human_period: typing.Optional[float] = None   # s: the human's command is applied this
     #                                         often; None: once a period (the sim passes its own)
-    await_absent_human: bool = False   # await the human also while they sit out (SimParams)
 
     @classmethod
     def of(cls, params) -> 'ProtocolSettings':
@@ -157,8 +136,7 @@ class ProtocolSettings:
         return cls(params.mode, tuple(params.expected_actors), params.lockstep_timeout,
                    params.command_timeout, params.control_period, params.max_force,
                    params.max_torque, params.robot_dof,
-                   getattr(params, 'human_period', params.control_period),
-                   bool(getattr(params, 'await_absent_human', False)))
+                   getattr(params, 'human_period', params.control_period))
 
     @property
     def human_slices(self) -> int:
@@ -389,11 +367,9 @@ class StepProtocol:
 
         Only while the human is involved: a human who sits out a training step has nothing
         applied, so their answers would carry nothing; the human node does not send them then
-        (issue 24: two of a lockstep step's five messages in the robot-alone episodes).
-        ``await_absent_human`` keeps the protocol before that: the human always counts.
+        (they were two of a lockstep step's five messages in the robot-alone episodes).
         """
-        return ((self.human_involved or self.settings.await_absent_human)
-                and HUMAN in self.expected)
+        return self.human_involved and HUMAN in self.expected
 
     def expected_now(self) -> tuple:
         """Return the expected actors whose commands count now (the human: awaits_human)."""
@@ -495,20 +471,3 @@ class StepProtocol:
         return StepOrder(wrench[TRANSLATION], wrench[ROTATION], missing, reason, ignored,
                          slices=1 if sliced else self.slices, final=final,
                          human_value=applied.get(HUMAN, 0.0))
-
-
-def summary_line(episode: int, state, counters: Counter, mode: str, end: str = '') -> str:
-    """Return the one-line summary of an episode (where each body ended, events)."""
-    end = end or ('truncated' if state.truncated else 'terminated' if state.terminated
-                  else 'stopped')
-    parts = [f'episode {episode} {end} after {state.step} steps ({state.time:.1f} s sim):',
-             f'slider S_x={state.slider_position:+.4f} m,',
-             f'pendulum P_z={state.pendulum_angle:+.4f} rad,',
-             f'ball B_y={state.ball_position:+.4f} m;',
-             'missing commands ' + ', '.join(
-                 f'{actor} {counters[actor + "_missing"]}' for actor in ACTORS) + ';']
-    events = [f'{name} {count}' for name, count in sorted(counters.items())
-              if count and not name.endswith('_missing')]
-    parts.append(', '.join(events) if events else 'no refused/clamped/off-axis/stale commands')
-    parts.append(f'({mode})')
-    return ' '.join(parts)

@@ -8,8 +8,7 @@ Step protocol (docs/architecture.md): a command answers a state by carrying the 
 In ``lockstep`` the sim advances as soon as every actor in ``expected_actors`` has answered the
 current state (or after ``lockstep_timeout`` wall seconds: the missing command counts as zero
 and the next state's ``*_command_missing`` flag says so); the human only while the session says
-they are involved (one who sits out sends nothing; ``await_absent_human``: always, as before
-issue 24); with no actor to await it runs free, as
+they are involved (one who sits out sends nothing); with no actor to await it runs free, as
 fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
 actor's command answering the newest state; one older than ``command_timeout`` counts as zero
 and is reported. The rules are the pure core ``hrc_sim_node.protocol`` (shared with the
@@ -27,23 +26,21 @@ Operator abort (``/hrc/session`` with phase ``aborted``): a running episode stop
 sim holds (no more steps or states, nothing applied) until ``/hrc/sim/reset`` is called again.
 """
 
-import struct
 import time
 
-from builtin_interfaces.msg import Time
-from geometry_msgs.msg import Point, Pose, Quaternion, Vector3, WrenchStamped
+from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
-from hrc_common.contract import BODY_COLOURS, SimLimits
+from hrc_common.contract import SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from hrc_sim_node.commands import HUMAN, ROBOT, unit_of
-from hrc_sim_node.body_geometry import body_poses
-from hrc_sim_node.physics import physics_params_of, PhysicsParams, SliderPendulumBall
-from hrc_sim_node.protocol import (ProtocolSettings, stamp_fields, stamp_ns,
-                                   StepProtocol, summary_line, WarningThrottle)
+from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
+from hrc_sim_node.protocol import ProtocolSettings, stamp_fields, stamp_ns, StepProtocol
+from hrc_sim_node.sim_log import summary_line, WarningThrottle
+from hrc_sim_node.sim_messages import command_stamp, marker_array, stamp_of, state_message
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from hrc_sim_node.stepper import SimStepper
 from rclpy.node import Node
@@ -51,8 +48,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Image
-from std_msgs.msg import ColorRGBA
-from visualization_msgs.msg import Marker, MarkerArray
+from visualization_msgs.msg import MarkerArray
 
 __all__ = ['SimNode', 'SimParams', 'LOCKSTEP', 'REALTIME', 'main']
 
@@ -79,12 +75,6 @@ NO_SUBSCRIPTION_EVENTS = qos.NO_SUBSCRIPTION_EVENTS
 COMMAND_DRAIN_LIMIT = 10000
 # Period (s) of the free-run timer: as short as possible, the timer is re-armed every step.
 FREE_RUN_PERIOD_S = 1e-6
-
-
-def stamp_of(nanoseconds: int) -> Time:
-    """Return a builtin_interfaces/Time for a simulation time in nanoseconds."""
-    sec, nanosec = stamp_fields(nanoseconds)
-    return Time(sec=sec, nanosec=nanosec)
 
 
 class SimNode(Node):
@@ -136,7 +126,6 @@ class SimNode(Node):
         self._timeout_timer.cancel()
         # Free run: a timer that is due at once, re-armed after each state, makes one step
         # per turn of the executor, so services and other timers are served in between.
-        # (A timer, not a guard condition: rclpy's EventsExecutor has no guard conditions.)
         self._free_run = self.create_timer(FREE_RUN_PERIOD_S, self._on_free_run)
         self._free_run.cancel()
         # Realtime: one tick per human slice (human_period), so the physics advances with
@@ -471,67 +460,6 @@ class SimNode(Node):
     def close(self):
         """Release PyBullet."""
         self.physics.close()
-
-
-def command_stamp(data: bytes) -> tuple:
-    """Return (sec, nanosec) of a CDR-serialized WrenchStamped without decoding it.
-
-    The header's stamp comes first, after the 4-byte encapsulation (byte 1: 1 = little
-    endian). Too short: (-1, 0), which no state carries.
-    """
-    if len(data) < 12:
-        return -1, 0
-    return struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
-
-
-def state_message(state, episode: int, stamp: Time, missing: dict, slice_index: int = 0,
-                  human_applied=()) -> TaskState:
-    """Convert a PhysicsState into a TaskState message (``slice_index`` > 0: a slice state)."""
-    message = TaskState(
-        episode=episode, step=state.step,
-        slider_position=state.slider_position, slider_velocity=state.slider_velocity,
-        pendulum_angle=state.pendulum_angle,
-        pendulum_angular_velocity=state.pendulum_angular_velocity,
-        ball_position=state.ball_position, ball_velocity=state.ball_velocity,
-        applied_force=state.applied_force, applied_torque=state.applied_torque,
-        robot_command_missing=bool(missing.get(ROBOT, False)),
-        human_command_missing=bool(missing.get(HUMAN, False)),
-        slice=int(slice_index), human_applied=[float(value) for value in human_applied],
-        terminated=state.terminated, truncated=state.truncated)
-    message.header.stamp = stamp
-    message.header.frame_id = 'world'
-    return message
-
-
-# Marker looks: id, RViz type, size (m) and colour of each body (the paper's colours).
-MARKER_STYLE = {
-    'rod': (0, Marker.CYLINDER, None, BODY_COLOURS['rod']),
-    'slider': (1, Marker.CUBE, (0.05, 0.05, 0.03), BODY_COLOURS['slider']),
-    'pendulum': (2, Marker.CUBE, None, BODY_COLOURS['pendulum']),
-    'ball': (3, Marker.SPHERE, None, BODY_COLOURS['ball']),
-}
-
-
-def marker_array(state, params: PhysicsParams, stamp: Time) -> MarkerArray:
-    """Return the rod, slider, pendulum and ball as RViz/Foxglove markers in frame 'world'."""
-    sizes = {'rod': (0.012, 0.012, params.rod_length + 0.04),
-             'slider': MARKER_STYLE['slider'][2],
-             'pendulum': (0.03, params.pendulum_length, 0.01),
-             'ball': (2 * params.ball_radius,) * 3}
-    markers = MarkerArray()
-    for name, (position, orientation) in body_poses(state, params).items():
-        marker_id, marker_type, _, rgb = MARKER_STYLE[name]
-        marker = Marker(ns='hrc_sim', id=marker_id, type=marker_type, action=Marker.ADD)
-        marker.header.stamp = stamp
-        marker.header.frame_id = 'world'
-        marker.pose = Pose(position=Point(x=position[0], y=position[1], z=position[2]),
-                           orientation=Quaternion(x=orientation[0], y=orientation[1],
-                                                  z=orientation[2], w=orientation[3]))
-        marker.scale = Vector3(x=float(sizes[name][0]), y=float(sizes[name][1]),
-                               z=float(sizes[name][2]))
-        marker.color = ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0)
-        markers.markers.append(marker)
-    return markers
 
 
 def main(args=None):

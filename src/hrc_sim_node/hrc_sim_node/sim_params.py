@@ -5,7 +5,7 @@ from dataclasses import dataclass
 from hrc_common.dof import DOFS, TRANSLATION
 from hrc_common.params import param
 from hrc_sim_node.commands import ACTORS, HUMAN, ROBOT
-from hrc_sim_node.physics import PhysicsParams
+from hrc_sim_node.physics_params import PhysicsParams
 
 LOCKSTEP = 'lockstep'
 REALTIME = 'realtime'
@@ -25,11 +25,6 @@ class SimParams(PhysicsParams):
     lockstep_timeout: float = param(
         1.0, 'lockstep: wall seconds to wait for the commands of a step before counting the '
         'missing ones as zero', low=0.001, high=600.0)
-    await_absent_human: bool = param(
-        False, 'lockstep: await the human also while they sit out a training step (the robot '
-        'learns alone), and the human node answers those states with zero: the protocol before '
-        'issue 24 (robot-alone steps carry 5 messages, bags hold the zeros); false = a human '
-        'who sits out sends nothing and is not awaited')
     command_timeout: float = param(
         0.5, 'realtime: a command older than this (wall s) counts as zero and is reported',
         low=0.01, high=60.0)

@@ -1,4 +1,4 @@
-"""The human's command at its own rate (issue 21): physics slices, protocol slices, the stepper.
+"""The human's command at its own rate: physics slices, protocol slices, the stepper.
 
 Pure cores (PyBullet, no ROS). A person's command that changes within a control period must
 change the physics within that period; with ``human_period = control_period`` everything is as
@@ -132,7 +132,7 @@ def test_a_human_who_sits_out_or_acts_once_a_period_steps_whole_periods_as_befor
 
 
 def test_a_human_who_sits_out_is_neither_awaited_nor_missing():
-    """Issue 24: the robot's answer alone steps a robot-alone period; nothing is missing."""
+    """The robot's answer alone steps a robot-alone period; nothing is missing."""
     protocol = lockstep(SLICED, human_involved=False)
     assert not protocol.awaits_human and protocol.awaited_actors() == ('robot',)
     protocol.start_episode(0)
@@ -153,41 +153,6 @@ def test_a_human_who_sits_out_is_neither_awaited_nor_missing():
     # only a human who acts is awaited again
     protocol.set_roles('translation', True)
     assert protocol.awaits_human and protocol.awaited_actors() == ('robot', 'human')
-
-
-def test_await_absent_human_keeps_the_protocol_before_issue_24():
-    """With the setting a human who sits out is awaited (lockstep) and expected (realtime).
-
-    As before issue 24: the period is stepped whole (no slices: nothing of the human is
-    applied) once both actors answered, and a silent human is counted missing.
-    """
-    settings = ProtocolSettings(control_period=0.2, human_period=0.02,
-                                robot_dof='translation', await_absent_human=True)
-    protocol = StepProtocol(settings)
-    protocol.set_roles('translation', human_involved=False)
-    assert protocol.awaits_human and protocol.awaited_actors() == ('robot', 'human')
-    assert not protocol.sliced
-    protocol.start_episode(0)
-    stamp = protocol.next_stamp(0, False)
-    assert protocol.on_command('robot', stamp, wrench(force_z=0.5), 0.0).order is None
-    # a role change during the wait does not step without the human (awaited either way)
-    protocol.set_roles('translation', human_involved=True)
-    assert protocol.on_roles_changed() is None and protocol.waiting
-    protocol.set_roles('translation', human_involved=False)
-    assert protocol.on_roles_changed() is None and protocol.waiting
-    order = protocol.on_command('human', stamp, wrench(), 0.0).order
-    assert order is not None and order.missing == {'robot': False, 'human': False}
-    realtime = StepProtocol(ProtocolSettings(mode='realtime', control_period=0.2,
-                                             robot_dof='translation', await_absent_human=True))
-    realtime.set_roles('translation', False)
-    realtime.start_episode(0)
-    realtime.on_command('robot', realtime.next_stamp(0, False), wrench(force_z=0.5), 1.0)
-    assert realtime.on_tick(1.1).missing == {'robot': False, 'human': True}
-    # the sim's setting reaches the human node through the sim's limits
-    from hrc_common.contract import SimLimits
-    from hrc_sim_node.sim_params import SimParams
-    assert SimLimits.of(SimParams(await_absent_human=True)).await_absent_human
-    assert not SimLimits.of(SimParams()).await_absent_human
 
 
 def test_at_the_old_rate_the_stepper_equals_the_plain_physics_step():

@@ -3,7 +3,8 @@
 from types import SimpleNamespace
 
 from hrc_sim_node.protocol import (MAX_EPISODE, per_dof, ProtocolError, ProtocolSettings,
-                                   roles, stamp_ns, StepProtocol, WarningThrottle)
+                                   roles, stamp_ns, StepProtocol)
+from hrc_sim_node.sim_log import WarningThrottle
 import pytest
 
 PERIOD_NS = 200_000_000
@@ -85,7 +86,7 @@ def test_free_run_without_expected_actors():
 def test_human_not_involved_is_not_applied_and_reported():
     protocol = started()
     protocol.set_roles('translation', human_involved=False)
-    # A human who sits out is not awaited (issue 24); a command sent anyway before the robot's
+    # A human who sits out is not awaited; a command sent anyway before the robot's
     # is not applied and is reported, one after the step answers no awaited state: stale.
     assert protocol.on_command('human', 0, wrench(torque_x=0.2), 0.0).order is None
     order = protocol.on_command('robot', 0, wrench(force_z=0.5), 0.0).order

@@ -153,7 +153,7 @@ def test_wrong_axis_components_are_ignored_and_reported(start_node, sim_client):
     sim_client.answer('human', state, force_z=0.7, torque_x=0.1)
     state = sim_client.next_state(2)
     assert state.applied_force == 0.7 and state.applied_torque == 0.3
-    # A human not involved now is not waited for (issue 24): the robot's answer alone steps,
+    # A human not involved now is not waited for: the robot's answer alone steps,
     # nothing is missing. (A human command sent anyway is not applied: test_protocol.py.)
     session.human_involved = False
     sim_client.session.publish(session)

@@ -53,7 +53,7 @@ import math
 
 import numpy
 
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 
 from hrc_bag.report.records import measures
 from hrc_study.statistics import (holm, logrank_faster, mann_whitney_less,

@@ -10,7 +10,7 @@ import math
 import pathlib
 
 from hrc_bag.report.paper import PAPER_TABLE2, paper_person_minutes, TARGET_PERSON_TIME_RATIO
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 import numpy
 
 from hrc_study.statistics import kaplan_meier

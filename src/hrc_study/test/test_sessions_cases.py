@@ -1,6 +1,6 @@
 """The study reads the paper's cases and strategies from params/cases.yaml (no copy of its own)."""
 
-from hrc_common.contract import case_table
+from hrc_common.cases import case_table
 from hrc_bag.report.records import case_roles, SessionRecord, strategy_step_counts
 
 

@@ -26,7 +26,8 @@ from rclpy.serialization import serialize_message
 from hrc_bag.format import RawMessage, TopicDescription
 from hrc_bag.qos_yaml import profile_to_dict
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event
+from hrc_bag.recording import EpisodeRecorder
 
 CONTROL_PERIOD_NS = 200_000_000    # simulation time per control step (0.2 s)
 

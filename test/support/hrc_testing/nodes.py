@@ -111,7 +111,6 @@ def serve_sim_parameters(context, limits, name: str = 'sim'):
         node.declare_parameter(field, float(getattr(limits, field)))
     # The human's period, as the sim declares it (the human acts once a period when unset).
     node.declare_parameter('human_period', float(limits.human_step))
-    node.declare_parameter('await_absent_human', bool(limits.await_absent_human))
     return node
 
 

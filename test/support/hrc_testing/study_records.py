@@ -2,7 +2,7 @@
 
 import numpy
 
-from hrc_common.contract import paper_case_ids
+from hrc_common.cases import paper_case_ids
 
 from hrc_bag.report.records import case_roles, EpisodeRecord, SessionRecord, strategy_step_counts
 

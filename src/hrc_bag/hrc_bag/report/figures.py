@@ -6,7 +6,8 @@ simulated-human profile's sessions (:func:`hrc_bag.report.metrics.primary_profil
 
 import math
 
-from hrc_common.contract import other_dof, paper_case_ids
+from hrc_common.cases import paper_case_ids
+from hrc_common.contract import other_dof
 import numpy
 
 from hrc_bag.report.curves import first_human_episode, return_band

@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 import functools
 import math
 
-from hrc_common.contract import case_table, cases_file_path, EpisodeKind
+from hrc_common.cases import case_table, cases_file_path
+from hrc_common.contract import EpisodeKind
 import yaml
 
 from hrc_bag.report.loading import load_sessions

@@ -1,0 +1,84 @@
+"""The sim node's messages: TaskState, markers and stamps from the physics' values.
+
+The ROS side of :mod:`hrc_sim_node.sim_node` (it converts, nothing here decides).
+"""
+
+import struct
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
+from hrc_common.contract import BODY_COLOURS
+from hrc_msgs.msg import TaskState
+from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.commands import HUMAN, ROBOT
+from hrc_sim_node.physics_params import PhysicsParams
+from hrc_sim_node.protocol import stamp_fields
+from std_msgs.msg import ColorRGBA
+from visualization_msgs.msg import Marker, MarkerArray
+
+
+def stamp_of(nanoseconds: int) -> Time:
+    """Return a builtin_interfaces/Time for a simulation time in nanoseconds."""
+    sec, nanosec = stamp_fields(nanoseconds)
+    return Time(sec=sec, nanosec=nanosec)
+
+
+def command_stamp(data: bytes) -> tuple:
+    """Return (sec, nanosec) of a CDR-serialized WrenchStamped without decoding it.
+
+    The header's stamp comes first, after the 4-byte encapsulation (byte 1: 1 = little
+    endian). Too short: (-1, 0), which no state carries.
+    """
+    if len(data) < 12:
+        return -1, 0
+    return struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
+
+
+def state_message(state, episode: int, stamp: Time, missing: dict, slice_index: int = 0,
+                  human_applied=()) -> TaskState:
+    """Convert a PhysicsState into a TaskState message (``slice_index`` > 0: a slice state)."""
+    message = TaskState(
+        episode=episode, step=state.step,
+        slider_position=state.slider_position, slider_velocity=state.slider_velocity,
+        pendulum_angle=state.pendulum_angle,
+        pendulum_angular_velocity=state.pendulum_angular_velocity,
+        ball_position=state.ball_position, ball_velocity=state.ball_velocity,
+        applied_force=state.applied_force, applied_torque=state.applied_torque,
+        robot_command_missing=bool(missing.get(ROBOT, False)),
+        human_command_missing=bool(missing.get(HUMAN, False)),
+        slice=int(slice_index), human_applied=[float(value) for value in human_applied],
+        terminated=state.terminated, truncated=state.truncated)
+    message.header.stamp = stamp
+    message.header.frame_id = 'world'
+    return message
+
+
+# Marker looks: id, RViz type, size (m) and colour of each body (the paper's colours).
+MARKER_STYLE = {
+    'rod': (0, Marker.CYLINDER, None, BODY_COLOURS['rod']),
+    'slider': (1, Marker.CUBE, (0.05, 0.05, 0.03), BODY_COLOURS['slider']),
+    'pendulum': (2, Marker.CUBE, None, BODY_COLOURS['pendulum']),
+    'ball': (3, Marker.SPHERE, None, BODY_COLOURS['ball']),
+}
+
+
+def marker_array(state, params: PhysicsParams, stamp: Time) -> MarkerArray:
+    """Return the rod, slider, pendulum and ball as RViz/Foxglove markers in frame 'world'."""
+    sizes = {'rod': (0.012, 0.012, params.rod_length + 0.04),
+             'slider': MARKER_STYLE['slider'][2],
+             'pendulum': (0.03, params.pendulum_length, 0.01),
+             'ball': (2 * params.ball_radius,) * 3}
+    markers = MarkerArray()
+    for name, (position, orientation) in body_poses(state, params).items():
+        marker_id, marker_type, _, rgb = MARKER_STYLE[name]
+        marker = Marker(ns='hrc_sim', id=marker_id, type=marker_type, action=Marker.ADD)
+        marker.header.stamp = stamp
+        marker.header.frame_id = 'world'
+        marker.pose = Pose(position=Point(x=position[0], y=position[1], z=position[2]),
+                           orientation=Quaternion(x=orientation[0], y=orientation[1],
+                                                  z=orientation[2], w=orientation[3]))
+        marker.scale = Vector3(x=float(sizes[name][0]), y=float(sizes[name][1]),
+                               z=float(sizes[name][2]))
+        marker.color = ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0)
+        markers.markers.append(marker)
+    return markers
