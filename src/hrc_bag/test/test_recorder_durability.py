@@ -16,7 +16,8 @@ from rclpy.serialization import serialize_message
 from hrc_bag import bag_reader
 from hrc_bag.format import RawMessage, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
-from hrc_bag.recording import boundary_event, EpisodeRecorder
+from hrc_bag.boundaries import boundary_event
+from hrc_bag.recording import EpisodeRecorder
 from hrc_testing.bag_traffic import type_name_of
 
 PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
