@@ -48,7 +48,7 @@ def check_episode(folder, name, summary_steps, human_involved) -> list:
     """Return what episode file ``name`` lacks (empty when whole).
 
     The human's topics are expected only in episodes with the human involved: a human who sits
-    out sends nothing (issue 24).
+    out sends nothing.
     """
     counts = {}
     for message in bag_reader.scan_file(pathlib.Path(folder) / name).messages:

@@ -30,6 +30,7 @@ import types
 
 from hrc_bag import serializer
 from hrc_common.session_plan import SessionSettings
+from hrc_engine import messages
 from hrc_engine import engine
 from hrc_engine.engine import EngineConfig, run_session
 
@@ -90,7 +91,6 @@ def per_message_us(encode, count: int = 5000) -> float:
 
 def sample_messages() -> list:
     """Return (type, plain values) of one control step's messages as the engine builds them."""
-    from hrc_engine import messages
     header = messages.header(1_500_000_000)
     wrench = {'header': header, 'wrench': {'force': {'x': 1.5, 'y': 0.0, 'z': 0.0},
                                            'torque': {'x': 0.0, 'y': 0.0, 'z': -0.2}}}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 22: how well can any robot of a strategy do with a person unlike the study's.
+"""How well can any robot of a strategy do with a person unlike the study's.
 
 The partners-first robustness target compares a robot's error with people unlike its training
 population (``hrc_partners.partners_first.unlike_people``: slower, heavier-handed, lapsing,
