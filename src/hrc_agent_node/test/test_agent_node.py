@@ -213,8 +213,16 @@ def test_agent_answers_every_step_and_announces_the_session(start_node, rclpy_co
     training, updating = SessionStatus.PHASE_TRAINING, SessionStatus.PHASE_UPDATING
     evaluation, done = SessionStatus.PHASE_EVALUATION, SessionStatus.PHASE_DONE
     assert phases[0] == (training, 0, False)
-    assert phases.index((updating, 0, False)) < phases.index((training, 1, True)) \
-        < phases.index((updating, 1, True)) < phases.index((evaluation, 1, True))
+    # /hrc/session keeps only the newest announcement (depth 1): the short 'updating' one may be
+    # replaced before a busy reader takes it, so the updates are read from the agent's log and
+    # the phases that last for episodes from the topic, in order.
+    assert 'PPO update 1 (after episode 0)' in agent.output
+    assert 'PPO update 2 (after episode 2)' in agent.output
+    lasting = [phase for phase in phases if phase[0] != updating]
+    assert lasting.index((training, 0, False)) < lasting.index((training, 1, True)) \
+        < lasting.index((evaluation, 1, True))
+    assert all(phase in ((updating, 0, False), (updating, 1, True)) for phase in phases
+               if phase[0] == updating)
     assert phases[-1] == (done, 1, True)
     last = fake.sessions[-1]
     assert (last.total_episodes, last.human_involved_episodes) == (4, 2)
