@@ -34,6 +34,9 @@ SUMMARY = ('Replay an episode file (.mcap) or a session folder recorded by recor
            'recorded messages are republished unchanged with their original relative timing '
            '(rate, loop, topic selection, start offset, /clock).')
 
+# Longest wait (s) for live readers to acknowledge a newest-only topic's previous sample.
+ACK_TIMEOUT = 5.0
+
 # As rclcpp::ClockQoS: the newest time only, best effort.
 CLOCK_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                        reliability=ReliabilityPolicy.BEST_EFFORT)
@@ -93,6 +96,7 @@ class ReplayNode(Node):
         super().__init__('replay')
         self.params = declare_parameters(self, ReplayParams)
         self._publishers_by_topic = {}
+        self._newest_only_topics = set()     # reliable keep-last-1 topics (see _wait_for_acks)
         self._skip = set()
         problems = replay_problems(self.params.path)
         if problems:
@@ -120,6 +124,8 @@ class ReplayNode(Node):
                 continue
             qos = qos_profile(publisher_qos(info.channel_metadata))
             self._publishers_by_topic[topic] = self.create_publisher(message_type, topic, qos)
+            if qos.depth == 1 and qos.reliability == ReliabilityPolicy.RELIABLE:
+                self._newest_only_topics.add(topic)
         missing = [topic for topic in self.params.topics
                    if topic != '*' and topic not in topics]
         if missing:
@@ -161,6 +167,7 @@ class ReplayNode(Node):
                 if wait > 0 and self._stop.wait(wait):
                     return
                 try:
+                    self._wait_for_acks_of_newest_only(message.topic, publisher)
                     publisher.publish(message.data)
                 except Exception:       # the node is shutting down (Ctrl-C) under our feet
                     if self._stop.is_set() or not self.context.ok():
@@ -170,6 +177,21 @@ class ReplayNode(Node):
             if not self.params.loop:
                 break
         self._done.set()
+
+    def _wait_for_acks_of_newest_only(self, topic, publisher) -> None:
+        """Let live readers take the previous sample of a reliable depth-1 topic first.
+
+        A reliable writer with keep-last 1 (as recorded for /hrc/session) holds only its newest
+        sample: publishing the next one before a slow reader acknowledged the previous drops
+        it for that reader. Waiting for the acknowledgements (bounded by ACK_TIMEOUT) keeps the
+        recorded QoS -- a late joiner still gets the newest status only -- and loses nothing
+        for readers that are already there; it delays the playback only when a reader lags.
+        """
+        if topic not in self._newest_only_topics:
+            return
+        if not publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT)):
+            self.get_logger().warning(f'{topic}: a reader did not acknowledge the previous '
+                                      f'sample within {ACK_TIMEOUT:.0f} s; publishing the next')
 
     def _wait_for_subscribers(self) -> bool:
         """Wait until each publisher has enough subscriptions; False when stopped first."""
