@@ -10,12 +10,12 @@ evaluation episodes all count, so a number names one recorded episode and one ba
 
 
 def episode_number(index: int) -> int:
-    """The number people read for the episode with this 0-based index."""
+    """Return the number people read for the episode with this 0-based index."""
     return int(index) + 1
 
 
 def episode_index(number: int) -> int:
-    """The 0-based index of the episode people call ``number`` (inverse of episode_number)."""
+    """Return the 0-based index of the episode people call ``number`` (episode_number inverted)."""
     if int(number) < 1:
         raise ValueError(f'episode numbers start at 1, got {number}')
     return int(number) - 1
