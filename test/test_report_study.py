@@ -1,6 +1,7 @@
 """The report by subject: a real study folder (hrc_live.study) and real bags (SessionWriter)."""
 
 import csv
+import dataclasses
 import io
 import json
 import os
@@ -10,6 +11,7 @@ import sys
 from hrc_common.executables import executable_path
 from hrc_common.tlx import TLX_SCALES
 from hrc_live import study
+from hrc_live.study_cli import index_line
 import pytest
 import yaml
 
@@ -90,7 +92,7 @@ def study_folder(tmp_path_factory):
     ]
     for hour, (subject, session_id, case, kind, episodes, code, tlx) in enumerate(sessions):
         strategy = 'practice' if kind == 'practice' else 'responsibility_guided'
-        study.append_index(folder, study.IndexEntry(
+        study.record_session(folder, study.IndexEntry(
             subject_id=subject, session_id=session_id, case=case, kind=kind,
             position=study.position_of(subjects, subject, case),
             started=f'2026-11-30T1{hour}:00:00', ended=f'2026-11-30T1{hour}:30:00',
@@ -125,12 +127,13 @@ def test_the_by_subject_table_counts_each_condition_and_its_practice_apart(study
 
     markdown = (tmp_path / 'by_subject.md').read_text()
     assert ('| P01 | 1 | 1 | 2 (1.8) | 1 / 2 | 1 | device 1.6; simulated 0.4; none 0.0 | '
-            '0.012 | 0.250 | 0.031 | 0.293 | 55 | 20 | 40 | 25 | 60 | 10 | 35.0 | done | '
-            'p01-c1 |') in markdown
+            '0.012 | 0.250 | 0.031 | 0.293 | 55 | 20 | 40 | 25 | 60 | 10 | 35.0 | '
+            'stopped at the cap | 1 (exit 0) | p01-c1 |') in markdown
     assert ('| P01 | 2 | 2 | none | 1 / 1 | 0 | joy 0.8 | n/a | n/a | n/a | n/a | n/a | n/a | '
-            'n/a | n/a | n/a | n/a | n/a | exit 130 | p01-c2 |') in markdown
+            'n/a | n/a | n/a | n/a | n/a | failed (exit 130) | 1 (exit 130) | p01-c2 |'
+            ) in markdown
     assert '| P02 | 2 | 1 | 1 (1.0) | n/a / n/a |' in markdown
-    assert 'practice only | p02-c2-practice |' in markdown
+    assert 'practice only | 1 (exit 1) | p02-c2-practice |' in markdown
     table = list(csv.DictReader(io.StringIO((tmp_path / 'by_subject.csv').read_text())))
     assert float(table[0]['human_seconds_device']) == pytest.approx(1.6)
     assert float(table[0]['human_seconds_joy']) == 0.0
@@ -143,6 +146,84 @@ def test_the_by_subject_table_counts_each_condition_and_its_practice_apart(study
         text = (tmp_path / name).read_text()
         assert 'Jane' not in text and 'stiff' not in text
         assert (tmp_path / name).stat().st_mode & 0o777 == 0o600        # holds subject ids
+
+
+def _resumed_condition(folder, bags, runs, index_format: str):
+    """Index P01's case 2 aborted (exit 3) and resumed (exit 0) under one session id.
+
+    ``index_format``: 'current' (record_session, twice) or 'before attempts' (the entry written
+    once per run, as sessions did before attempts existed: the report must still read it).
+    """
+    session_id = 'p01-c2'
+    episodes = [({'human_involved': True, 'evaluation': False}, [('device', True)] * 4),
+                ({'human_involved': True, 'evaluation': True, **EVALUATED},
+                 [('device', True)] * 4)]
+    tlx_file = runs / session_id / 'tlx.yaml'
+    tlx_file.parent.mkdir(parents=True)
+    tlx_file.write_text(yaml.safe_dump([{
+        'session_id': session_id, 'case': 2, 'answered': '2026-11-30T12:00:00',
+        'scales': {scale: float(score) for scale, score in TLX.items()}, 'raw_tlx': 35.0}]))
+    runs_of = [('2026-11-30T10:00:00', '2026-11-30T10:10:00', 3, ''),
+               ('2026-11-30T11:00:00', '2026-11-30T11:40:00', 0, str(tlx_file))]
+    bag_folder = write_session(bags, session_id, 2, episodes, 'responsibility_guided')
+    records = []
+    for started, ended, code, tlx in runs_of:
+        entry = study.IndexEntry(
+            subject_id='P01', session_id=session_id, case=2, kind='condition', position=1,
+            started=started, ended=ended, exit_code=code, bags=bag_folder,
+            run_dir=str(runs / session_id), tlx_file=tlx)
+        if index_format == 'current':
+            study.record_session(folder, entry)
+        else:
+            record = dataclasses.asdict(entry)
+            del record['attempts']
+            records.append(record)
+    if records:
+        folder.mkdir()
+        (folder / 'index.yaml').write_text(yaml.safe_dump(records))
+
+
+@pytest.mark.parametrize('index_format', ['current', 'before attempts'])
+def test_an_aborted_and_resumed_condition_is_one_row_with_its_attempts(tmp_path, index_format):
+    folder = tmp_path / 'study'
+    _resumed_condition(folder, tmp_path / 'bags', tmp_path / 'runs', index_format)
+    if index_format == 'current':
+        document = yaml.safe_load((folder / 'index.yaml').read_text())
+        assert len(document) == 1 and [attempt['exit_code'] for attempt in
+                                       document[0]['attempts']] == [3, 0]
+        assert document[0]['started'] == '2026-11-30T10:00:00'
+        assert document[0]['exit_code'] == 0 and document[0]['tlx_file']
+        assert [entry.exit_code for entry in study.load_index(folder)] == [0]
+        assert '(attempts: exit 3, 0)' in index_line(study.load_index(folder)[0])
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'bag', 'report', '--study-dir',
+               str(folder), '--out', str(tmp_path / 'out')]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    markdown = (tmp_path / 'out' / 'by_subject.md').read_text()
+    rows = [line for line in markdown.splitlines() if line.startswith('| P01 ')]
+    assert len(rows) == 1, markdown
+    assert rows[0].endswith('| 35.0 | stopped at the cap | 2 (exit 3, 0) | p01-c2 |'), rows
+
+
+def test_concurrent_sessions_and_registrations_keep_every_entry(tmp_path):
+    """12 registrations and 12 index records at once: every one stays (each under the lock)."""
+    folder = tmp_path / 'study'
+    script = (
+        'import sys\n'
+        'from hrc_live import study\n'
+        'from hrc_live.study_cli import main\n'
+        'number = int(sys.argv[2])\n'
+        "assert main(['--study-dir', sys.argv[1], 'register', f'P{number:02d}', '--consent', "
+        "'yes']) == 0\n"
+        "study.record_session(sys.argv[1], study.IndexEntry(f'P{number:02d}', f's{number}', 2, "
+        "'condition', 1, '2026-11-30T10:00:00', '2026-11-30T10:10:00', 0, 'b', 'r'))\n")
+    workers = [subprocess.Popen([sys.executable, '-c', script, str(folder), str(number)])
+               for number in range(12)]
+    assert [worker.wait(timeout=120) for worker in workers] == [0] * 12
+    assert sorted(subject.id for subject in study.load_registry(folder)) == [
+        f'P{number:02d}' for number in range(12)]
+    assert sorted(entry.session_id for entry in study.load_index(folder)) == sorted(
+        f's{number}' for number in range(12))
 
 
 CLI_SCRIPT = r"""

@@ -5,7 +5,7 @@ import sys
 import time
 
 from hrc_common.session_plan import SessionSettings
-from hrc_live.study import append_index, IndexEntry, load_registry, position_of
+from hrc_live.study import IndexEntry, load_registry, position_of, record_session
 import yaml
 
 
@@ -36,7 +36,11 @@ def owner_only(settings: SessionSettings, parameters: dict) -> None:
 
 def index_session(settings: SessionSettings, options, kind: str, started: str,
                   code: int) -> None:
-    """Add the session to the study's per-subject index (with --study-dir)."""
+    """Add this run of the session to the study's per-subject index (with --study-dir).
+
+    The TLX file is named only once it holds this session's answers (a run that was aborted,
+    or whose person did not answer, names none; a later attempt that stores them does).
+    """
     if not options.study_dir:
         return
     session_id = settings.session_id + ('-practice' if kind == 'practice' else '')
@@ -49,9 +53,22 @@ def index_session(settings: SessionSettings, options, kind: str, started: str,
         started=started, ended=time.strftime('%Y-%m-%dT%H:%M:%S'), exit_code=int(code),
         bags=str((pathlib.Path(settings.bags_dir) / session_id).resolve()),
         run_dir=str(run_dir.resolve()),
-        tlx_file=str(tlx.resolve()) if options.tlx and kind == 'condition' else '')
-    path = append_index(options.study_dir, entry)
-    print(f'[session] {kind} {session_id} added to the study index {path}', flush=True)
+        tlx_file=str(tlx.resolve()) if kind == 'condition' and tlx_stored(
+            tlx, session_id) else '')
+    path = record_session(options.study_dir, entry)
+    print(f'[session] {kind} {session_id} (exit {int(code)}) recorded in the study index '
+          f'{path}', flush=True)
+
+
+def tlx_stored(path: pathlib.Path, session_id: str) -> bool:
+    """Return whether the TLX file ``path`` holds an answer of ``session_id``."""
+    try:
+        answers = yaml.safe_load(path.read_text()) or []
+    except (OSError, yaml.YAMLError, UnicodeDecodeError):
+        return False
+    return isinstance(answers, list) and any(
+        isinstance(answer, dict) and answer.get('session_id') == session_id
+        for answer in answers)
 
 
 def wait_for_tlx(path: pathlib.Path, session_id: str, executor, timeout: float,
@@ -61,12 +78,7 @@ def wait_for_tlx(path: pathlib.Path, session_id: str, executor, timeout: float,
           f'skips it)', flush=True)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and not stop_reason:
-        try:
-            answers = yaml.safe_load(path.read_text()) or []
-        except (OSError, yaml.YAMLError):
-            answers = []
-        if any(isinstance(answer, dict) and answer.get('session_id') == session_id
-               for answer in answers):
+        if tlx_stored(path, session_id):
             print(f'[session] NASA-TLX stored in {path}', flush=True)
             return True
         executor.spin_once(timeout_sec=0.2)

@@ -8,10 +8,13 @@ A study lives in one folder (``--study-dir``, default ``study``):
   other fields (a name, e-mail or birth date cannot be stored by mistake); the key that links a
   pseudonym to a person stays on paper, outside this software.
 * ``index.yaml``: one entry per session a subject took part in (practice or condition): the
-  session id, case, kind, position in the subject's order, start and end, exit code, and the
-  files of the session (bags, run folder, NASA-TLX), so a report can tabulate by subject.
+  session id, case, kind, position in the subject's order, start and end, exit code, every
+  attempt (an aborted session resumed later is one entry with two), and the files of the
+  session (bags, run folder, NASA-TLX once stored), so a report can tabulate by subject.
 
-Both files hold subject ids, so they are written with mode 0600 (owner only), atomically.
+Both files hold subject ids, so they are written with mode 0600 (owner only), atomically, and
+every change is a read-modify-write under the study folder's lock
+(``hrc_common.study_index.study_lock``): concurrent registrations or sessions all keep theirs.
 
 Counterbalancing (a modelling choice; Williams 1949, "Experimental designs balanced for the
 estimation of residual effects of treatments", Aust. J. Sci. Res. A 2:149-168): for an even
@@ -27,7 +30,8 @@ import pathlib
 import typing
 
 from hrc_common.contract import atomic_write, id_problem, PERSONAL_FILE_MODE
-from hrc_common.study_index import INDEX_FILE, IndexEntry, PAPER_CASES, SESSION_KINDS
+from hrc_common.study_index import (add_attempt, attempt_of, INDEX_FILE, IndexEntry,
+                                    merge_attempts, PAPER_CASES, SESSION_KINDS, study_lock)
 import yaml
 
 SUBJECTS_FILE = 'subjects.yaml'
@@ -107,6 +111,19 @@ def save_registry(folder, subjects: list) -> pathlib.Path:
     atomic_write(path, yaml.safe_dump([asdict(subject) for subject in subjects],
                                       sort_keys=False), mode=PERSONAL_FILE_MODE)
     return path
+
+
+def update_registry(folder, change) -> tuple:
+    """Apply ``change(subjects)`` to the registry under the study lock; return (result, path).
+
+    The registry is read, changed and written while the lock is held, so two registrations at
+    the same moment both stay (without it each wrote the list it had read, one replacing the
+    other's). Nothing is written when ``change`` raises.
+    """
+    with study_lock(folder):
+        subjects = load_registry(folder)
+        result = change(subjects)
+        return result, save_registry(folder, subjects)
 
 
 def register(subjects: list, subject_id: str, consent: str, date: str,
@@ -192,27 +209,45 @@ def assign_orders(subjects: list, cases: typing.Sequence[int] = PAPER_CASES) -> 
 
 # ---------------------------------------------------------------------------- session index
 
-def load_index(folder) -> list:
-    """Return the IndexEntries of ``folder``/index.yaml ([] if none)."""
+def _index_records(folder) -> list:
     path = pathlib.Path(folder) / INDEX_FILE
     if not path.is_file():
         return []
     document = yaml.safe_load(path.read_text()) or []
+    if not isinstance(document, list) or not all(isinstance(item, dict) for item in document):
+        raise StudyError(f'{path}: not a list of session entries')
+    return merge_attempts(document)
+
+
+def load_index(folder) -> list:
+    """Return the IndexEntries of ``folder``/index.yaml ([] if none), one per session."""
     try:
-        return [IndexEntry(**record) for record in document]
+        return [IndexEntry(**record) for record in _index_records(folder)]
     except TypeError as error:
-        raise StudyError(f'{path}: an entry does not fit: {error}') from None
+        raise StudyError(f'{pathlib.Path(folder) / INDEX_FILE}: an entry does not fit: '
+                         f'{error}') from None
 
 
-def append_index(folder, entry: IndexEntry) -> pathlib.Path:
-    """Add one entry to the index (0600, atomically)."""
+def record_session(folder, entry: IndexEntry) -> pathlib.Path:
+    """Add a run of a session to the index (0600, atomically, under the study lock).
+
+    A session already indexed (the same id and kind: a resume of an aborted condition) gets the
+    run as its next attempt; any other gets a new entry.
+    """
     if entry.kind not in SESSION_KINDS:
         raise StudyError(f'kind must be one of {SESSION_KINDS}, got {entry.kind!r}')
     path = pathlib.Path(folder) / INDEX_FILE
-    path.parent.mkdir(parents=True, exist_ok=True)
-    entries = load_index(folder) + [entry]
-    atomic_write(path, yaml.safe_dump([asdict(item) for item in entries], sort_keys=False),
-                 mode=PERSONAL_FILE_MODE)
+    with study_lock(folder):
+        records = _index_records(folder)
+        new = asdict(entry)
+        same = next((record for record in records if (record['session_id'], record['kind'])
+                     == (entry.session_id, entry.kind)), None)
+        if same is None:
+            new['attempts'] = new['attempts'] or [attempt_of(new)]
+            records.append(new)
+        else:
+            add_attempt(same, new)
+        atomic_write(path, yaml.safe_dump(records, sort_keys=False), mode=PERSONAL_FILE_MODE)
     return path
 
 

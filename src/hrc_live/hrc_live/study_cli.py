@@ -17,7 +17,8 @@ import shlex
 import sys
 
 from hrc_live.study import (assign_orders, by_subject, consent_problem, load_index,
-                            load_registry, PAPER_CASES, register, save_registry, StudyError)
+                            load_registry, PAPER_CASES, register, StudyError,
+                            update_registry)
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import DEFAULT_LEARNING, learning_names
 
@@ -70,6 +71,15 @@ def plan_commands(subject, study_dir: str, practice: int, human: str,
     return lines
 
 
+def index_line(entry) -> str:
+    """Return the line of ``study index`` for one entry (its attempts when it has several)."""
+    codes = [str(attempt['exit_code']) for attempt in entry.attempts]
+    return (f'  {entry.started}  {entry.kind:9s} case {entry.case} (position {entry.position})'
+            f'  {entry.session_id}  exit {entry.exit_code}'
+            + (f" (attempts: exit {', '.join(codes)})" if len(codes) > 1 else '')
+            + (f'  TLX {entry.tlx_file}' if entry.tlx_file else ''))
+
+
 def main(argv=None) -> int:
     """Entry point of ``hrc study``."""
     options = parse_args(sys.argv[1:] if argv is None else argv)
@@ -77,13 +87,13 @@ def main(argv=None) -> int:
         subjects = load_registry(options.study_dir)
         if options.command == 'register':
             date = options.date or datetime.date.today().isoformat()
-            subject = register(subjects, options.subject_id, options.consent, date)
-            path = save_registry(options.study_dir, subjects)
+            (subject, count), path = update_registry(options.study_dir, lambda subjects: (
+                register(subjects, options.subject_id, options.consent, date), len(subjects)))
             print(f'{subject.id}: consent {subject.consent} ({subject.consent_date}); '
-                  f'registry {path} ({len(subjects)} subjects)')
+                  f'registry {path} ({count} subjects)')
         elif options.command == 'assign':
-            assigned = assign_orders(subjects, options.cases)
-            save_registry(options.study_dir, subjects)
+            assigned, _ = update_registry(options.study_dir, lambda subjects: assign_orders(
+                subjects, options.cases))
             for subject in assigned:
                 print(f'{subject.id}: cases in the order {subject.order}')
             if not assigned:
@@ -105,9 +115,7 @@ def main(argv=None) -> int:
             for subject_id, entries in by_subject(load_index(options.study_dir)).items():
                 print(f'{subject_id}:')
                 for entry in entries:
-                    print(f'  {entry.started}  {entry.kind:9s} case {entry.case} (position '
-                          f'{entry.position})  {entry.session_id}  exit {entry.exit_code}'
-                          + (f'  TLX {entry.tlx_file}' if entry.tlx_file else ''))
+                    print(index_line(entry))
     except StudyError as error:
         print(f'study: {error}', file=sys.stderr)
         return 2

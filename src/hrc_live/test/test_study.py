@@ -1,10 +1,12 @@
 """The study protocol's pure parts: registry validation, Williams-square balance, the index."""
 
+import dataclasses
 import collections
 import itertools
 
-from hrc_live.study import (append_index, assign_orders, case_orders, consent_problem,
-                            IndexEntry, load_index, load_registry, register, save_registry,
+from hrc_live.study import (assign_orders, case_orders, consent_problem,
+                            IndexEntry, load_index, load_registry, record_session, register,
+                            save_registry,
                             StudyError, williams_rows)
 from hrc_live.study_cli import main
 import pytest
@@ -78,9 +80,10 @@ def test_registry_and_index_files_are_private_and_read_back(tmp_path):
     assert 'not in the registry' in consent_problem(subjects, 'P99')
     entry = IndexEntry('P07', 'case2-seed0-x', 2, 'condition', 1, '2026-11-30T10:00:00',
                        '2026-11-30T10:20:00', 0, 'bags/case2-seed0-x', 'runs/case2-seed0-x')
-    index = append_index(tmp_path, entry)
+    index = record_session(tmp_path, entry)
     assert index.stat().st_mode & 0o777 == 0o600
-    assert load_index(tmp_path) == [entry]
+    assert load_index(tmp_path) == [dataclasses.replace(entry, attempts=[
+        {'started': '2026-11-30T10:00:00', 'ended': '2026-11-30T10:20:00', 'exit_code': 0}])]
 
 
 def test_cli_register_assign_plan(tmp_path, capsys):

@@ -2,7 +2,7 @@
 
 A study folder (``session --study-dir DIR``, see docs/live_study.md) holds ``index.yaml``:
 one entry per session a subject took part in, practice or condition, written by
-``hrc_live.study.append_index``. Its format (the fields of
+``hrc_live.study.record_session``. Its format (the fields of
 ``hrc_common.study_index.IndexEntry``)::
 
     - subject_id: P01            # the pseudonym (no names anywhere)
@@ -15,7 +15,10 @@ one entry per session a subject took part in, practice or condition, written by
       exit_code: 0
       bags: /abs/bags/p01-case2
       run_dir: /abs/runs/p01-case2
-      tlx_file: /abs/runs/p01-case2/tlx.yaml   # '' = no questionnaire asked
+      tlx_file: /abs/runs/p01-case2/tlx.yaml   # '' = no answers stored
+      attempts:                  # every run: an aborted session resumed later has two
+      - {started: '2026-11-30T21:00:00', ended: '2026-11-30T21:10:00', exit_code: 3}
+      - {started: '2026-11-30T21:15:00', ended: '2026-11-30T21:40:00', exit_code: 0}
 
 The practice of a condition is indexed as the session ``<session_id>-practice`` (kind
 ``practice``); the raw NASA-TLX file (written by the display node) is a YAML list of
@@ -24,9 +27,11 @@ frustration}, raw_tlx}``.
 
 :func:`load_study_index` reads the index with ``hrc_common.study_index.IndexEntry`` (the
 format both sides import; hrc_bag sits below hrc_live, docs/architecture.md) and checks it by
-shape first: every reason at once in a :class:`StudyIndexError`. :func:`subject_rows` gives one
-row per condition (its practice counted apart, in its own columns) and one per practice without
-a condition.
+shape first: every reason at once in a :class:`StudyIndexError`. An index written before
+attempts existed lists a resumed session once per run: its runs are read as the attempts of one
+entry. :func:`subject_rows` gives one row per condition (its practice counted apart, in its own
+columns, its attempts and outcome: converged, stopped at the cap, aborted) and one per practice
+without a condition.
 Only pseudonymous ids, numbers and the TLX scores go into the rows: no notes, no names.
 """
 
@@ -35,7 +40,9 @@ import math
 import pathlib
 
 from hrc_common.contract import id_problem
-from hrc_common.study_index import INDEX_FILE, IndexEntry, PAPER_CASES, SESSION_KINDS
+from hrc_common.session_control import EXIT_OPERATOR_ABORT
+from hrc_common.study_index import (ATTEMPT_FIELDS, INDEX_FILE, IndexEntry, merge_attempts,
+                                    PAPER_CASES, SESSION_KINDS)
 from hrc_common.tlx import check_tlx, raw_tlx
 import yaml
 
@@ -75,7 +82,7 @@ def entry_problems(record, number: int, fields: tuple, kinds: tuple, cases: tupl
     if not isinstance(record, dict):
         return [f'entry {number}: not a mapping ({record!r})']
     reasons = []
-    required = [name for name in fields if name != 'tlx_file']
+    required = [name for name in fields if name not in ('tlx_file', 'attempts')]
     missing = [name for name in required if name not in record]
     if missing:
         reasons.append(f'missing fields {missing}')
@@ -98,8 +105,24 @@ def entry_problems(record, number: int, fields: tuple, kinds: tuple, cases: tupl
     for name in ('started', 'ended', 'bags', 'run_dir', 'tlx_file'):
         if name in record:
             reasons.append(_text_problem(record[name], name))
+    reasons += _attempts_problems(record.get('attempts', []))
     label = record.get('session_id', '?')
     return [f'entry {number} ({label}): {reason}' for reason in reasons if reason]
+
+
+def _attempts_problems(attempts) -> list:
+    if not isinstance(attempts, list):
+        return [f'attempts must be a list, got {attempts!r}'[:200]]
+    reasons = []
+    for number, attempt in enumerate(attempts, 1):
+        if not isinstance(attempt, dict) or sorted(attempt) != sorted(ATTEMPT_FIELDS):
+            reasons.append(f'attempt {number} must have exactly {list(ATTEMPT_FIELDS)}, got '
+                           f'{attempt!r}'[:200])
+            continue
+        reasons += [_text_problem(attempt['started'], f'attempt {number} started'),
+                    _text_problem(attempt['ended'], f'attempt {number} ended'),
+                    _integer_problem(attempt['exit_code'], f'attempt {number} exit_code')]
+    return reasons
 
 
 def load_study_index(folder) -> list:
@@ -128,17 +151,15 @@ def load_study_index(folder) -> list:
     reasons = [reason for number, record in enumerate(document, 1)
                for reason in entry_problems(record, number, fields, SESSION_KINDS,
                                             PAPER_CASES)]
-    pairs = [(record.get('session_id'), record.get('kind')) for record in document
-             if isinstance(record, dict)]
-    reasons += [f'session {session_id!r} ({kind}) is indexed twice'
-                for session_id, kind in sorted(set(pairs), key=str) if pairs.count(
-                    (session_id, kind)) > 1]
     if reasons:
         raise StudyIndexError(f'{path}: ' + '\n'.join(reasons))
     entries = []
-    for record in document:
+    for record in merge_attempts(document):
         values = {name: (str(value) if name in ('started', 'ended') else value)
                   for name, value in record.items()}
+        values['attempts'] = [{name: (str(value) if name != 'exit_code' else value)
+                               for name, value in attempt.items()}
+                              for attempt in values['attempts']]
         entries.append(IndexEntry(**values))
     return entries
 
@@ -208,7 +229,8 @@ def _empty_row(entry) -> dict:
             'practice_session_id': '', 'practice_exit_code': None,
             'practice_episodes': math.nan, 'practice_human_seconds': math.nan,
             'human_involved_episodes': math.nan, 'total_episodes': math.nan,
-            'evaluation_episodes': math.nan, 'human_seconds': {},
+            'evaluation_episodes': math.nan, 'human_seconds': {}, 'converged': None,
+            'attempts': [attempt['exit_code'] for attempt in entry.attempts],
             **{key: math.nan for key in ERROR_KEYS}, 'tlx': {}, 'raw_tlx': math.nan,
             'started': str(entry.started)}
 
@@ -235,8 +257,8 @@ def subject_rows(entries: list, sessions=(), log=print) -> list:
         if session is not None:
             metrics = measures(record_from_bag_session(session))
             row.update({key: metrics[key] for key in ('human_involved_episodes',
-                                                      'total_episodes', 'evaluation_episodes')
-                        + ERROR_KEYS})
+                                                      'total_episodes', 'evaluation_episodes',
+                                                      'converged') + ERROR_KEYS})
             row['human_seconds'] = _engaged_seconds(human_time(session))
         practice = practices.get(entry.session_id + PRACTICE_SUFFIX)
         if practice is not None and practice.subject_id == entry.subject_id:
@@ -258,6 +280,25 @@ def subject_rows(entries: list, sessions=(), log=print) -> list:
         rows.append(row)
     rows.sort(key=lambda row: (row['subject_id'], row['position'] or 99, row['started']))
     return rows
+
+
+def outcome(row) -> str:
+    """Return how a condition row ended: converged, stopped at the cap, aborted, or failed.
+
+    From its last attempt's exit code and, for a session that finished, whether its bags show
+    the convergence rule met (``measures``' converged): a session that ran to its episode cap
+    without converging also exits 0, and must not read as a success.
+    """
+    code = row['exit_code']
+    if code is None:
+        return ''
+    if code == EXIT_OPERATOR_ABORT:
+        return 'aborted'
+    if code != 0:
+        return f'failed (exit {code})'
+    if row['converged'] is None:
+        return 'finished (no bags)'
+    return 'converged' if row['converged'] else 'stopped at the cap'
 
 
 def source_columns(rows) -> list:

@@ -8,7 +8,7 @@ import io
 import math
 
 from hrc_bag.report.records import ERROR_KEYS
-from hrc_bag.report.study import source_columns
+from hrc_bag.report.study import outcome, source_columns
 
 
 def _csv_number(value: float) -> str:
@@ -23,8 +23,11 @@ def _csv_count(value: float) -> str:
     return '' if math.isnan(value) else str(int(value))
 
 
-def _exit_cell(code) -> str:
-    return '' if code is None else ('done' if code == 0 else f'exit {code}')
+def _attempts_cell(codes) -> str:
+    """Return the attempts of a condition: their count and exit codes, e.g. '2 (exit 3, 0)'."""
+    if not codes:
+        return ''
+    return f"{len(codes)} (exit {', '.join(str(code) for code in codes)})"
 
 
 def by_subject_markdown(rows, tlx_scales: tuple) -> str:
@@ -33,7 +36,7 @@ def by_subject_markdown(rows, tlx_scales: tuple) -> str:
               'Human-involved / training episodes', 'Evaluation episodes',
               'Human time by input (s)', 'Slider error (m)', 'Pendulum error (rad)',
               'Ball error (m)', 'Total error'] + [f'TLX {scale}' for scale in tlx_scales] + [
-              'Raw TLX', 'Condition', 'Session']
+              'Raw TLX', 'Outcome', 'Attempts', 'Session']
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for row in rows:
         practice = 'none'
@@ -50,8 +53,8 @@ def by_subject_markdown(rows, tlx_scales: tuple) -> str:
                  _cell(row['ball_error'], 3), _cell(row['total_error'], 3)]
         cells += [_cell(row['tlx'].get(scale, math.nan), 0) for scale in tlx_scales]
         cells += [_cell(row['raw_tlx'], 1),
-                  _exit_cell(row['exit_code']) if row['kind'] == 'condition'
-                  else 'practice only', row['session_id'] or row['practice_session_id']]
+                  outcome(row) if row['kind'] == 'condition' else 'practice only',
+                  _attempts_cell(row['attempts']), row['session_id'] or row['practice_session_id']]
         lines.append('| ' + ' | '.join(cells) + ' |')
     lines += ['', 'One row per condition a subject took part in (pseudonymous ids from the '
               "study index; no names or notes). Position: the case's place in the subject's "
@@ -61,7 +64,10 @@ def by_subject_markdown(rows, tlx_scales: tuple) -> str:
               'Human time: simulated seconds the human was engaged, by the input that drove '
               "him, over the condition's episodes. Errors: mean over the evaluation "
               'episodes (Table II "Performance"). TLX: the raw NASA-TLX (0-100, performance '
-              '0 = perfect) and its unweighted mean; n/a = not stored.']
+              '0 = perfect) and its unweighted mean; n/a = not stored. Outcome: converged (the '
+              'convergence rule met), stopped at the cap (ran every episode without '
+              'converging), aborted by the operator, or failed; attempts: every run of the '
+              'condition (an abort resumed later is two) with its exit code.']
     return '\n'.join(lines) + '\n'
 
 
@@ -73,7 +79,7 @@ def by_subject_csv(rows, tlx_scales: tuple) -> str:
     counts = ['practice_episodes', 'human_involved_episodes', 'total_episodes',
               'evaluation_episodes']
     writer.writerow(['subject_id', 'case', 'position', 'kind', 'session_id', 'exit_code',
-                     'practice_session_id', 'practice_exit_code'] + counts
+                     'outcome', 'attempts', 'practice_session_id', 'practice_exit_code'] + counts
                     + ['practice_human_seconds']
                     + [f'human_seconds_{source}' for source in sources] + list(ERROR_KEYS)
                     + [f'tlx_{scale}' for scale in tlx_scales] + ['raw_tlx'])
@@ -83,7 +89,8 @@ def by_subject_csv(rows, tlx_scales: tuple) -> str:
         has_bag = bool(row['human_seconds']) or not math.isnan(row['total_episodes'])
         writer.writerow(
             [row['subject_id'], row['case'], row['position'], row['kind'], row['session_id'],
-             code(row['exit_code']), row['practice_session_id'],
+             code(row['exit_code']), outcome(row) if row['kind'] == 'condition' else '',
+             ' '.join(str(code) for code in row['attempts']), row['practice_session_id'],
              code(row['practice_exit_code'])]
             + [_csv_count(row[key]) for key in counts]
             + [_csv_number(row['practice_human_seconds'])]
