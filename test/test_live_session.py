@@ -507,6 +507,14 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         code, said = operator(ros_domain_id, 'resume')
         assert code == 1 and 'still disconnected' in said, said
         writer = plug_in(fifo)
+        # Back: said on /hrc/session, by operator status and on the page before any resume.
+        assert watcher.wait(lambda: 'connected again' in watcher.statuses[-1].message, 30), \
+            output()
+        code, said = operator(ros_domain_id, 'status')
+        assert code == 0 and 'connected again' in said, said
+        assert watcher.wait(lambda: any('The joystick is connected again' in banner
+                                        for banner in page_words.banners()), 30), \
+            page_words.banners()
         code, said = operator(ros_domain_id, 'resume')
         assert code == 0 and 'resuming' in said, said
         assert watcher.wait(lambda: runner.poll() is not None, timeout=240), output()
@@ -519,6 +527,9 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
+    # The terminal says a pause for the joystick, never an operator's abort.
+    assert 'phase aborted' not in text and 'session aborted by the operator' not in text, text
+    assert 'the joystick is connected again' in text, text
     # What the person read, in order: the lost joystick (never "stopped by the
     # operator", no FIFO detail), then the countdown of the resume, then their turn again.
     from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE

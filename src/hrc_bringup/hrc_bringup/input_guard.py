@@ -46,7 +46,8 @@ class InputGuard:
 
     def __init__(self, node, kind: str, device: str, link_timeout: float = 1.0):
         self.node, self.kind, self.device = node, kind, device
-        self.lost = ''                  # why the input is lost ('' = it is not)
+        self.lost = ''                  # why the session is paused for a lost input ('' = not)
+        self.back = False               # paused for a lost input that is there again
         # The link watchdog (two hosts, docs/two_hosts.md): monotonic s of the newest state,
         # of the newest answer from the person's side and of the human node's newest status.
         self.link_timeout = link_timeout
@@ -97,8 +98,10 @@ class InputGuard:
             return present, why if present else device_missing_message(
                 self.device, why, joystick_devices())
         publishers = self.node.count_publishers(self._topics.JOY)
-        if self.kind == 'joy' or publishers:
-            return publishers > 0, joy_missing_message(publishers)
+        if publishers:
+            return True, f'/joy has {publishers} publisher{"s" if publishers > 1 else ""}'
+        if self.kind == 'joy':
+            return False, joy_missing_message(publishers)
         return False, (device_missing_message(self.device, why, joystick_devices()) + ' Or: '
                        + joy_missing_message(publishers))
 
@@ -119,8 +122,29 @@ class InputGuard:
         values['message'] = status.message
         self.input_status = values
         self.input_status_at = time.monotonic()
-        if values.get('pause_requested') == 'true' and self.involved:
+        if self.lost:
+            self._say_back(values.get('state') == 'ok', status.message)
+        elif values.get('pause_requested') == 'true' and self.involved:
             self._lose(status.message or 'the human node asks to pause')
+
+    def _say_back(self, present: bool, message: str) -> None:
+        """While paused for a lost input, say at once when it is back (or lost again).
+
+        The pages, the console and ``operator status`` read "connected again" from the cleared
+        ``/hrc/session/input_lost`` and the paused status's message as soon as the human node
+        reports the input back, not only after the operator's resume.
+        """
+        if present == self.back:
+            return
+        self.back = present
+        if present:
+            print(f'[session] the joystick is connected again ({message}): resume with '
+                  f'"hrc operator resume" or the console', flush=True)
+        else:
+            print(f'[session] the joystick is disconnected again: {message}', flush=True)
+        self.lost_pub.publish(self._string(data='' if present else self.lost))
+        if self._status_pub is not None:
+            self._publish_paused()
 
     def _on_state(self, state):
         now = time.monotonic()
@@ -168,13 +192,16 @@ class InputGuard:
 
     def _publish_paused(self) -> None:
         """Say on /hrc/session (for ``operator status``) that the session is paused, and why."""
-        self._status_pub = self.node.create_publisher(self._session_status,
-                                                      self._topics.SESSION,
-                                                      self._qos.SESSION_QOS)
+        if self._status_pub is None:
+            self._status_pub = self.node.create_publisher(self._session_status,
+                                                          self._topics.SESSION,
+                                                          self._qos.SESSION_QOS)
         if self.last_status is not None:
             status = self.last_status
             status.phase = int(Phase.PAUSED)
-            status.message = f'{self.lost}: paused; resume after it is back'
+            status.message = (f'{self.lost}; the joystick is connected again: paused, resume '
+                              f'when ready' if self.back else
+                              f'{self.lost}: paused; resume after it is back')
 
             self._status_pub.publish(status)
 
@@ -209,7 +236,7 @@ class InputGuard:
         # The services go a moment later: the answer to the resume call must reach the caller
         # first (the new agent takes seconds to serve them itself).
         self._retire_at = time.monotonic() + SERVICE_RETIRE_S
-        self.lost, self.agent_down, self.resume_requested = '', False, False
+        self.lost, self.agent_down, self.resume_requested, self.back = '', False, False, False
         self.lost_pub.publish(self._string(data=''))
 
     def watch_link(self) -> None:

@@ -4,7 +4,7 @@ import copy
 import time
 
 from hrc_common import qos, topics
-from hrc_common.contract import Phase, phase_label, source_label
+from hrc_common.contract import HOLD_ABORTED, HOLD_NOT_INVOLVED, Phase, phase_label, source_label
 from hrc_common.nodes import DrainedNode, take_waiting
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus
 
@@ -49,6 +49,9 @@ class Progress:
         self.alone_since = None     # (monotonic s, training episodes done) the robot went alone
         self._verdict_due = None    # the status that ended training, until its episodes are in
         self.person_joined = None   # monotonic s the person's first training step was announced
+        # Why the runner paused the session for a lost input ('' = it did not): the input
+        # guard's word; the agent it stops for it says "aborted", which is not what happened.
+        self.paused_for_input = lambda: ''
         self.node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                       qos.SESSION_QOS)
         self.node.create_subscription(EpisodeSummary, topics.EPISODE, self._on_episode,
@@ -70,6 +73,8 @@ class Progress:
         # episodes are shown on the progress line only.
         def milestone(status):
             phase = phase_label(status.phase, '?')
+            if phase == 'aborted' and self.paused_for_input():
+                phase = 'paused (joystick disconnected)'
             return (status.training_step, status.human_involved,
                     phase if phase not in ('training', 'updating') else 'training')
 
@@ -129,8 +134,10 @@ class Progress:
 
     def _on_action(self, action):
         """Say which input drives the person's side whenever it changes (never silently)."""
-        if action.source_detail.startswith('not involved'):
+        if action.source_detail.startswith(HOLD_NOT_INVOLVED):
             return  # zero on purpose: the person has no part in this training step
+        if action.source_detail.startswith(HOLD_ABORTED) and self.paused_for_input():
+            return  # the agent stopped for the lost input, not an operator's abort
         source = source_label(action.source)
         detail = action.source_detail.split(' (', 1)[0] if source != 'none' \
             else action.source_detail

@@ -81,6 +81,8 @@ class SessionRun:
                                  self.parameters['human'].get('device', ''),
                                  self.options.link_timeout)
                       if live_input and self.options.stand_in == 'none' else None)
+        if self.guard is not None:
+            self.progress.paused_for_input = lambda: self.guard.lost
         self.start = time.monotonic()
         try:
             early = self._before_the_nodes(params_dir, live_input)

@@ -141,6 +141,18 @@ class InputSource(enum.IntEnum):
         return self.name.lower()
 
 
+# Why the human node holds zero with source NONE on purpose, not for a lost input: the first
+# words of HumanAction.source_detail (the human node writes them, the session runner's input
+# guard and progress lines read them; every other NONE detail is the reason an input is lost).
+HOLD_NOT_INVOLVED = 'not involved in this training step'
+HOLD_ABORTED = 'session aborted by the operator'
+
+
+def holds_on_purpose(detail: str) -> bool:
+    """Return whether a zero answer's ``detail`` is a deliberate hold (no lost input)."""
+    return detail.startswith(HOLD_NOT_INVOLVED) or detail.startswith(HOLD_ABORTED)
+
+
 def source_label(code: int, default: str = None) -> str:
     """Return the label of a raw SOURCE_* code; ``default`` (or 'source N') if unknown."""
     try:

@@ -36,7 +36,7 @@ The input status (:class:`InputStatus`) is what the node publishes on ``/hrc/hum
 from dataclasses import dataclass
 import typing
 
-from hrc_common.contract import InputSource, SimLimits
+from hrc_common.contract import HOLD_ABORTED, HOLD_NOT_INVOLVED, InputSource, SimLimits
 from hrc_common.dof import check_dof, DOFS
 from hrc_common.params import from_dict, param, ParameterError
 from hrc_joystick_node.human_model import ClonedHuman, load_human_model
@@ -305,7 +305,7 @@ class HumanCore:
             raise RuntimeError("the sim's limits are not known yet: call set_limits() first")
         last = self.last_answer
         if self.aborted:
-            return self._zero(episode, step, stamp_ns, 'session aborted by the operator')
+            return self._zero(episode, step, stamp_ns, HOLD_ABORTED)
         if last is not None and (last.episode, last.step, last.slice) == (episode, step,
                                                                           slice_index):
             return last._replace(repeated=True)
@@ -350,7 +350,7 @@ class HumanCore:
         if last is None or not self.answers_states:
             return None
         return self._zero(last.episode, last.step, last.stamp_ns,
-                          'session aborted by the operator')
+                          HOLD_ABORTED)
 
     def _zero(self, episode, step, stamp_ns, why) -> HumanAnswer:
         answer = HumanAnswer(int(episode), int(step), int(stamp_ns), 0.0, 0.0, self.dof, ZERO,
@@ -365,7 +365,7 @@ class HumanCore:
         """
         active = self.selector.active
         if not self.involved:
-            return 0.0, False, ZERO, f'not involved in this training step (input: {active})'
+            return 0.0, False, ZERO, f'{HOLD_NOT_INVOLVED} (input: {active})'
         params = self.params
         if active in (DEVICE, JOY):
             reading = sticks.get(active) or StickReading(None, None, active)

@@ -9,7 +9,10 @@ file (nobody is).
 The lost-input signal of the human node: with ``on_input_lost: zero`` it answers every state
 while its input is lost with ``HumanAction.source == SOURCE_NONE`` and a ``source_detail``
 giving the reason (src/hrc_joystick_node/README.md); an answer while the person is not involved
-in the training step says so (``not involved ...``) and is no loss. :func:`lost_reason` reads it.
+in the training step, or after the operator aborted the session, says so
+(``hrc_common.contract.holds_on_purpose``) and is no loss. :func:`lost_reason` reads it: an
+operator's abort is never taken for a lost joystick, whichever of the abort's status and the
+human node's zero arrives first.
 """
 
 import array
@@ -21,13 +24,12 @@ import stat
 import termios
 
 from hrc_common import topics
-from hrc_common.contract import InputSource
+from hrc_common.contract import holds_on_purpose, InputSource
 
 SOURCE_NONE = int(InputSource.NONE)
 # The session runner says on this topic (std_msgs/String, transient local) why the person's
 # input is lost ('' = it is not); the display node shows it on both pages.
 INPUT_LOST_TOPIC = topics.INPUT_LOST
-NOT_INVOLVED = 'not involved'
 
 
 def device_presence(path: str) -> tuple:
@@ -88,9 +90,9 @@ def joy_missing_message(publishers: int) -> str:
 def lost_reason(source: int, detail: str, involved: bool) -> str:
     """Return why the person's input is lost according to one HumanAction ('' = it is not).
 
-    Only while the person is involved: an answer outside their training steps holds zero on
-    purpose.
+    Only while the person is involved: an answer outside their training steps, or after an
+    abort, holds zero on purpose.
     """
-    if not involved or source != SOURCE_NONE or detail.startswith(NOT_INVOLVED):
+    if not involved or source != SOURCE_NONE or holds_on_purpose(detail):
         return ''
     return detail or 'the human node holds zero (no input)'
