@@ -59,7 +59,7 @@ from hrc_live.display_documents import (console_document, overlay_document, scen
 from hrc_live.display_words import overlay
 from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
-from hrc_live.page_server import EventHub, PageServer
+from hrc_live.page_server import EventHub, PageServer, tlx_body
 
 SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the person's page "
            '(scene drawn in the browser from a pushed state stream) and /console for the '
@@ -279,10 +279,9 @@ class DisplayNode(Node):
         """
         if not self.params.tlx_file:
             return 404, 'no questionnaire in this session (tlx_file is empty)'
-        try:
-            answer = json.loads(body or b'{}')
-        except (ValueError, UnicodeDecodeError):
-            return 400, 'not JSON'
+        answer, problem = tlx_body(body)
+        if problem:
+            return 400, problem
         scores, reasons = check_tlx(answer, step=TLX_STEP)
         if reasons:
             return 400, 'rejected: ' + '; '.join(reasons)

@@ -7,6 +7,7 @@ node's behalf (it calls the display node's ``status``, ``control``, ``tlx_answer
 the rules).
 """
 
+import errno
 import http.server
 import json
 import pathlib
@@ -14,6 +15,7 @@ import queue
 import secrets
 import sys
 import threading
+import time
 
 from hrc_common.session_control import OPERATOR_SERVICES
 
@@ -27,6 +29,18 @@ FILES = {'/': ('person.html', 'text/html; charset=utf-8'),
 CLIENT_QUEUE = 200
 # Largest request body accepted (bytes): a TLX answer is ~150.
 MAX_BODY = 10_000
+# Connections served at once (pages, consoles, status readers; a lab has a few): one more is
+# answered 503 at once and closed, so a flood never takes the process to its descriptor limit.
+MAX_CONNECTIONS = 64
+# Seconds a connection may stay silent while the server waits for its request (a slow-loris
+# client, a browser tab left open without its stream) or stall a write; then it is closed.
+IDLE_TIMEOUT_S = 30.0
+# Seconds the accept loop rests when the process is out of file descriptors (EMFILE/ENFILE):
+# the listening socket stays readable, so retrying at once would spin a core.
+ACCEPT_BACKOFF_S = 0.2
+BUSY_ANSWER = (b'HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain\r\n'
+               b'Content-Length: 37\r\nConnection: close\r\n\r\n'
+               b'busy: too many connections; try again')
 # Host names every request may name besides the served address (loopback only).
 LOOPBACK_NAMES = ('127.0.0.1', 'localhost', '[::1]')
 # The header that carries the session's secret, and the placeholder the pages hold for it.
@@ -72,6 +86,26 @@ class RequestGuard:
         if not secrets.compare_digest(offered.encode(), self.token.encode()):
             return f'missing or wrong {TOKEN_HEADER} (the session secret of the served page)'
         return ''
+
+
+def os_error_text(error: OSError) -> str:
+    """Return an OSError as its errno name and text, e.g. 'EMFILE: Too many open files'."""
+    return f'{errno.errorcode.get(error.errno, error.errno)}: {error.strerror}'
+
+
+def tlx_body(body: bytes) -> tuple:
+    """Return (answer mapping, '') for a TLX request body, or (None, why it is refused).
+
+    Bounded: the body is at most MAX_BODY bytes, and a deeply nested one (which the JSON
+    parser meets with RecursionError) is refused like any other malformed body.
+    """
+    try:
+        answer = json.loads(body or b'{}')
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return None, 'not JSON'
+    if not isinstance(answer, dict):
+        return None, 'not a JSON object of the NASA-TLX scales'
+    return answer, ''
 
 
 def event_bytes(name: str, document) -> bytes:
@@ -132,13 +166,17 @@ class EventHub:
 class PageServer:
     """The HTTP side: files, the event stream, status.json, the controls and the TLX form."""
 
-    def __init__(self, node: 'DisplayNode', port: int):  # noqa: F821 (hrc_live.display_node)
+    def __init__(self, node: 'DisplayNode', port: int,  # noqa: F821 (hrc_live.display_node)
+                 max_connections: int = MAX_CONNECTIONS, idle_timeout: float = IDLE_TIMEOUT_S):
         self.node = node
         self.closing = threading.Event()
+        self.connections = 0            # connections being served now
+        self._count_lock = threading.Lock()
         server = self
 
         class Handler(http.server.BaseHTTPRequestHandler):
             protocol_version = 'HTTP/1.1'
+            timeout = idle_timeout      # socket timeout: http.server closes a silent client
 
             def do_GET(self):  # noqa: N802 (the name http.server calls)
                 server.get(self)
@@ -149,19 +187,51 @@ class PageServer:
             def do_PUT(self):  # noqa: N802 (any other method: 405, after the guard)
                 server.other(self)
 
-            do_DELETE = do_PATCH = do_OPTIONS = do_PUT  # noqa: N815
+            # HEAD and TRACE too (http.server would say 501, "not implemented": they are
+            # refused on purpose)
+            do_DELETE = do_PATCH = do_OPTIONS = do_HEAD = do_TRACE = do_CONNECT = do_PUT  # noqa: N815
 
             def log_message(self, format, *args):  # noqa: A002
                 pass  # one line per request would flood the log
 
         class Server(http.server.ThreadingHTTPServer):
+            def get_request(self):
+                try:
+                    return super().get_request()
+                except OSError as error:
+                    if error.errno in (errno.EMFILE, errno.ENFILE):
+                        server.node.get_logger().warning(
+                            f'out of file descriptors ({os_error_text(error)}): new '
+                            f'connections wait', throttle_duration_sec=5.0)
+                        time.sleep(ACCEPT_BACKOFF_S)
+                    raise
+
+            def process_request(self, request, client_address):
+                if not server.admit():
+                    try:
+                        request.sendall(BUSY_ANSWER)
+                    except OSError:
+                        pass
+                    self.shutdown_request(request)
+                    return
+                super().process_request(request, client_address)
+
+            def process_request_thread(self, request, client_address):
+                try:
+                    super().process_request_thread(request, client_address)
+                finally:
+                    server.release()
+
             def handle_error(self, request, client_address):
                 # One line, never a traceback in the display's log (the request is dropped).
                 error = sys.exc_info()[1]
+                if isinstance(error, (ConnectionResetError, BrokenPipeError)):
+                    return      # the browser went away between two requests: nothing to say
                 server.node.get_logger().warning(
                     f'request from {client_address[0]} dropped: {type(error).__name__}: '
                     f'{error}', throttle_duration_sec=5.0)
 
+        self.max_connections = max_connections
         self.httpd = Server(('127.0.0.1', port), Handler)
         self.httpd.daemon_threads = True
         self.address, self.port = self.httpd.server_address[:2]
@@ -170,6 +240,19 @@ class PageServer:
         self.thread = threading.Thread(target=self.httpd.serve_forever, name='display-http',
                                        daemon=True)
         self.thread.start()
+
+    def admit(self) -> bool:
+        """Count one more connection if there is room; return whether there was."""
+        with self._count_lock:
+            if self.connections >= self.max_connections:
+                return False
+            self.connections += 1
+            return True
+
+    def release(self) -> None:
+        """Count one connection less (its thread ended)."""
+        with self._count_lock:
+            self.connections -= 1
 
     @staticmethod
     def answer(request, code: int, body: bytes, content_type: str) -> None:
@@ -196,9 +279,16 @@ class PageServer:
         return True
 
     def other(self, request) -> None:
-        """Answer a method the server does not offer (after the guard)."""
+        """Answer a method the server does not offer: 405 (after the guard), then close."""
+        request.close_connection = True     # a HEAD answer with a body ends the connection
         if not self.refused(request, request.command):
-            self.answer(request, 405, b'GET or POST only', 'text/plain; charset=utf-8')
+            request.send_response(405)
+            request.send_header('Allow', 'GET, POST')
+            body = b'GET or POST only'
+            request.send_header('Content-Type', 'text/plain; charset=utf-8')
+            request.send_header('Content-Length', str(len(body)))
+            request.end_headers()
+            request.wfile.write(body)
 
     def get(self, request) -> None:
         """Answer one GET request."""
