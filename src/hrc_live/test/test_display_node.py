@@ -310,6 +310,9 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     assert wait_for(send.is_enabled, 30, 0.1)
     send.click()
     assert wait_for(lambda: not form.is_displayed(), 20, 0.2)
+    banner = browser.find_element('id', 'banner')
+    assert wait_for(lambda: banner.text == 'Thank you, your answers are saved', 20, 0.2), \
+        banner.text
     stored = tmp_path / 'tlx.yaml'
     records = yaml.safe_load(stored.read_text())
     assert len(records) == 1 and records[0]['session_id'] == 'display-test'
@@ -334,9 +337,29 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
     assert [record.get('correction', False) for record in records] == [False, True]
     assert records[1]['corrects'] == records[0]['answered']
 
+    # The session closes behind the person's page: it keeps thanking them (it said
+    # "Connection to the session lost: retrying" in red). The lost stream is an event the page
+    # sees (EventSource readyState leaves OPEN), waited on, not a time.
+    display.stop()
+    assert wait_for(lambda: fetch_fails(port), 30, 0.2)
+    # the page's stream leaves OPEN (1) when its error handler has run
+    assert wait_for(lambda: browser.execute_script('return window.hrcEvents.readyState') != 1,
+                    30, 0.2)
+    assert banner.text == 'Thank you, your answers are saved'
+    assert 'lost' not in browser.find_element('id', 'page').text
+
 
 ANSWER = {'mental': 40, 'physical': 10, 'temporal': 30, 'performance': 20, 'effort': 50,
           'frustration': 15}
+
+
+def fetch_fails(port) -> bool:
+    """Return whether the display no longer answers on ``port``."""
+    try:
+        fetch(port, '/status.json')
+    except OSError:
+        return True
+    return False
 
 
 def page_token(port) -> str:
