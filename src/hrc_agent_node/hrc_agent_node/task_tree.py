@@ -27,6 +27,8 @@ import os
 
 import yaml
 
+from hrc_common import bounded_yaml
+
 # State variables a subtask may watch (PhysicsState / TaskState attribute, unit).
 STATE_VARIABLES = {
     'slider_position': 'm',
@@ -266,11 +268,12 @@ def load_data_file(path, what: str, error_type, build):
         raise error_type(f'{what} {path} is not a regular file')
     try:
         with open(path, encoding='utf-8') as stream:
-            document = yaml.safe_load(stream)
+            document = bounded_yaml.load(stream.read(), path)
     except OSError as error:
         raise error_type(f'cannot read {what} {path}: {error}') from None
     except (UnicodeDecodeError, yaml.YAMLError) as error:
-        raise error_type(f'{what} {path} is not valid YAML text: {error}') from None
+        raise error_type(f'{what} {path} is not valid YAML text: '
+                         f'{bounded_yaml.describe(error)}') from None
     try:
         return build(document)
     except error_type as error:

@@ -91,6 +91,7 @@ def test_the_reported_tree_files_give_their_reason(path, value, reason):
 @pytest.mark.parametrize('kind, reason', [
     ('binary', 'is not valid YAML text'), ('fifo', 'is not a regular file'),
     ('directory', 'is not a regular file'), ('missing', 'cannot read'),
+    ('deep', 'is not valid YAML text: line 1, column 65: nested more than 64 levels deep'),
 ])
 def test_unreadable_data_files_are_refused_with_a_reason(tmp_path, kind, reason):
     path = tmp_path / 'data.yaml'
@@ -100,6 +101,8 @@ def test_unreadable_data_files_are_refused_with_a_reason(tmp_path, kind, reason)
         os.mkfifo(path)        # opening it would block until a writer comes
     elif kind == 'directory':
         path.mkdir()
+    elif kind == 'deep':
+        path.write_text('[' * 20000 + ']' * 20000)     # a RecursionError in PyYAML
     tree = TaskTree.from_file(PARAMS / 'task_tree.yaml')
     with pytest.raises(TaskTreeError, match=reason):
         TaskTree.from_file(path)

@@ -24,6 +24,7 @@ import yaml
 
 from hrc_bag.format import END_FILE_SUFFIX, METADATA_FILE
 from hrc_bag.qos_yaml import load_yaml
+from hrc_common import bounded_yaml
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 
@@ -240,8 +241,8 @@ def bag_metadata_yaml(folder) -> tuple:
     except (OSError, UnicodeDecodeError) as error:
         return {}, f'{path} cannot be read ({error}): using the MCAP files of the folder'
     except yaml.YAMLError as error:
-        first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
-        return {}, f'{path} is not YAML ({first_line}): using the MCAP files of the folder'
+        return {}, (f'{path} is not YAML ({bounded_yaml.describe(error)}): using the MCAP '
+                    'files of the folder')
     if document is None:
         return {}, ''
     information = (document.get('rosbag2_bagfile_information')

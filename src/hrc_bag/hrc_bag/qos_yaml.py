@@ -18,20 +18,19 @@ Policies are written as the lower-case names rmw uses (rmw_qos_*_policy_to_str);
 seconds and nanoseconds.
 """
 
+from hrc_common import bounded_yaml
 from hrc_common.contract import NS_PER_S as NANOSECONDS
 import yaml
 
-# libyaml's parser and emitter when PyYAML has them (the pure-Python ones cost ms per file)
-_LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
 _DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)
 
 # Durations this long or longer mean "infinite" (older rmw wrote other sentinel values).
 INFINITE_THRESHOLD_NS = 0x7FFFFFFF * NANOSECONDS
 
 
-def load_yaml(text: str):
-    """Parse YAML (safe types only)."""
-    return yaml.load(text, Loader=_LOADER)
+def load_yaml(text: str, source: str = 'YAML'):
+    """Parse YAML (safe types only) within the bounds of hrc_common.bounded_yaml."""
+    return bounded_yaml.load(text, source)
 
 
 def dump_yaml(document) -> str:

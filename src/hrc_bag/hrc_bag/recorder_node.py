@@ -22,6 +22,7 @@ import signal
 import sys
 import time
 
+from hrc_common import bounded_yaml
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
 from hrc_common.nodes import DrainedNode, run_node, take_waiting
@@ -110,9 +111,10 @@ class RecorderNode(DrainedNode):
         try:
             with open(path) as stream:
                 text = stream.read()
-            config = yaml.safe_load(text) or {}
+            config = bounded_yaml.load(text, path) or {}
         except (OSError, yaml.YAMLError) as error:
-            raise ParameterError(f'session_config: cannot read {path}: {error}')
+            reason = bounded_yaml.describe(error) if isinstance(error, yaml.YAMLError) else error
+            raise ParameterError(f'session_config: cannot read {path}: {reason}')
         if not isinstance(config, dict):
             raise ParameterError(f'session_config: {path} is not a YAML mapping')
         return config, text

@@ -18,6 +18,7 @@ from hrc_bag.format import (BAG_VERSION, describe_error, FileInfo, MESSAGE_ENCOD
                             METADATA_FILE, RecordingError, STORAGE_IDENTIFIER,
                             TopicDescription)
 from hrc_bag.qos_yaml import dump_profiles, dump_yaml, load_yaml
+from hrc_common import bounded_yaml
 
 
 def topic_metadata(topic: str, description: TopicDescription) -> dict:
@@ -146,7 +147,7 @@ class SessionIndex:
         try:
             document = load_yaml(self.path.read_text())
         except yaml.YAMLError as error:
-            raise ValueError(f'not YAML: {str(error).splitlines()[0]}') from None
+            raise ValueError(f'not YAML: {bounded_yaml.describe(error)}') from None
         if document is None:
             return
         if not isinstance(document, dict):

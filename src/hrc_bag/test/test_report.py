@@ -163,7 +163,9 @@ def test_human_time_is_counted_by_input_source(bags, written):
 
 
 BAD_METADATA = {'binary': b'\xff\xfe\x00binary', 'not YAML': b'key: [unclosed\n',
-                'a list': b'- a\n- b\n', 'a string': b'just words\n'}
+                'a list': b'- a\n- b\n', 'a string': b'just words\n',
+                # beyond hrc_common.bounded_yaml's depth (yaml.safe_load recursed out)
+                'nested 20,000 deep': b'[' * 20000 + b']' * 20000}
 
 
 @pytest.mark.parametrize('kind', sorted(BAD_METADATA))

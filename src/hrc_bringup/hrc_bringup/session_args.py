@@ -5,6 +5,7 @@ import pathlib
 import shlex
 import sys
 
+from hrc_common import bounded_yaml
 from hrc_common.session_plan import (add_learning_option, NODES, new_session_id,
                                      parse_overrides, SessionSettings)
 from hrc_live.study import consent_problem, load_registry, StudyError
@@ -127,7 +128,8 @@ def parse_args(argv=None):
         try:
             overrides.update(file_overrides(path))
         except (OSError, ValueError, yaml.YAMLError) as error:
-            parser.error(f'--params {path}: {error}')
+            reason = bounded_yaml.describe(error) if isinstance(error, yaml.YAMLError) else error
+            parser.error(f'--params {path}: {reason}')
     try:
         overrides.update(parse_overrides(options.overrides))
     except ValueError as error:
@@ -195,7 +197,7 @@ def person_input(settings: SessionSettings, options) -> str:
 
 def file_overrides(path) -> dict:
     """Return {'node.name': value} of the node sections of a ROS 2 parameter file."""
-    document = yaml.safe_load(pathlib.Path(path).read_text()) or {}
+    document = bounded_yaml.load_file(path) or {}
     if not isinstance(document, dict):
         raise ValueError('not a parameter file (a mapping of node sections)')
     overrides = {}

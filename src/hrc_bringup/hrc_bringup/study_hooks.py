@@ -4,6 +4,7 @@ import pathlib
 import sys
 import time
 
+from hrc_common import bounded_yaml
 from hrc_common.session_plan import SessionSettings
 from hrc_live.study import IndexEntry, load_registry, position_of, record_session
 import yaml
@@ -63,7 +64,7 @@ def index_session(settings: SessionSettings, options, kind: str, started: str,
 def tlx_stored(path: pathlib.Path, session_id: str) -> bool:
     """Return whether the TLX file ``path`` holds an answer of ``session_id``."""
     try:
-        answers = yaml.safe_load(path.read_text()) or []
+        answers = bounded_yaml.load_file(path) or []
     except (OSError, yaml.YAMLError, UnicodeDecodeError):
         return False
     return isinstance(answers, list) and any(

@@ -10,6 +10,7 @@ import functools
 
 import yaml
 
+from hrc_common import bounded_yaml
 from hrc_common.contract import DOFS, other_dof
 from hrc_common.paths import params_file
 
@@ -47,11 +48,12 @@ def load_case_table(path=None) -> dict:
     path = path or cases_file_path()
     try:
         with open(path, 'rb') as stream:
-            document = yaml.safe_load(stream)
+            document = bounded_yaml.load(stream.read(), str(path))
     except OSError as error:
         raise CaseTableError(f'cannot read cases file {path}: {error.strerror}') from None
     except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise CaseTableError(f'cases file {path} is not YAML: {error}') from None
+        raise CaseTableError(f'cases file {path} is not YAML: '
+                             f'{bounded_yaml.describe(error)}') from None
     table, problems = check_case_table(document)
     if problems:
         raise CaseTableError(f'cases file {path}: ' + '; '.join(problems))

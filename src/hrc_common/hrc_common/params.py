@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, fields, MISSING, replace
 import math
 import typing
 
-import yaml
+from hrc_common import bounded_yaml
 
 from hrc_common.params_arguments import closest_hint, node_parameter_problems, process_arguments
 
@@ -178,7 +178,7 @@ def load_yaml(params_cls, path, node_name: str):
     Accepts the node's own section (``node_name:`` or ``/**:``) with ``ros__parameters``.
     """
     with open(path) as stream:
-        document = yaml.safe_load(stream) or {}
+        document = bounded_yaml.load(stream.read(), str(path)) or {}
     values = {}
     for key in ('/**', node_name, '/' + node_name):
         section = document.get(key)

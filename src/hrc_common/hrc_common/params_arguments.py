@@ -14,6 +14,8 @@ import sys
 
 import yaml
 
+from hrc_common import bounded_yaml
+
 
 # Parameters every rclpy node accepts besides its own.
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
@@ -107,7 +109,7 @@ def read_params_file(path: str, problems: list):
         problems.append(f'{where}: not a YAML parameter file (binary data)')
         return None
     try:
-        document = yaml.safe_load(text)
+        document = bounded_yaml.load(text, where)
     except yaml.YAMLError as error:
         mark = getattr(error, 'problem_mark', None)
         at = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''

@@ -19,6 +19,7 @@ import subprocess
 
 import yaml
 
+from hrc_common import bounded_yaml
 from hrc_common.cases import case_problem, case_table
 from hrc_common.contract import atomic_write, id_problem, make_session_id, PERSONAL_FILE_MODE
 from hrc_common.params import field_problems, param
@@ -66,7 +67,7 @@ def load_learning(params_dir: pathlib.Path, name: str) -> dict:
         names = ', '.join(learning_names(params_dir)) or 'none'
         raise ValueError(f'learning configuration {name!r} not found in '
                          f'{pathlib.Path(params_dir) / LEARNING_DIR} (there are: {names})')
-    document = yaml.safe_load(path.read_text()) or {}
+    document = bounded_yaml.load_file(path) or {}
     nodes = set(document) if isinstance(document, dict) else {'?'}
     section = document.get('agent') if isinstance(document, dict) else None
     values = section.get('ros__parameters') if isinstance(section, dict) else None
@@ -159,7 +160,7 @@ def parse_override(text: str):
         raise ValueError(f'--set {text!r}: expected node.parameter=value, e.g. agent.horizon=256')
     key, raw = text.split('=', 1)
     node, name = key.split('.', 1)
-    return node, name, yaml.safe_load(raw) if raw != '' else ''
+    return node, name, bounded_yaml.load(raw, f'--set {key}') if raw != '' else ''
 
 
 def parse_overrides(texts) -> dict:
@@ -196,7 +197,7 @@ def override_arguments(overrides: dict) -> list:
 def load_node_parameters(params_dir: pathlib.Path, node: str) -> dict:
     """Return the ``ros__parameters`` of ``node`` in its parameter file."""
     path = params_dir / NODES[node][2]
-    document = yaml.safe_load(path.read_text()) or {}
+    document = bounded_yaml.load_file(path) or {}
     return dict((document.get(node) or {}).get('ros__parameters') or {})
 
 

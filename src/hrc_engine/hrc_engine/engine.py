@@ -33,7 +33,7 @@ import pathlib
 import time
 import typing
 
-import yaml
+from hrc_common import bounded_yaml
 
 from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.checkpoint import load_into, save_checkpoint
@@ -191,7 +191,7 @@ class InProcessSession:
                                              self.config.params_dir or None)
         text = config_path.read_text()
         self.writer = SessionWriter(self.settings.bags_dir, self.session_id,
-                                    session_config=yaml.safe_load(text),
+                                    session_config=bounded_yaml.load(text, str(config_path)),
                                     session_config_text=text,
                                     descriptions=topic_descriptions())
 

@@ -23,7 +23,7 @@ import json
 import sys
 import time
 
-import yaml
+from hrc_common import bounded_yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_into, read_checkpoint, save_checkpoint
@@ -204,7 +204,7 @@ def main(argv=None) -> int:
         return 2
     if args.episodes > 0:
         learning['max_training_episodes'] = args.episodes
-    overrides = {name: yaml.safe_load(value) for name, value in
+    overrides = {name: bounded_yaml.load(value, f'--set {name}') for name, value in
                  (item.split('=', 1) for item in args.set)}
     params = with_overrides(AgentParams(), case=args.case, seed=args.seed,
                             evaluation_episodes=args.evaluation_episodes,

@@ -52,6 +52,7 @@ import typing
 
 import yaml
 
+from hrc_common import bounded_yaml
 from hrc_common.params import from_dict, param, ParameterError
 from hrc_common.paths import params_file
 
@@ -212,7 +213,7 @@ def load_profiles(path=None) -> typing.Dict[str, HumanProfile]:
     except OSError as error:
         raise ParameterError(f'{path}: cannot read: {error.strerror or error}') from None
     try:
-        document = yaml.safe_load(text)
+        document = bounded_yaml.load(text, str(path))
     except yaml.YAMLError as error:
         where = getattr(error, 'problem_mark', None)
         at = f' (line {where.line + 1}, column {where.column + 1})' if where else ''

@@ -38,6 +38,7 @@ import pathlib
 import threading
 import time
 
+from hrc_common import bounded_yaml
 from hrc_common import qos, topics
 from hrc_common.contract import atomic_write, dof_name, PERSONAL_FILE_MODE, phase_label
 from hrc_common.nodes import run_node
@@ -265,7 +266,7 @@ class DisplayNode(Node):
         """Return the answers stored in ``tlx_file`` ([] when none or unreadable)."""
         path = pathlib.Path(self.params.tlx_file)
         try:
-            document = yaml.safe_load(path.read_text()) if path.is_file() else []
+            document = bounded_yaml.load_file(path) if path.is_file() else []
         except (OSError, yaml.YAMLError, UnicodeDecodeError):
             return []
         return [item for item in document or [] if isinstance(item, dict)]

@@ -29,6 +29,7 @@ import datetime
 import pathlib
 import typing
 
+from hrc_common import bounded_yaml
 from hrc_common.contract import atomic_write, id_problem, PERSONAL_FILE_MODE
 from hrc_common.study_index import (add_attempt, attempt_of, INDEX_FILE, IndexEntry,
                                     merge_attempts, PAPER_CASES, SESSION_KINDS, study_lock)
@@ -87,12 +88,21 @@ def subject_problems(record) -> list:
     return [f'subject {record.get("id")!r}: {reason}' for reason in reasons]
 
 
+def _study_file(path: pathlib.Path):
+    """Return the YAML document of a study file ([] when empty); StudyError if unreadable."""
+    try:
+        return bounded_yaml.load_file(path) or []
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+        raise StudyError(f'{path}: not readable as YAML ({bounded_yaml.describe(error)})') \
+            from None
+
+
 def load_registry(folder) -> list:
     """Return the Subjects of ``folder``/subjects.yaml ([] if there is none); check every entry."""
     path = pathlib.Path(folder) / SUBJECTS_FILE
     if not path.is_file():
         return []
-    document = yaml.safe_load(path.read_text()) or []
+    document = _study_file(path)
     if not isinstance(document, list):
         raise StudyError(f'{path}: not a list of subjects')
     reasons = [reason for record in document for reason in subject_problems(record)]
@@ -213,7 +223,7 @@ def _index_records(folder) -> list:
     path = pathlib.Path(folder) / INDEX_FILE
     if not path.is_file():
         return []
-    document = yaml.safe_load(path.read_text()) or []
+    document = _study_file(path)
     if not isinstance(document, list) or not all(isinstance(item, dict) for item in document):
         raise StudyError(f'{path}: not a list of session entries')
     return merge_attempts(document)

@@ -38,7 +38,7 @@ import pathlib
 import sys
 import time
 
-import yaml
+from hrc_common import bounded_yaml
 
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import save_checkpoint
@@ -114,8 +114,7 @@ def population_settings(cases_file='') -> PopulationSettings:
     ``cases_file``: default the installed params/cases.yaml. Defaults where the block or a key
     is missing; ParameterError (a ValueError) with every reason on bad values.
     """
-    document = yaml.safe_load(pathlib.Path(cases_file or share_file(CASES_FILE_NAME))
-                              .read_text()) or {}
+    document = bounded_yaml.load_file(cases_file or share_file(CASES_FILE_NAME)) or {}
     block = ((document.get('strategies') or {}).get('partners_first') or {}) \
         .get('population') or {}
     if not isinstance(block, dict):

@@ -14,6 +14,7 @@ import dataclasses
 import math
 import typing
 
+from hrc_common import bounded_yaml
 from hrc_common.contract import AGENT_STEP_TYPE, HUMAN_ACTION_TYPE
 import yaml
 
@@ -148,7 +149,7 @@ def action_trace(session: Session, seconds: float = 4.0, start: float = 0.0,
 
 def _counts(text) -> dict:
     try:
-        counts = yaml.safe_load(text or '') or {}
+        counts = bounded_yaml.load(text or '', 'the episode counts') or {}
     except yaml.YAMLError:
         return {}
     return {str(name): int(count) for name, count in counts.items()} if isinstance(

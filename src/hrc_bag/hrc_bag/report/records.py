@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 import functools
 import math
 
+from hrc_common import bounded_yaml
 from hrc_common.cases import case_table, cases_file_path
 from hrc_common.contract import EpisodeKind
-import yaml
 
 from hrc_bag.report.loading import load_sessions
 from hrc_bag.report.session_config import (episode_limit_of, episode_seconds_of, learning_of,
@@ -55,7 +55,7 @@ def strategy_step_counts() -> dict:
     The last step's convergence ends training.
     """
     with open(cases_file_path(), 'rb') as stream:
-        strategies = yaml.safe_load(stream)['strategies']
+        strategies = bounded_yaml.load(stream.read(), str(cases_file_path()))['strategies']
     return {name: len(strategy['steps']) for name, strategy in strategies.items()}
 
 

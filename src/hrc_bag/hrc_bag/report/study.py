@@ -39,6 +39,7 @@ import datetime
 import math
 import pathlib
 
+from hrc_common import bounded_yaml
 from hrc_common.contract import id_problem
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
 from hrc_common.study_index import (ATTEMPT_FIELDS, INDEX_FILE, IndexEntry, merge_attempts,
@@ -139,9 +140,9 @@ def load_study_index(folder) -> list:
         raise StudyFolderError(f'{path}: no study index (a session run with --study-dir '
                                f'{folder} writes it)')
     try:
-        document = yaml.safe_load(path.read_text())
+        document = bounded_yaml.load(path.read_text(), str(path))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise StudyIndexError(f'{path}: not YAML ({str(error).splitlines()[0]})') from None
+        raise StudyIndexError(f'{path}: not YAML ({bounded_yaml.describe(error)})') from None
     if document is None:
         document = []
     if not isinstance(document, list):
@@ -177,9 +178,9 @@ def load_tlx_answer(entry, log=print) -> dict:
         log(f'{entry.session_id}: no NASA-TLX stored ({path} does not exist)')
         return {}
     try:
-        document = yaml.safe_load(path.read_text())
+        document = bounded_yaml.load(path.read_text(), str(path))
     except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise StudyIndexError(f'{path}: not YAML ({str(error).splitlines()[0]})') from None
+        raise StudyIndexError(f'{path}: not YAML ({bounded_yaml.describe(error)})') from None
     if not isinstance(document, list) or not all(isinstance(item, dict) for item in document):
         raise StudyIndexError(f'{path}: not a list of NASA-TLX answers')
     answers = [item for item in document if item.get('session_id') == entry.session_id]
