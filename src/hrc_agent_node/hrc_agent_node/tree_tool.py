@@ -19,7 +19,9 @@ def main(argv=None) -> int:
     parser.add_argument('--tree', default=None, help='task tree YAML (default: installed)')
     parser.add_argument('--cases', default=None, help='cases YAML (default: installed)')
     parser.add_argument('--preset', default=None, help="reward preset (default: the file's)")
-    parser.add_argument('--case', type=int, default=None, help='paper case 1..6')
+    parser.add_argument('--case', type=int, default=None,
+                        help="a case of the cases file (installed: the paper's 1..6, partners "
+                             'first 7-8)')
     parser.add_argument('--step', type=int, default=1, help='training step of the case, from 1')
     parser.add_argument('--png', default=None, help='draw the tree into this PNG file')
     args = parser.parse_args(argv)

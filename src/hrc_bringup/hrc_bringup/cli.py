@@ -231,14 +231,18 @@ def study_dir_first(argv: list) -> list:
     return front + rest
 
 
-def usage() -> str:
-    """Return ``hrc --help``: the verbs, one a line, and the shared flags."""
-    width = max(len(verb.name) for verb in VERBS)
-    lines = [f'usage: {PROG} <verb> [flags ...]   ({PROG} <verb> --help: its flags and an '
-             'example)', '', 'verbs:']
-    for verb in VERBS:
+def usage(group: str = '') -> str:
+    """Return ``hrc --help`` (the verbs, one a line, and the shared flags) or a group's."""
+    verbs = [verb for verb in VERBS if not group or verb.words[0] == group]
+    width = max(len(verb.name) for verb in verbs)
+    lines = [f'usage: {PROG} {group or "<verb>"}{" <verb>" if group else ""} [flags ...]   '
+             f'({PROG} {group + " " if group else ""}<verb> --help: its flags and an example)',
+             '', 'verbs:']
+    for verb in verbs:
         lines += textwrap.wrap(f'  {verb.name:<{width}}  {verb.summary}', width=USAGE_WIDTH,
                                subsequent_indent=' ' * (width + 4))
+    if group:
+        return '\n'.join(lines)
     lines += ['', 'flags spelled the same by every verb that takes them: --case N, --seed N, '
               '--engine graph|inprocess,', '--human sim|auto|device|joy|model|script, --profile '
               'NAME (simulated human), --set NODE.PARAM=VALUE.',
@@ -253,6 +257,15 @@ def refuse(where: str, reasons: list) -> int:
     for reason in reasons:
         print(f'{prefix}: {reason}', file=sys.stderr)
     return EXIT_BAD_ARGUMENTS
+
+
+def group_help(argv: list) -> str:
+    """Return the group of ``hrc <group> --help`` (``hrc bag -h``), else ''."""
+    groups = {verb.words[0] for verb in VERBS if len(verb.words) > 1}
+    if argv and argv[0] in groups and any(word in ('-h', '--help') for word in argv[1:]):
+        if len(argv) < 2 or argv[1].startswith('-'):
+            return argv[0]
+    return ''
 
 
 def find_verb(argv: list) -> tuple:
@@ -303,6 +316,9 @@ def main(argv=None) -> int:
             print(usage(), file=sys.stdout if argv else sys.stderr, flush=True)
             return 0 if argv else EXIT_BAD_ARGUMENTS
         verb, rest, problem = find_verb(argv)
+        if verb is None and group_help(argv):
+            print(usage(group_help(argv)), flush=True)
+            return 0
         if verb is None:
             return refuse('', [problem])
         return run_verb(verb, rest)

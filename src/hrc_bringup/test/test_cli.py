@@ -4,6 +4,7 @@ In-process calls of ``cli.main`` (no ROS graph); one subprocess test runs the in
 as ``ros2 run hrc_bringup hrc`` starts it.
 """
 
+import argparse
 import subprocess
 
 from hrc_testing.bag_traffic import record_in_process, strategy_plan
@@ -39,6 +40,42 @@ def test_every_verb_has_help_with_an_example(capsys, verb):
     example = next(v.example for v in cli.VERBS if v.name == verb)
     assert out.rstrip().endswith(f'example:\n  {example}'), out
     assert example.startswith(f'hrc {verb} ')
+
+
+def undocumented_flags(parser: argparse.ArgumentParser) -> list:
+    """Return the flags of ``parser`` and its sub-parsers that have no help text."""
+    missing = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                missing += undocumented_flags(sub)
+        elif not action.help:
+            missing.append(f'{parser.prog} {"/".join(action.option_strings) or action.dest}')
+    return missing
+
+
+@pytest.mark.parametrize('argv', [verb.name.split() for verb in cli.VERBS]
+                         + [['session', '--engine', 'inprocess']], ids=' '.join)
+def test_every_flag_of_every_verb_has_help(monkeypatch, argv):
+    parsers = []
+
+    def capture(parser, args=None, namespace=None):
+        parsers.append(parser)
+        raise SystemExit(0)
+    monkeypatch.setattr(argparse.ArgumentParser, 'parse_known_args', capture)
+    cli.main([*argv, '--help'])
+    assert parsers, argv
+    assert [flag for parser in parsers for flag in undocumented_flags(parser)] == []
+
+
+@pytest.mark.parametrize('group', ['bag', 'partners', 'joystick'])
+def test_a_group_verbs_help_lists_its_verbs_and_exits_0(capsys, group):
+    code, out, err = run(capsys, group, '--help')
+    assert code == 0 and err == ''
+    assert out.startswith(f'usage: hrc {group} <verb>')
+    names = [verb.name for verb in cli.VERBS if verb.words[0] == group]
+    assert names and all(f'  {name} ' in out for name in names), out
+    assert '  session ' not in out and '  results ' not in out
 
 
 def test_no_verb_unknown_verb_and_a_group_without_its_verb_exit_2_with_the_reason(capsys):

@@ -29,7 +29,8 @@ def parse_args(argv=None):
         prog='hrc operator', description='Pause, resume or abort the running hrc session, or show '
         'its status. Pause and resume take effect at the next episode boundary; abort is '
         'immediate (zero commands, bags closed, resumable from the last checkpoint).')
-    parser.add_argument('command', choices=('pause', 'resume', 'abort', 'status'))
+    parser.add_argument('command', choices=('pause', 'resume', 'abort', 'status'),
+                        help='pause, resume or abort the running session, or show its status')
     parser.add_argument('--timeout', type=float, default=10.0,
                         help='seconds to wait for the agent (default 10)')
     parser.add_argument('--domain-id', type=int, default=None,

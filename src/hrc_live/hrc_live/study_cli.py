@@ -33,16 +33,18 @@ def parse_args(argv=None):
     commands = parser.add_subparsers(dest='command', required=True)
     add = commands.add_parser('register', help='add a subject or record a new consent answer')
     add.add_argument('subject_id', help='the pseudonym (e.g. P07), never a name')
-    add.add_argument('--consent', required=True, choices=('yes', 'no'))
+    add.add_argument('--consent', required=True, choices=('yes', 'no'),
+                     help='the consent answer the subject gave')
     add.add_argument('--date', default=None, help='date of the consent answer (default today)')
     assign = commands.add_parser('assign', help='give consenting subjects their case order')
     assign.add_argument('--cases', type=int, nargs='+', default=list(PAPER_CASES),
                         help='the cases to counterbalance (default 1..6)')
     plan = commands.add_parser('plan', help="print the commands of a subject's sessions")
-    plan.add_argument('subject_id')
+    plan.add_argument('subject_id', help='a registered subject')
     plan.add_argument('--practice', type=int, default=3,
                       help='practice episodes before each condition (default 3; 0 = none)')
-    plan.add_argument('--human', default='device', choices=('device', 'joy'))
+    plan.add_argument('--human', default='device', choices=('device', 'joy'),
+                      help='the joystick as a device (default) or through a joy node')
     plan.add_argument('--learning', default=DEFAULT_LEARNING, metavar='NAME',
                       help='learning configuration of every condition (params/learning/'
                       f'<name>.yaml; default {DEFAULT_LEARNING}, the one the simulated study '

@@ -26,17 +26,25 @@ def main(argv=None) -> int:
     """Console entry point."""
     parser = argparse.ArgumentParser(prog='hrc partners advisor',
                                      description=__doc__.split('\n\n')[0])
-    parser.add_argument('--person', default='person:paper_symmetric:0')
-    parser.add_argument('--weak', default='', metavar='DOF:FACTOR')
-    parser.add_argument('--robot-rotation', default='', metavar='CHECKPOINT')
-    parser.add_argument('--robot-translation', default='', metavar='CHECKPOINT')
-    parser.add_argument('--stand-in-robot', type=float, default=None, metavar='NOISE')
+    parser.add_argument('--person', default='person:paper_symmetric:0',
+                        help='the simulated person: profile:NAME or person:NAME:K')
+    parser.add_argument('--weak', default='', metavar='DOF:FACTOR',
+                        help="make the person FACTOR times worse at judging that DOF's quantity")
+    parser.add_argument('--robot-rotation', default='', metavar='CHECKPOINT',
+                        help='agent that drives the rotation (e.g. a case-2 checkpoint)')
+    parser.add_argument('--robot-translation', default='', metavar='CHECKPOINT',
+                        help='agent that drives the translation (e.g. a case-1 checkpoint)')
+    parser.add_argument('--stand-in-robot', type=float, default=None, metavar='NOISE',
+                        help='a scripted PD robot with this command noise for both DOFs '
+                             'instead of the checkpoints')
     parser.add_argument('--episodes', type=int, default=5, help='episodes per DOF')
     parser.add_argument('--seconds', type=float, default=12.0, help='s per episode')
     parser.add_argument('--rest', type=float, default=5.0, help='s between episodes')
-    parser.add_argument('--seed', type=int, default=0)
-    parser.add_argument('--validate', type=int, default=0, metavar='N')
-    parser.add_argument('--truth-seconds', type=float, default=0.0)
+    parser.add_argument('--seed', type=int, default=0, help='seed of the person and the robots')
+    parser.add_argument('--validate', type=int, default=0, metavar='N',
+                        help='validate the advisor on N simulated people of known skills instead')
+    parser.add_argument('--truth-seconds', type=float, default=0.0,
+                        help="with --validate: s per episode of the truth's runs (0: --seconds)")
     args = parser.parse_args(argv)
 
     # after the parsing: these load torch (seconds), --help and usage errors answer without

@@ -39,10 +39,12 @@ def parse_args(argv):
                         help='subjects or session ids to hold out (default: the last session)')
     parser.add_argument('--dof', choices=['translation', 'rotation'], default=None,
                         help='the degree of freedom to clone (needed when both were driven)')
-    parser.add_argument('--history-steps', type=int, default=6)
-    parser.add_argument('--hidden', type=int, nargs='+', default=[32, 32])
-    parser.add_argument('--epochs', type=int, default=600)
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--history-steps', type=int, default=6,
+                        help='states of history the model sees (>= 1)')
+    parser.add_argument('--hidden', type=int, nargs='+', default=[32, 32],
+                        help="widths of the network's hidden layers")
+    parser.add_argument('--epochs', type=int, default=600, help='training epochs')
+    parser.add_argument('--seed', type=int, default=0, help='seed of the training')
     parser.add_argument('--targets', choices=['applied', 'command'], default='applied',
                         help='learn from the commands the sim applied in each period (one per '
                         "slice at the human's rate) or from the HumanAction of each step")

@@ -35,13 +35,18 @@ def main(argv=None) -> int:
     """Console entry point."""
     parser = argparse.ArgumentParser(prog='hrc partners crossplay',
                                      description=__doc__.split('\n\n')[0])
-    parser.add_argument('--agent', nargs='+', required=True, metavar='NAME=CHECKPOINT')
-    parser.add_argument('--partner', nargs='+', required=True, metavar='SPEC')
-    parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2])
+    parser.add_argument('--agent', nargs='+', required=True, metavar='NAME=CHECKPOINT',
+                        help='agents to evaluate (NAME=CHECKPOINT[@TRAINING_PARTNER])')
+    parser.add_argument('--partner', nargs='+', required=True, metavar='SPEC',
+                        help='partners: profile:NAME, person:NAME:K, population:NAME, '
+                             'model:PATH')
+    parser.add_argument('--seeds', nargs='+', type=int, default=[0, 1, 2],
+                        help='evaluation seeds of every cell')
     parser.add_argument('--episodes', type=int, default=3, help='evaluation episodes per seed')
     parser.add_argument('--profiles-file', default=None,
                         help='simulated-human profiles (default: the installed sim_human.yaml)')
-    parser.add_argument('--out', default='runs/crossplay')
+    parser.add_argument('--out', default='runs/crossplay',
+                        help='folder for matrix.json, matrix.md and heatmap.png')
     parser.add_argument('--quiet', action='store_true',
                         help='no line per cell (nor the time left) on stderr')
     args = parser.parse_args(argv)

@@ -280,7 +280,7 @@ def main(argv=None) -> int:
                     'population of simulated people, no person; then start the session with '
                     'the person from the checkpoint (the command is printed).')
     parser.add_argument('--case', type=int, default=8, help='7 or 8 (default 8)')
-    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--seed', type=int, default=0, help='session seed')
     parser.add_argument('--session-id', default='', help="default: the session runner's")
     parser.add_argument('--runs-dir', default='runs', help="the session runner's --runs-dir")
     parser.add_argument('--profile', default='', help="the person's simulated-human profile")
