@@ -306,7 +306,12 @@ def iter_messages(path, topics=None) -> typing.Iterator[BagMessage]:
 
 
 class MessageDecoder:
-    """Decode BagMessage CDR data into Python objects using the schemas stored in the bag."""
+    """Decode BagMessage CDR data into Python objects using the schemas stored in the bag.
+
+    A schema with no text (a writer that left it out) would decode every message as an empty
+    object; such a type is decoded with its installed definition instead (the report says so:
+    :func:`without_schema`), or refused (BagError) when none is installed.
+    """
 
     def __init__(self):
         self._factory = DecoderFactory()
@@ -320,12 +325,32 @@ class MessageDecoder:
             # the factory caches decoders by schema id: one id per distinct schema
             schema = Schema(id=len(self._decoders) + 1, name=message.type_name,
                             encoding='ros2msg',
-                            data=message.schema_text.encode())
+                            data=self._schema_text(message).encode())
             decoder = self._factory.decoder_for('cdr', schema)
             if decoder is None:
-                raise ValueError(f'cannot decode {message.type_name} on {message.topic}')
+                raise BagError(f'cannot decode {message.type_name} on {message.topic}')
             self._decoders[key] = decoder
         return decoder(message.data)
+
+    def _schema_text(self, message: BagMessage) -> str:
+        if message.schema_text.strip():
+            return message.schema_text
+        from hrc_bag import msgdefs  # lazy: the ament index, only for a bag without a schema
+        where = f'{message.topic} ({message.type_name or "no type name"})'
+        try:
+            text = msgdefs.full_definition(message.type_name)
+        except (msgdefs.DefinitionNotFound, ValueError):
+            raise BagError(f'{where}: the bag holds no schema of the type and none is '
+                           'installed: its messages cannot be read') from None
+        return text
+
+
+def without_schema(messages) -> list:
+    """Return a notice per topic of ``messages`` whose bag holds no schema text of its type."""
+    topics = sorted({(message.topic, message.type_name) for message in messages
+                     if not message.schema_text.strip()})
+    return [f'{topic} ({type_name or "no type name"}): the bag holds no schema of the type: '
+            'decoded with the installed definition' for topic, type_name in topics]
 
 
 @dataclass(frozen=True)

@@ -212,3 +212,76 @@ def test_the_cli_refuses_files_that_are_not_mcap_with_the_reason(bags, tmp_path)
     assert 'zz_empty.mcap: is empty' in done.stderr
     done = subprocess.run(command + [str(fifo)], capture_output=True, text=True, timeout=60)
     assert done.returncode == 1 and 'is a FIFO, not an MCAP file' in done.stderr
+
+
+def _without_schema_text(source, target):
+    """Copy the MCAP file ``source`` to ``target`` with every schema's text left out."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+    with open(source, 'rb') as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        metadata = list(reader.iter_metadata())
+        messages = list(reader.iter_messages())
+    with open(target, 'wb') as stream:
+        writer = Writer(stream)
+        writer.start(profile='ros2', library='a writer that leaves the schemas out')
+        schemas = {schema.id: writer.register_schema(schema.name, schema.encoding, b'')
+                   for schema in summary.schemas.values()}
+        channels = {channel.id: writer.register_channel(
+            channel.topic, channel.message_encoding, schemas[channel.schema_id],
+            channel.metadata) for channel in summary.channels.values()}
+        for record in metadata:
+            writer.add_metadata(record.name, record.metadata)
+        for _, channel, message in messages:
+            writer.add_message(channels[channel.id], message.log_time, message.data,
+                               message.publish_time, message.sequence)
+        writer.finish()
+
+
+def test_a_bag_without_schema_texts_is_read_with_the_installed_definitions(bags, tmp_path):
+    source = bags[0] / 'case2_seed1'
+    folder = tmp_path / 'case2_seed1'
+    folder.mkdir()
+    for file in source.glob('*.mcap'):
+        _without_schema_text(file, folder / file.name)
+    expected = report.load_session(source)
+    session = report.load_session(folder)
+    assert expected_values(session.summaries) == expected_values(expected.summaries)
+    assert [(summary.episode, summary.total_error) for summary in session.summaries] == [
+        (summary.episode, summary.total_error) for summary in expected.summaries]
+    assert session.summaries and session.case_id == expected.case_id == 2
+    assert ('/hrc/episode (hrc_msgs/msg/EpisodeSummary): the bag holds no schema of the type: '
+            'decoded with the installed definition') in session.notices, session.notices
+
+
+def test_a_type_without_schema_text_nor_installed_definition_is_refused():
+    from hrc_bag.bag_reader import BagError, BagMessage, MessageDecoder
+    message = BagMessage('/foreign', 'foreign_msgs/msg/Thing', b'\x00\x01\x00\x00', 0, 0, 0)
+    with pytest.raises(BagError, match=r'/foreign \(foreign_msgs/msg/Thing\): the bag holds no '
+                                       'schema of the type and none is installed'):
+        MessageDecoder().decode(message)
+
+
+def test_a_session_rewritten_by_rosbags_gives_the_same_numbers_and_says_how(bags, tmp_path):
+    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+    source = bags[0] / 'case5_seed1'
+    target = tmp_path / 'rewritten'
+    with Reader(source) as reader, Writer(target, version=9,
+                                          storage_plugin=StoragePlugin.MCAP) as writer:
+        connections = {}
+        for connection in reader.connections:       # one per topic: each file repeats them
+            if connection.topic not in connections:
+                connections[connection.topic] = writer.add_connection(
+                    connection.topic, connection.msgtype, msgdef=connection.msgdef.data,
+                    rihs01=connection.digest or 'RIHS01_' + '0' * 64,
+                    offered_qos_profiles=connection.ext.offered_qos_profiles)
+        for connection, stamp, data in reader.messages():
+            writer.write(connections[connection.topic], stamp, data)
+    assert len(list(target.glob('*.mcap'))) == 1            # every episode in one file
+    original, rewritten = report.load_session(source), report.load_session(target)
+    assert report.human_time(original) == report.human_time(rewritten) != {}
+    assert expected_values(rewritten.summaries) == expected_values(original.summaries)
+    assert ("no file holds an hrc episode record (written by another tool?): the person's "
+            'time is counted from the HumanAction messages') in rewritten.notices
+    assert not any('hrc episode record' in notice for notice in original.notices)

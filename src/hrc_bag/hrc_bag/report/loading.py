@@ -126,6 +126,21 @@ def _human_inputs_of_file(file, metadata: dict, human_topics: list) -> dict:
     return tally.record()
 
 
+def _human_inputs_by_episode(path, human_topics: list) -> dict:
+    """Return {episode: an hrc_episode record counted from the HumanAction messages}.
+
+    For files another tool wrote (rosbags' Writer, a merge): they carry no hrc records, and
+    one file may hold several episodes; each HumanAction names its own episode.
+    """
+    from hrc_bag import cdr_peek  # lazy: only for bags without hrc records
+    tallies = {}
+    for message in bag_reader.iter_messages(path, topics=human_topics):
+        fields = cdr_peek.human_action(message.data)
+        if fields is not None:
+            tallies.setdefault(fields[1], HumanInputTally()).add(*fields)
+    return {episode: tally.record() for episode, tally in sorted(tallies.items())}
+
+
 def _steps_of(record: dict) -> str:
     """Return "N steps" of a file's hrc_episode record (its last step + 1, if recorded)."""
     last = record.get('last_step', '')
@@ -168,6 +183,8 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
             config = _config_of(scan.metadata)
         episode = scan.metadata.get(SESSION_RECORD, {}).get('episode', '')
         own_summary = None
+        notices += [notice for notice in bag_reader.without_schema(scan.messages)
+                    if notice not in notices]
         for message in scan.messages:
             decoded = decoder.decode(message)
             if message.topic in episode_topics:
@@ -195,6 +212,10 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
                 + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
                 + f'): its time and errors are from {used[0].name} ('
                 + ('the attempt that finished)' if finished else 'none finished: the last)'))
+    if not episode_files and human_topics:
+        human_inputs = _human_inputs_by_episode(path, human_topics)
+        notices.append('no file holds an hrc episode record (written by another tool?): the '
+                       "person's time is counted from the HumanAction messages")
     if not complete:
         notices.append('a file was not closed (recorder killed?): read up to its last chunk')
     last = statuses[-1] if statuses else None
