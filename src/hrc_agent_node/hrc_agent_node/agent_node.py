@@ -53,13 +53,14 @@ from hrc_agent_node.agent_practice import PracticeEpisodes
 from hrc_agent_node.agent_startup import SESSION_MATCH_GRACE_S, StartupWait
 from hrc_agent_node.agent_services import (ANNOUNCE_ACK_TIMEOUT_S, EXIT_LINGER_S,
                                           OperatorServices)
-from hrc_agent_node.checkpoint import CheckpointError, load_into, save_checkpoint
+from hrc_agent_node.checkpoint import (CheckpointError, load_into, remove_stale_temporaries,
+                                       save_checkpoint)
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.practice import PracticeRun
 from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
-from hrc_common.contract import Phase, SimLimits
+from hrc_common.contract import os_error_text, Phase, SimLimits
 from hrc_common.dof import set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
@@ -177,6 +178,10 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         self.step_gaps = 0
         self.checkpoint_dir = (os.path.join(self.params.checkpoint_dir, self.core.session_id)
                                if self.params.checkpoint_dir and self.practice is None else '')
+        stale = remove_stale_temporaries(self.checkpoint_dir) if self.checkpoint_dir else []
+        if stale:
+            self.get_logger().info(f'removed {len(stale)} temporary files of a killed '
+                                   f'checkpoint write in {self.checkpoint_dir}')
 
     # ------------------------------------------------------------------ session lifecycle
 
@@ -426,7 +431,8 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
             stats = self.core.update()
             if stats is not None:
                 self.log_update(stats, f'after episode {result.episode}')
-        self.save_checkpoint(LATEST_CHECKPOINT)
+        if not self.save_checkpoint(LATEST_CHECKPOINT):
+            return
         if result.event == 'training_finished':
             outcome = 'converged' if result.converged else 'not converged'
             self.get_logger().info(f'training finished after {self.core.total_episodes} '
@@ -454,20 +460,28 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
             metrics = ', '.join(f'{name} {value:.4f}' if isinstance(value, float)
                                 else f'{name} {value}' for name, value in summary.items())
             self.get_logger().info(f'evaluation: {metrics}')
-        self.save_checkpoint(FINAL_CHECKPOINT)
+        if not self.save_checkpoint(FINAL_CHECKPOINT):
+            return
         self.publish_session('session done: ' + self.core.status_line())
         self.get_logger().info(f'session {self.core.session_id} done')
         self.exit_at = time.monotonic() + EXIT_LINGER_S
 
-    def save_checkpoint(self, name: str):
-        """Write a checkpoint into the session's checkpoint directory (if any)."""
+    def save_checkpoint(self, name: str) -> bool:
+        """Write a checkpoint into the session's checkpoint directory (if any).
+
+        A write that fails (a full disk, a folder not writable) ends the session with exit
+        code 1 and the reason: a session without its checkpoints cannot be resumed, and one
+        without ``final.pt`` must not read as a success. Returns whether it was written.
+        """
         if not self.checkpoint_dir:
-            return
+            return True
         path = os.path.join(self.checkpoint_dir, name)
         try:
             save_checkpoint(self.core, path)
         except OSError as error:
-            self.get_logger().error(f'checkpoint {path} not written: {error}')
+            self.abort(f'checkpoint {path} not written: {os_error_text(error)}', exit_code=1)
+            return False
+        return True
 
     def publish_session(self, message: str):
         """Publish the SessionStatus (transient local: late joiners get the newest).

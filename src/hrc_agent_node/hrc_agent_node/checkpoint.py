@@ -96,6 +96,23 @@ def make_checkpoint(core) -> dict:
             'core': core.state_dict()}
 
 
+def remove_stale_temporaries(directory) -> list:
+    """Remove the temporary files a killed checkpoint write left in ``directory``; list them.
+
+    ``atomic_write`` writes ``.<name>.<random>.tmp`` beside the checkpoint and renames it; a
+    SIGKILL between the two leaves it (about 0.5 MiB each). Only the session's own agent
+    writes its checkpoint folder (its id is claimed), so at its start none is in progress.
+    """
+    removed = []
+    if not os.path.isdir(directory):
+        return removed
+    for name in sorted(os.listdir(directory)):
+        if name.startswith(('.latest.pt.', '.final.pt.')) and name.endswith('.tmp'):
+            os.unlink(os.path.join(directory, name))
+            removed.append(name)
+    return removed
+
+
 def save_checkpoint(core, path) -> str:
     """Write ``core``'s checkpoint to ``path`` atomically and durably; return the path."""
     path = os.fspath(path)

@@ -39,7 +39,6 @@ import shlex
 import signal
 import subprocess
 import sys
-import multiprocessing
 import time
 
 from hrc_common import paths
@@ -48,56 +47,14 @@ from hrc_common.session_plan import package_version, parse_overrides, SessionSet
 from hrc_common.time_left import TimeLeft
 
 from hrc_bringup.experiment_args import build_parser
-from hrc_bringup.experiment_resume import (finished_sessions, JOURNAL_NAME, journal_line,
+from hrc_bringup.experiment_resume import (earlier_files, finished_sessions, JOURNAL_NAME,
+                                           journal_line, set_aside,
                                            kept_runs, MANIFEST_NAME, split_resumed)
-from hrc_bringup.experiment_task import run_task, session_id_of, SessionTask, unpack_folder
+from hrc_bringup.experiment_task import (lost_outcome, run_task, session_id_of, SessionTask,
+                                         unpack_folder)
+from hrc_bringup.local_pool import LocalPool, WAKE_PERIOD_S
 
 # s: how often the sweep's main thread wakes while it waits for sessions (signal handling)
-WAKE_PERIOD_S = 0.5
-
-
-def _ignore_interrupt():
-    """Pool worker initializer: Ctrl-C is the driver's to handle (it terminates the pool)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-class LocalPool:
-    """The embedded executor: a process pool on this machine."""
-
-    def __init__(self, workers: int):
-        self.workers = workers
-        # spawn: a fresh interpreter per worker (no forked torch or PyBullet state)
-        self.pool = multiprocessing.get_context('spawn').Pool(workers, _ignore_interrupt)
-
-    def describe(self) -> str:
-        """Return what runs the tasks."""
-        return f'local process pool ({self.workers} workers)'
-
-    def run(self, tasks, on_done, function=run_task):
-        """Run every task (``function(task)``); call ``on_done(outcome)`` as each finishes.
-
-        The wait for the next outcome wakes every :data:`WAKE_PERIOD_S`: Python runs signal
-        handlers in the main thread only, and a SIGTERM or Ctrl-C the kernel hands to one of
-        the pool's threads does not end the main thread's wait for a result, so without the
-        wake the sweep would go on until the next session ended (minutes).
-        """
-        outcomes = self.pool.imap_unordered(function, tasks, chunksize=1)
-        for _ in range(len(tasks)):
-            while True:
-                try:
-                    outcome = outcomes.next(timeout=WAKE_PERIOD_S)
-                    break
-                except multiprocessing.TimeoutError:
-                    continue   # a signal that arrived meanwhile has been handled by now
-            on_done(outcome)
-
-    def close(self, abort: bool = False):
-        """Stop the workers (``abort``: at once, sessions in progress are lost)."""
-        if abort:
-            self.pool.terminate()
-        else:
-            self.pool.close()
-        self.pool.join()
 
 
 class RayExecutor:
@@ -119,13 +76,24 @@ class RayExecutor:
                 f'CPU per session)')
 
     def run(self, tasks, on_done):
-        """Run every task; call ``on_done(outcome)`` as each finishes."""
-        pending = [self.remote.remote(task) for task in tasks]
+        """Run every task; call ``on_done(outcome)`` as each finishes.
+
+        A task whose worker died (killed, out of memory, its node lost) is reported as lost
+        with Ray's reason; the other tasks go on.
+        """
+        task_of = {self.remote.remote(task): task for task in tasks}
+        pending = list(task_of)
         while pending:
             # woken every WAKE_PERIOD_S, so that Ctrl-C or SIGTERM is handled (LocalPool.run)
             done, pending = self.ray.wait(pending, num_returns=1, timeout=WAKE_PERIOD_S)
-            if done:
-                on_done(self.ray.get(done[0]))
+            for reference in done:
+                try:
+                    outcome = self.ray.get(reference)
+                except self.ray.exceptions.RayError as error:
+                    reason = str(error).strip().splitlines()[0] if str(error).strip() else ''
+                    outcome = lost_outcome(task_of[reference], f'its Ray worker died '
+                                           f'({type(error).__name__}: {reason})', 0.0)
+                on_done(outcome)
 
     def close(self, abort: bool = False):
         """Disconnect (a local instance started here stops with it, and its tasks)."""
@@ -235,7 +203,7 @@ def make_executor(options):
     """Return the executor the options ask for."""
     if options.ray or options.ray_address:
         return RayExecutor(options.ray_address or None, options.cpus_per_session)
-    return LocalPool(options.parallel or os.cpu_count() or 1)
+    return LocalPool(options.parallel or os.cpu_count() or 1, lost=lost_outcome)
 
 
 def main(argv=None) -> int:
@@ -249,6 +217,8 @@ def main(argv=None) -> int:
     planned = plan_tasks(options, bags_dir, runs_dir)
     version = _version()
     prior_runs, reused, tasks = resume_plan(options, bags_dir, planned, version)
+    if not clean_folders(options, name, tasks, runs_dir):
+        return 2
     journal = bags_dir / JOURNAL_NAME
     if not options.resume:
         journal.write_text('')     # a new sweep of the folder: its sessions are journalled anew
@@ -317,6 +287,27 @@ def main(argv=None) -> int:
     from hrc_study import results_cli  # lazy: scipy and matplotlib (seconds), only for --report
     code = results_cli.main([str(bags_dir), '--out', out])
     return 1 if failed or code else 0
+
+
+def clean_folders(options, name: str, tasks: list, runs_dir: pathlib.Path) -> bool:
+    """Give the sessions to run clean folders (--resume); False, with the reasons, if refused.
+
+    Without --resume a folder of an earlier sweep of ``name`` is refused: its sessions would
+    mix with the new ones.
+    """
+    earlier = earlier_files(tasks)
+    if earlier and not options.resume:
+        for session_id, used in earlier.items():
+            print(f'[experiment] {name}: session {session_id} holds files of an earlier run '
+                  f'({"; ".join(used)})', file=sys.stderr)
+        print(f'[experiment] {name} was run before: --resume continues it (finished sessions '
+              'kept, the others run again in clean folders), or give another --name',
+              file=sys.stderr)
+        return False
+    for line in set_aside(tasks, runs_dir) if earlier else []:
+        print(f'[experiment] run again in a clean folder; the earlier files kept: {line}',
+              flush=True)
+    return True
 
 
 def interrupt_on_signals() -> None:

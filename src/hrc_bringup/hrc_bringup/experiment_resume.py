@@ -17,6 +17,9 @@ states apart: the runner warns). Plain Python, no ROS.
 
 import json
 import pathlib
+import shutil
+
+from hrc_common.session_claim import folders_in_use, session_folders
 
 JOURNAL_NAME = 'sessions.jsonl'
 MANIFEST_NAME = 'experiment.json'
@@ -138,3 +141,41 @@ def kept_runs(folder: pathlib.Path, reused: list) -> list:
                                       record['outcome'].get('finished_after', 0.0))
             run['sessions_run'] += 1
     return kept + sorted(interrupted.values(), key=lambda run: run['started'])
+
+
+EARLIER_RUNS = 'earlier-runs'   # in the sweep's runs folder: files of sessions run again
+
+
+def earlier_files(tasks: list) -> dict:
+    """Return {session id: its folders that hold files} of the tasks (a SessionTask each)."""
+    found = {}
+    for task in tasks:
+        used = folders_in_use(session_folders(task.settings))
+        if used:
+            found[task.session_id] = used
+    return found
+
+
+def set_aside(tasks: list, runs_folder: pathlib.Path) -> list:
+    """Move the folders of ``tasks`` that hold files under ``runs_folder``/earlier-runs.
+
+    A session run again starts in clean folders, and what the earlier run left (a killed
+    run's partial bags, a session of another version) is kept, out of the report's way (the
+    report reads the bags folder). Returns a line per folder moved.
+    """
+    moved = []
+    for task in tasks:
+        folders = session_folders(task.settings)
+        if not folders_in_use(folders):
+            continue
+        attempt = 1
+        while (runs_folder / EARLIER_RUNS / f'{task.session_id}-{attempt}').exists():
+            attempt += 1
+        target = runs_folder / EARLIER_RUNS / f'{task.session_id}-{attempt}'
+        for what, folder in folders.items():
+            if folder.is_dir():
+                destination = target / what.replace(' ', '-')
+                destination.parent.mkdir(parents=True, exist_ok=True)
+                shutil.move(str(folder), str(destination))
+                moved.append(f'{task.session_id}: {what} {folder} -> {destination}')
+    return moved

@@ -62,14 +62,27 @@ def session_id_of(case: int, seed: int, profile: str, profiles: list) -> str:
     return f'{base}-{profile}' if len(profiles) > 1 and profile else base
 
 
+def task_outcome(task: SessionTask, exit_code=1, error: str = '') -> dict:
+    """Return the outcome record of ``task`` as a worker starts it (a failure until it ends)."""
+    settings = task.settings
+    return {'session_id': settings.session_id, 'case': settings.case, 'seed': settings.seed,
+            'profile': settings.human_profile, 'engine': task.engine,
+            'host': socket.gethostname(), 'worker_pid': os.getpid(), 'exit_code': exit_code,
+            'error': error}
+
+
+def lost_outcome(task: SessionTask, how: str, seconds: float) -> dict:
+    """Return the outcome of a task whose worker died before it answered (exit code 1)."""
+    outcome = task_outcome(task, 1, f'session lost: {how}')
+    outcome.update(host=socket.gethostname(), worker_pid=None, seconds=seconds)
+    return outcome
+
+
 def run_task(task: SessionTask) -> dict:
     """Run one session on this worker; return its outcome (never raises)."""
     started, cpu_started = time.monotonic(), _cpu_seconds()
     settings = task.settings
-    outcome = {'session_id': settings.session_id, 'case': settings.case, 'seed': settings.seed,
-               'profile': settings.human_profile, 'engine': task.engine,
-               'host': socket.gethostname(), 'worker_pid': os.getpid(), 'exit_code': 1,
-               'error': ''}
+    outcome = task_outcome(task)
     if task.not_after and time.time() > task.not_after:
         outcome.update(exit_code=None, error='skipped: --stop-after passed', seconds=0.0)
         return outcome

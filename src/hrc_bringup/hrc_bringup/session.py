@@ -42,6 +42,7 @@ import sys
 
 from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common import paths
+from hrc_common.session_claim import claim_session, SessionIdTaken
 from hrc_common.session_plan import compose, SessionSettings, write_session_files
 
 from hrc_bringup.compose_nodes import session_composition
@@ -112,11 +113,18 @@ def run_session(settings: SessionSettings, options) -> int:
     if problems:
         print('\n'.join(f'session: {problem}' for problem in problems), file=sys.stderr)
         return 2
-    run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
     if settings.subject_id:
         # with a subject id everything the session writes is owner-only (files 0600, folders
         # 0700): the nodes inherit the mask (checkpoints, run and bag folders)
         os.umask(0o077)
+    try:
+        notice = claim_session(settings, generated=not options.session_id)
+    except (SessionIdTaken, OSError) as error:
+        print(f'session: {error}', file=sys.stderr)
+        return 2
+    if notice:
+        print(f'[session] {notice}', flush=True)
+    run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
     live_input = person_input(settings, options)
     try:
         parameters = prepare_parameters(settings, options, params_dir, run_dir, live_input)

@@ -254,7 +254,7 @@ class SessionRun:
         if recorder_exit not in (0, None) and code in (0, EXIT_OPERATOR_ABORT):
             print('[session] the recorder did not exit cleanly: check its log', file=sys.stderr)
             code = 1
-        if code == EXIT_OPERATOR_ABORT:
+        if code in (EXIT_OPERATOR_ABORT, 1):     # aborted, or a node failed: say how on
             checkpoint = (pathlib.Path(parameters['agent']['checkpoint_dir'])
                           / settings.session_id / LATEST_CHECKPOINT)
             if checkpoint.is_file():

@@ -200,3 +200,26 @@ def test_a_signal_handed_to_another_thread_stops_the_sweep_at_once():
     finally:
         pool.close(abort=True)
         signal.signal(signal.SIGUSR1, previous)
+
+
+def _echo_or_die(task: str) -> str:
+    """Return the task's name, or kill this worker (SIGKILL) for 'die' (a sweep task)."""
+    if task == 'die':
+        os.kill(os.getpid(), signal.SIGKILL)
+    return task
+
+
+def test_a_killed_worker_loses_its_session_only_and_the_sweep_ends():
+    """A SIGKILLed worker hung multiprocessing.Pool for ever; now its task alone is lost."""
+    outcomes = []
+    pool = experiment.LocalPool(2, lost=lambda task, how, seconds: f'{task}: {how}')
+    sweep = threading.Thread(target=pool.run, daemon=True,
+                             args=(['a', 'die', 'b', 'c'], outcomes.append, _echo_or_die))
+    sweep.start()
+    sweep.join(timeout=180)     # spawned workers take seconds each on a busy machine
+    try:
+        assert not sweep.is_alive(), f'the sweep hangs; outcomes so far: {outcomes}'
+    finally:
+        pool.close(abort=True)
+    assert sorted(outcomes) == [
+        'a', 'b', 'c', 'die: its worker process died (killed by SIGKILL)']

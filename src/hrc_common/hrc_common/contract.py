@@ -52,6 +52,7 @@ Files
 from dataclasses import dataclass
 import datetime
 import enum
+import errno
 import math
 import os
 import re
@@ -421,6 +422,15 @@ def make_session_id(case: int, seed: int, now: datetime.datetime = None,
 
 PUBLIC_FILE_MODE = 0o644
 PERSONAL_FILE_MODE = 0o600   # files holding a subject id or notes: owner only
+
+
+def os_error_text(error: OSError) -> str:
+    """Return "<file>: <reason> (<ENAME>)" of an OSError: what a person can act on, one line."""
+    name = errno.errorcode.get(error.errno or 0, '')
+    target = error.filename2 or error.filename     # a rename's target, else the file
+    where = f'{target}: ' if target else ''
+    reason = error.strerror or str(error)
+    return f'{where}{reason}' + (f' ({name})' if name else '')
 
 
 def atomic_write(path, data, mode: int = PUBLIC_FILE_MODE) -> None:

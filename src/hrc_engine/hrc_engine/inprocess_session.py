@@ -9,8 +9,10 @@ live display or replay need the graph.
 import json
 import sys
 
+from hrc_common.contract import os_error_text
 from hrc_common.params import ParameterError
-from hrc_common.session_plan import parse_overrides, SessionSettings
+from hrc_common.session_claim import claim_session, SessionIdTaken
+from hrc_common.session_plan import new_session_id, parse_overrides, SessionSettings
 
 from hrc_engine.inprocess_args import build_parser
 
@@ -55,11 +57,24 @@ def main(argv=None) -> int:
     """Run the session; print its result; exit 0, or 2 for bad parameters."""
     config, as_json = parse_args(argv)
     from hrc_engine.engine import run_session  # lazy: torch, as in parse_args (loaded by now)
+    settings = config.settings
+    generated = not settings.session_id
+    settings.session_id = settings.session_id or new_session_id(settings)
     try:
-        result = run_session(config)
-    except (ParameterError, ValueError, OSError) as error:
+        notice = claim_session(settings, generated) if settings.record else ''
+    except (SessionIdTaken, OSError) as error:
         print(f'hrc session --engine inprocess: {error}', file=sys.stderr)
         return 2
+    if notice:
+        print(f'[inprocess_session] {notice}', file=sys.stderr, flush=True)
+    try:
+        result = run_session(config)
+    except (ParameterError, ValueError) as error:
+        print(f'hrc session --engine inprocess: {error}', file=sys.stderr)
+        return 2
+    except OSError as error:        # a write failed (a full disk): not the user's parameters
+        print(f'hrc session --engine inprocess: {os_error_text(error)}', file=sys.stderr)
+        return 1
     if as_json:
         print(json.dumps(vars(result), indent=2, default=str))
         return 0
