@@ -81,3 +81,18 @@ def test_help_into_a_closed_pipe_is_quiet():
     process.stdout.close()   # before the node has printed anything (it imports for ~1 s)
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 0 and b'Traceback' not in stderr, stderr.decode()
+
+
+@pytest.mark.parametrize('profile_argument, reason', [
+    ('profile:=nobody', "profile: 'nobody' is not in "),
+    ('profiles_file:=PATH', 'profiles_file: PATH: not valid YAML (line 2, column 1)'),
+], ids=['unknown profile', 'broken profiles file'])
+def test_the_human_nodes_profile_is_checked_with_the_other_values(tmp_path, profile_argument,
+                                                                  reason):
+    """A bad profile was reported only once every other value passed, a file not by name."""
+    broken = tmp_path / 'profiles.yaml'
+    broken.write_text('profiles: [1\n')
+    result = run('hrc_joystick_node', 'human_node', [
+        '-p', 'deadzone:=5.0', '-p', profile_argument.replace('PATH', str(broken))])
+    assert_refused(result, ['parameters rejected (2 reasons)', 'deadzone: ',
+                            reason.replace('PATH', str(broken))])

@@ -63,3 +63,44 @@ def test_a_request_never_answered_is_asked_again(rclpy_context):
     answering.shutdown()
     asker.destroy_node()
     owner.destroy_node()
+
+
+def _ask_until(query, executor, condition, rounds=600):
+    for _ in range(rounds):
+        if condition():
+            return True
+        query.poll()
+        executor.spin_once(timeout_sec=0.05)
+    return condition()
+
+
+def test_a_node_without_some_parameters_is_named_and_optional_ones_are_skipped(rclpy_context):
+    """A sim without an optional parameter was answered with nothing: the node waited forever.
+
+    rclpy answers a request naming a parameter the node lacks with no value at all; the query
+    then asks name by name, takes what the node has and names the needed ones it lacks.
+    """
+    import rclpy
+    from rclpy.parameter import Parameter
+    asker = rclpy.create_node('asker', context=rclpy_context)
+    older_sim = rclpy.create_node('older_sim', context=rclpy_context, parameter_overrides=[
+        Parameter('control_period', value=0.2), Parameter('max_force', value=10.0)],
+        automatically_declare_parameters_from_overrides=True)
+    executor = LeanExecutor(context=rclpy_context)
+    executor.add_node(asker)
+    executor.add_node(older_sim)
+    values = []
+    now = [0.0]
+    needs_torque = ParameterQuery(asker, 'older_sim', ['control_period', 'max_force',
+                                                       'max_torque'], values.append,
+                                  clock=lambda: now[0], optional=['human_period'])
+    assert _ask_until(needs_torque, executor, lambda: needs_torque.lacking)
+    assert needs_torque.lacking == ['max_torque'] and not needs_torque.done and values == []
+    takes_what_is_there = ParameterQuery(asker, 'older_sim', ['control_period', 'max_force'],
+                                         values.append, clock=lambda: now[0],
+                                         optional=['human_period'])
+    assert _ask_until(takes_what_is_there, executor, lambda: takes_what_is_there.done)
+    assert values == [{'control_period': 0.2, 'max_force': 10.0}]
+    executor.shutdown()
+    asker.destroy_node()
+    older_sim.destroy_node()

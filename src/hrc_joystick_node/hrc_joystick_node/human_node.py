@@ -38,12 +38,13 @@ from hrc_common.contract import NS_PER_S, SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
-from hrc_common.params import as_dict, declare_parameters
+from hrc_common.params import as_dict, declare_parameters, ParameterError
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from rclpy.node import Node
 from sensor_msgs.msg import Joy
 
-from hrc_joystick_node.human_core import HumanAnswer, HumanCore, HumanParams, InputStatus
+from hrc_joystick_node.human_core import (HumanAnswer, HumanCore, HumanParams, InputStatus,
+                                          resolve_profile)
 from hrc_joystick_node.inputs import DEVICE, JOY, JoyInput, StickReading
 from hrc_joystick_node.js_event import JoystickDevice
 from hrc_joystick_node.human_profile import default_profiles_path, load_profiles
@@ -99,7 +100,7 @@ class HumanNode(Node):
 
     def __init__(self):
         super().__init__('human')
-        self.params = params = declare_parameters(self, HumanParams)
+        self.params = params = self._declare()
         profiles_path = params.profiles_file or default_profiles_path()
         self.core = HumanCore(params, load_profiles(profiles_path), str(profiles_path))
         self.profile = self.core.profile
@@ -131,9 +132,8 @@ class HumanNode(Node):
         # here). States are subscribed from the start, so that discovery matches the sim's
         # writer early (a state published to a reader not matched yet is lost); one that comes
         # before the limits waits for them (on_sim_limits answers it).
-        self.sim_query = ParameterQuery(self, params.sim_node,
-                                        SimLimits.NAMES + SimLimits.OPTIONAL_NAMES,
-                                        self.on_sim_limits)
+        self.sim_query = ParameterQuery(self, params.sim_node, SimLimits.NAMES,
+                                        self.on_sim_limits, optional=SimLimits.OPTIONAL_NAMES)
         # At the human's rate the sim sends the states within each period here; each is
         # answered with a wrench (lockstep: the sim waits for it), no HumanAction.
         self.create_subscription(TaskState, topics.SLICE_STATE, self.on_state, qos.STATE_QOS,
@@ -167,6 +167,34 @@ class HumanNode(Node):
             f'profile={params.profile}{person}, dof={self.core.dof} (until a session '
             f'arrives), subtasks={self.core.subtasks}; parameters: {as_dict(params)}')
         self.check_inputs()
+
+    def _declare(self) -> HumanParams:
+        """Declare the parameters; ParameterError with every reason, the profile's among them.
+
+        The profile is checked against the profiles file also when other values are wrong,
+        and a bad profiles file is named as the parameter ``profiles_file``.
+        """
+        try:
+            params, reasons = declare_parameters(self, HumanParams), []
+        except ParameterError as error:
+            params, reasons = None, list(error.reasons)
+        values = {name: self.get_parameter(name).value for name in ('profile', 'profiles_file',
+                                                                    'person')
+                  if self.has_parameter(name)}
+        path = values.get('profiles_file') or default_profiles_path()
+        try:
+            profiles = load_profiles(path)
+            if params is not None or 'profile' in values:
+                resolve_profile(params or HumanParams(**values), profiles, str(path))
+        except ParameterError as error:
+            named = [reason if reason.startswith(('profile:', 'profiles_file:'))
+                     else f'profiles_file: {reason}' for reason in error.reasons]
+            reasons += [reason for reason in named if reason not in reasons]
+        except (TypeError, ValueError):
+            pass                        # a wrong type: declare_parameters said so
+        if reasons:
+            raise ParameterError('HumanParams rejected: ' + '; '.join(reasons), reasons)
+        return params
 
     @property
     def answered(self) -> int:
