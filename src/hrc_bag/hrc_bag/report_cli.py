@@ -44,7 +44,9 @@ def parse_arguments(argv):
     parser.add_argument('--fig6-start', type=float, default=0.0,
                         help='start of the Fig. 6 window in the evaluation episode (s)')
     parser.add_argument(POOL_OPTION, action='store_true',
-                        help='pool sessions of different learning configurations in Table II')
+                        help='pool sessions that differ in learning configuration (and, given '
+                             'by path, in who acted as the person, episode limits, practice '
+                             'only or repeats)')
     return parser.parse_args(argv)
 
 
@@ -79,9 +81,12 @@ def _write(arguments, entries, paths) -> tuple:
     """Load the sessions and write the report; return ({name: path}, sessions, exit code)."""
     bag_sessions = load_sessions(paths, log=_log) if paths else []
     records = sorted(map(record_from_bag_session, bag_sessions), key=session_order)
-    refusal = pooling_refusal(records, arguments.pool_configurations)
+    # a study's conditions differ on purpose (subjects, aborted ones): its by-subject table
+    # says how each went; sessions given by path are pooled as seeds
+    refusal = pooling_refusal(records, arguments.pool_configurations,
+                              strict=not arguments.study_dir)
     if refusal:
-        _log(refusal)
+        _log_lines(refusal)
         return {}, records, 2
     files = {}
     if records:

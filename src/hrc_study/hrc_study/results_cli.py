@@ -84,10 +84,11 @@ def main(argv=None) -> int:
         progress.close()
         log('no session with episode summaries in ' + ', '.join(arguments.paths))
         return 1
-    refusal = pooling_refusal(sessions, arguments.pool_configurations)
+    refusal = pooling_refusal(sessions, arguments.pool_configurations, strict=True)
     if refusal:
         progress.close()
-        log(refusal)
+        for line in refusal.splitlines():
+            log(line)
         return 2
     command = 'hrc results ' + ' '.join(shlex.quote(arg) for arg in argv)
     try:

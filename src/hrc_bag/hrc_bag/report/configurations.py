@@ -10,6 +10,8 @@ the same settings (a configuration file edited between the runs is another confi
 
 import json
 
+from hrc_bag.report.metrics import human_time
+from hrc_bag.report.records import record_kind
 from hrc_bag.report.session_config import UNRECORDED
 
 POOL_OPTION = '--pool-configurations'
@@ -47,14 +49,74 @@ def describe(counts: dict) -> str:
                      for label, count in counts.items())
 
 
-def pooling_refusal(sessions, pool: bool = False) -> str:
-    """Return why the sessions may not be pooled ('' when they may).
+def input_of(session) -> str:
+    """Return who acted as the person: the input source of most engaged steps, or 'nobody'."""
+    bag_session = session.extra.get('bag_session')
+    if bag_session is None:
+        return ''                       # a record without its bags (a CSV): not known
+    sources = {source: entry['engaged_steps'] for source, entry in
+               human_time(bag_session).items() if entry['engaged_steps']}
+    return max(sources, key=sources.get) if sources else 'nobody'
 
-    They may when they are all of one learning configuration or when ``pool`` is set.
+
+def _differ(what: str, labels: dict) -> list:
+    """Return the reason when the sessions have more than one ``what`` ({label: [ids]})."""
+    if len(labels) <= 1:
+        return []
+    return [f'the sessions differ in {what}: ' + '; '.join(
+        f'{label} ({len(ids)}: {", ".join(sorted(ids)[:3])}{", ..." if len(ids) > 3 else ""})'
+        for label, ids in labels.items())]
+
+
+def pooling_problems(sessions, strict: bool = True) -> list:
+    """Return every reason why the sessions may not be pooled into one Table II (or []).
+
+    Always: different learning configurations. ``strict`` (pooling many sessions as seeds, as
+    ``hrc results`` does) also: who acted as the person, the episode limits, practice-only
+    sessions and repeats of one case with one person.
     """
+    reasons = []
     counts = configurations(sessions)
-    if pool or len(counts) <= 1:
+    if len(counts) > 1:
+        reasons.append(f'the sessions were run with {len(counts)} learning configurations: '
+                       f'{describe(counts)}; Table II would pool different learners')
+    if not strict or len(sessions) < 2:
+        return reasons
+    by_input, by_limit, by_person = {}, {}, {}
+    for session in sessions:
+        source = input_of(session)
+        if source:
+            by_input.setdefault(source, []).append(session.session_id)
+        if session.episode_limit:
+            by_limit.setdefault(f'at most {session.episode_limit} training episodes',
+                                []).append(session.session_id)
+        subject = session.extra.get('subject_id') or ''
+        person = (session.case_id, session.profile, session.seed,
+                  session.extra.get('person', -1), subject)
+        by_person.setdefault(person, []).append(session.session_id)
+    reasons += _differ("the person's input (who acted as the person)", by_input)
+    reasons += _differ('their episode limits', by_limit)
+    practice_only = sorted(session.session_id for session in sessions if session.episodes and
+                           all(record_kind(episode) == 'practice'
+                               for episode in session.episodes))
+    if practice_only:
+        reasons.append(f'practice only (no training episode): {", ".join(practice_only)}')
+    for (case_id, profile, seed, _, subject), ids in by_person.items():
+        if len(ids) > 1:
+            who = f'subject {subject}' if subject else f'profile {profile} seed {seed}'
+            reasons.append(f'case {case_id} with {who} is there {len(ids)} times '
+                           f'({", ".join(sorted(ids))}): counted once per person, a repeat '
+                           'is not another seed')
+    return reasons
+
+
+def pooling_refusal(sessions, pool: bool = False, strict: bool = False) -> str:
+    """Return why the sessions may not be pooled, a reason a line ('' when they may).
+
+    They may when the problems of :func:`pooling_problems` are none or ``pool`` is set.
+    """
+    reasons = [] if pool else pooling_problems(sessions, strict)
+    if not reasons:
         return ''
-    return (f'the sessions were run with {len(counts)} learning configurations: '
-            f'{describe(counts)}; Table II would pool different learners. Give the sessions '
-            f'of one configuration, or {POOL_OPTION} to pool them anyway.')
+    return '\n'.join(reasons + [f'give sessions that agree, or {POOL_OPTION} to pool them '
+                                 'anyway'])

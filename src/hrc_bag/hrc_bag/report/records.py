@@ -236,6 +236,7 @@ def record_from_bag_session(session) -> SessionRecord:
                          episode_limit=episode_limit_of(session.config),
                          path=str(session.path),
                          extra={'bag_session': session, 'person': person_of(session.config),
+                                'subject_id': str(session.config.get('subject_id') or ''),
                                 'limits': limits_of(session.config),
                                 'episode_seconds': episode_seconds_of(session.config)},
                          learning=learning, learning_settings=settings)
