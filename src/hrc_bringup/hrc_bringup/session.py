@@ -48,6 +48,7 @@ from hrc_common.session_plan import compose, SessionSettings, write_session_file
 from hrc_bringup.compose_nodes import session_composition
 from hrc_bringup.session_args import parse_args, person_input
 from hrc_bringup.session_run import SessionRun
+from hrc_bringup.study_hooks import warn_out_of_order
 
 
 def pretrain_if_needed(parameters: dict, run_dir):
@@ -125,6 +126,7 @@ def run_session(settings: SessionSettings, options) -> int:
     if notice:
         print(f'[session] {notice}', flush=True)
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
+    warn_out_of_order(settings, options)
     live_input = person_input(settings, options)
     try:
         parameters = prepare_parameters(settings, options, params_dir, run_dir, live_input)

@@ -6,7 +6,8 @@ import time
 
 from hrc_common import bounded_yaml
 from hrc_common.session_plan import SessionSettings
-from hrc_live.study import IndexEntry, load_registry, position_of, record_session
+from hrc_live.study import (IndexEntry, load_index, load_registry, order_warning, position_of,
+                            record_session, StudyError)
 import yaml
 
 
@@ -33,6 +34,20 @@ def owner_only(settings: SessionSettings, parameters: dict) -> None:
                 path.chmod(0o700 if path.is_dir() else 0o600)
             except OSError as error:
                 print(f'[session] could not make {path} owner-only: {error}', file=sys.stderr)
+
+
+def warn_out_of_order(settings: SessionSettings, options) -> None:
+    """Say at the start when a study condition runs out of its subject's registered order."""
+    if not (options.study_dir and settings.subject_id):
+        return
+    try:
+        warning = order_warning(load_registry(options.study_dir),
+                                load_index(options.study_dir), settings.subject_id,
+                                settings.case)
+    except StudyError as error:
+        warning = f'the study files cannot be read: {error}'
+    if warning:
+        print(f'[session] WARNING: {warning}', file=sys.stderr, flush=True)
 
 
 def index_session(settings: SessionSettings, options, kind: str, started: str,

@@ -275,3 +275,30 @@ def by_subject(entries: list) -> dict:
     for entry in sorted(entries, key=lambda item: item.started):
         table.setdefault(entry.subject_id, []).append(entry)
     return table
+
+
+def order_warning(subjects: list, entries: list, subject_id: str, case: int) -> str:
+    """Return why running ``case`` now breaks the subject's registered order ('' if it does not).
+
+    The order counterbalances learning effects across subjects (a Williams square): a
+    condition run before the ones ahead of it in the order, or one run again after it ended
+    well (exit 0), changes what the study measures.
+    """
+    subject = next((subject for subject in subjects if subject.id == subject_id), None)
+    if subject is None or not subject.order:
+        return f'{subject_id} has no case order in the registry (run "hrc study assign")'
+    if case not in subject.order:
+        return f'case {case} is not in the order of {subject_id} {subject.order}'
+    done = {entry.case for entry in entries if entry.subject_id == subject_id
+            and entry.kind == 'condition' and entry.exit_code == 0}
+    position = subject.order.index(case) + 1
+    if case in done:
+        return (f'case {case} (condition {position} of {subject_id}) was run to its end '
+                'already: this run is a repeat')
+    ahead = [earlier for earlier in subject.order[:position - 1] if earlier not in done]
+    if ahead:
+        return (f'case {case} is condition {position} of {subject_id} (order {subject.order}) '
+                f'but {", ".join(f"case {earlier}" for earlier in ahead)} before it '
+                f'{"has" if len(ahead) == 1 else "have"} not run to the end: out of the '
+                'registered order')
+    return ''

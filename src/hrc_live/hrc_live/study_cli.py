@@ -13,6 +13,7 @@ printed).
 
 import argparse
 import datetime
+import pathlib
 import shlex
 import sys
 
@@ -49,24 +50,40 @@ def parse_args(argv=None):
                       help='learning configuration of every condition (params/learning/'
                       f'<name>.yaml; default {DEFAULT_LEARNING}, the one the simulated study '
                       "measured best for the person's time)")
+    plan.add_argument('--joystick-params', default='joystick.yaml', metavar='FILE',
+                      help='the joystick parameters file of "hrc joystick setup", read by '
+                      'each session (default joystick.yaml; --human device)')
+    plan.add_argument('--episodes', type=int, default=0, metavar='N',
+                      help='at most N training episodes per condition (default: the learning '
+                      'configuration)')
     commands.add_parser('index', help='list the sessions per subject')
     return parser.parse_args(argv)
 
 
 def plan_commands(subject, study_dir: str, practice: int, human: str,
-                  learning: str = DEFAULT_LEARNING) -> list:
+                  learning: str = DEFAULT_LEARNING, joystick_params: str = '',
+                  episodes: int = 0) -> list:
     """Return the session command lines of ``subject``'s conditions, in order.
 
     Each names its learning configuration (``--learning``), the same in every condition, so
-    the plan says what the robot runs and the live study runs what a simulated one predicts.
+    the plan says what the robot runs and the live study runs what a simulated one predicts;
+    with a device, the joystick parameters file (its axis, inversion, deadzone), said in a
+    comment when it does not exist yet.
     """
     lines = []
+    if joystick_params and human == 'device' and not pathlib.Path(joystick_params).is_file():
+        lines.append(f'# {joystick_params} does not exist yet: run "hrc joystick setup -o '
+                     f'{joystick_params}" with the subject\'s joystick first')
     for position, case in enumerate(subject.order, start=1):
         command = ['hrc', 'session', '--case', str(case), '--mode', 'realtime', '--human',
                    human, '--display', '--tlx', '--subject-id', subject.id, '--study-dir',
                    study_dir]
+        if joystick_params and human == 'device':
+            command += ['--params', joystick_params]
         if practice:
             command += ['--practice', str(practice)]
+        if episodes:
+            command += ['--episodes', str(episodes)]
         command += ['--learning', learning]
         lines.append(f'# condition {position} of {len(subject.order)}: case {case}')
         lines.append(shlex.join(command))
@@ -111,8 +128,12 @@ def main(argv=None) -> int:
             subject = next(s for s in subjects if s.id == options.subject_id)
             if not subject.order:
                 raise StudyError(f'{subject.id} has no case order yet: run "study assign"')
+            if options.episodes < 0:
+                raise StudyError(f"--episodes must be >= 1 (0: the learning configuration's), "
+                                 f'got {options.episodes}')
             print('\n'.join(plan_commands(subject, options.study_dir, options.practice,
-                                          options.human, options.learning)))
+                                          options.human, options.learning,
+                                          options.joystick_params, options.episodes)))
         else:
             for subject_id, entries in by_subject(load_index(options.study_dir)).items():
                 print(f'{subject_id}:')

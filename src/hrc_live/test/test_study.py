@@ -93,19 +93,64 @@ def test_cli_register_assign_plan(tmp_path, capsys):
     assert 'no case order yet' in capsys.readouterr().err
     assert main(['--study-dir', study, 'assign', '--cases', '2', '5']) == 0
     assert 'P01: cases in the order [2, 5]' in capsys.readouterr().out
-    assert main(['--study-dir', study, 'plan', 'P01', '--practice', '2']) == 0
+    assert main(['--study-dir', study, 'plan', 'P01', '--practice', '2',
+                 '--joystick-params', str(tmp_path / 'stick.yaml')]) == 0
     lines = capsys.readouterr().out.splitlines()
+    assert lines.pop(0) == (f'# {tmp_path / "stick.yaml"} does not exist yet: run "hrc joystick '
+                            f'setup -o {tmp_path / "stick.yaml"}" with the subject\'s joystick '
+                            'first')
     assert lines[0] == '# condition 1 of 2: case 2'
     assert lines[1].startswith('hrc session --case 2 --mode realtime')
+    assert f'--params {tmp_path / "stick.yaml"}' in lines[1]
     assert '--subject-id P01' in lines[1] and '--practice 2' in lines[1]
     # Every condition names its learning configuration (the default: what the simulated study
     # measured best), so the live study runs what a simulated one predicts; no --set at all.
     assert lines[1].endswith('--learning sac') and lines[3].endswith('--learning sac'), lines
     assert '--set' not in lines[1] and '--set' not in lines[3]
     assert main(['--study-dir', study, 'plan', 'P01', '--learning', 'ppo']) == 0
-    assert capsys.readouterr().out.splitlines()[1].endswith('--learning ppo')
+    commands = [line for line in capsys.readouterr().out.splitlines() if line.startswith('hrc')]
+    assert commands[0].endswith('--learning ppo')
     assert main(['--study-dir', study, 'plan', 'P01', '--learning', 'fast']) == 2
     assert "--learning 'fast': not a learning configuration (there are: paper, ppo, sac)" in \
         capsys.readouterr().err
     assert main(['--study-dir', study, 'register', 'Jane Doe', '--consent', 'yes']) == 2
     assert 'is not valid' in capsys.readouterr().err
+
+
+def test_plan_names_the_joystick_file_and_the_episodes_and_refuses_bad_ones(tmp_path, capsys):
+    study, stick = str(tmp_path / 'study'), tmp_path / 'joystick.yaml'
+    stick.write_text('human:\n  ros__parameters: {axis: 1}\n')
+    main(['--study-dir', study, 'register', 'P01', '--consent', 'yes'])
+    main(['--study-dir', study, 'assign', '--cases', '2', '5'])
+    capsys.readouterr()
+    assert main(['--study-dir', study, 'plan', 'P01', '--joystick-params', str(stick),
+                 '--episodes', '40']) == 0
+    commands = [line for line in capsys.readouterr().out.splitlines()
+                if not line.startswith('#')]
+    assert len(commands) == 2 and all(f'--params {stick} ' in line and '--episodes 40 ' in line
+                                      for line in commands), commands
+    assert main(['--study-dir', study, 'plan', 'P01', '--episodes', '-3']) == 2
+    assert '--episodes must be >= 1' in capsys.readouterr().err
+    assert main(['--study-dir', study, 'plan', 'P01', '--human', 'joy']) == 0
+    assert '--params' not in capsys.readouterr().out     # the joy node maps the stick
+
+
+def _entry(case, exit_code, kind='condition'):
+    from hrc_live.study import IndexEntry
+    return IndexEntry(subject_id='P01', session_id=f'c{case}-{exit_code}', case=case, kind=kind,
+                      position=0, started='', ended='', exit_code=exit_code, bags='',
+                      run_dir='', tlx_file='')
+
+
+def test_a_condition_out_of_the_registered_order_is_named():
+    from hrc_live.study import order_warning, Subject
+    subjects = [Subject(id='P01', consent='yes', consent_date='2026-12-01',
+                        registered='2026-12-01', order=[2, 5, 4])]
+    assert order_warning(subjects, [], 'P01', 2) == ''
+    assert order_warning(subjects, [_entry(2, 0)], 'P01', 5) == ''
+    assert order_warning(subjects, [_entry(2, 3), _entry(2, 0, 'practice')], 'P01', 4) == (
+        'case 4 is condition 3 of P01 (order [2, 5, 4]) but case 2, case 5 before it have not '
+        'run to the end: out of the registered order')
+    assert order_warning(subjects, [_entry(2, 0)], 'P01', 2) == (
+        'case 2 (condition 1 of P01) was run to its end already: this run is a repeat')
+    assert order_warning(subjects, [], 'P01', 6) == 'case 6 is not in the order of P01 [2, 5, 4]'
