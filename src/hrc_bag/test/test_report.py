@@ -216,6 +216,11 @@ def test_the_cli_refuses_files_that_are_not_mcap_with_the_reason(bags, tmp_path)
 
 def _without_schema_text(source, target):
     """Copy the MCAP file ``source`` to ``target`` with every schema's text left out."""
+    _copy_mcap(source, target, keep_schemas=False)
+
+
+def _copy_mcap(source, target, keep_schemas=True, transform=None):
+    """Copy the MCAP file ``source`` to ``target``; ``transform(topic, data)`` edits messages."""
     from mcap.reader import make_reader
     from mcap.writer import Writer
     with open(source, 'rb') as stream:
@@ -225,8 +230,9 @@ def _without_schema_text(source, target):
         messages = list(reader.iter_messages())
     with open(target, 'wb') as stream:
         writer = Writer(stream)
-        writer.start(profile='ros2', library='a writer that leaves the schemas out')
-        schemas = {schema.id: writer.register_schema(schema.name, schema.encoding, b'')
+        writer.start(profile='ros2', library='another writer')
+        schemas = {schema.id: writer.register_schema(schema.name, schema.encoding,
+                                                     schema.data if keep_schemas else b'')
                    for schema in summary.schemas.values()}
         channels = {channel.id: writer.register_channel(
             channel.topic, channel.message_encoding, schemas[channel.schema_id],
@@ -234,7 +240,8 @@ def _without_schema_text(source, target):
         for record in metadata:
             writer.add_metadata(record.name, record.metadata)
         for _, channel, message in messages:
-            writer.add_message(channels[channel.id], message.log_time, message.data,
+            data = transform(channel.topic, message.data) if transform else message.data
+            writer.add_message(channels[channel.id], message.log_time, data,
                                message.publish_time, message.sequence)
         writer.finish()
 
@@ -285,3 +292,36 @@ def test_a_session_rewritten_by_rosbags_gives_the_same_numbers_and_says_how(bags
     assert ("no file holds an hrc episode record (written by another tool?): the person's "
             'time is counted from the HumanAction messages') in rewritten.notices
     assert not any('hrc episode record' in notice for notice in original.notices)
+
+
+def test_a_summary_that_contradicts_itself_is_repaired_and_said(bags, tmp_path):
+    from hrc_msgs.msg import EpisodeSummary
+    from rclpy.serialization import deserialize_message, serialize_message
+
+    def hostile(topic, data):
+        if topic != '/hrc/episode':
+            return data
+        summary = deserialize_message(data, EpisodeSummary)
+        summary.total_error = 99.0              # not the sum of its three errors
+        summary.robot_effort = float('nan')
+        return serialize_message(summary)
+
+    source = bags[0] / 'case5_seed1'
+    folder = tmp_path / 'case5_seed1'
+    folder.mkdir()
+    for file in source.glob('*.mcap'):
+        _copy_mcap(file, folder / file.name, transform=hostile)
+    expected = report.load_session(source)
+    session = report.load_session(folder)
+    assert [summary.total_error for summary in session.summaries] == pytest.approx([
+        summary.total_error for summary in expected.summaries], rel=1e-12)
+    assert all(math.isnan(summary.robot_effort) for summary in session.summaries)
+    first = session.summaries[0]
+    assert (f'episode {first.episode}: its summary total_error 99 is not the sum of its errors '
+            f'({expected.summaries[0].total_error:g}): the sum is used') in session.notices
+    assert f'episode {first.episode}: its summary robot_effort nan is not a finite number >= ' \
+        '0: left out' in session.notices
+    from hrc_bag.report.records import measures
+    records = report.load_records([folder], log=lambda text: None)
+    assert math.isnan(measures(records[0])['robot_effort'])
+    assert measures(records[0])['total_error'] < 99

@@ -12,6 +12,7 @@ on these records.
 """
 
 from dataclasses import dataclass, field
+import math
 import pathlib
 import typing
 
@@ -22,6 +23,7 @@ import yaml
 from hrc_bag import bag_reader
 from hrc_bag.format import EPISODE_RECORD, HumanInputTally, SESSION_RECORD
 from hrc_bag.qos_yaml import load_yaml
+from hrc_bag.report.session_config import nested
 
 
 @dataclass
@@ -141,6 +143,39 @@ def _human_inputs_by_episode(path, human_topics: list) -> dict:
     return {episode: tally.record() for episode, tally in sorted(tallies.items())}
 
 
+# fields of an EpisodeSummary that are finite and >= 0 (m, rad, their sum, variances)
+CHECKED_FIELDS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error',
+                  'human_effort', 'robot_effort')
+SUM_TOLERANCE = 1e-6        # relative: the agent writes the sum of the three in float64
+
+
+def summary_problems(summary, three_subtasks: bool = True) -> list:
+    """Return why an episode summary contradicts itself, and repair what can be ([]: fine).
+
+    The total error is the sum of the subtasks' errors (hrc_agent_node's EpisodeResult): with
+    the installed task tree (``three_subtasks``: slider, pendulum, ball) a total that is not
+    their sum is replaced by the sum; with another tree only a total below the three is (its
+    other subtasks add to it). An error or effort that is not a finite number >= 0 (a bag
+    edited or written by another tool) is set to NaN, so no table shows a number for it.
+    """
+    problems = []
+    for name in CHECKED_FIELDS:
+        value = float(getattr(summary, name))
+        if not math.isfinite(value) or value < 0:
+            problems.append(f'{name} {value!r} is not a finite number >= 0: left out')
+            setattr(summary, name, math.nan)
+    parts = [float(summary.slider_error), float(summary.pendulum_error),
+             float(summary.ball_error)]
+    total = float(summary.total_error)
+    slack = SUM_TOLERANCE * max(1.0, abs(total))
+    if all(map(math.isfinite, parts)) and math.isfinite(total) and (
+            total < sum(parts) - slack or (three_subtasks and total > sum(parts) + slack)):
+        problems.append(f'total_error {total:g} is not the sum of its errors '
+                        f'({sum(parts):g}): the sum is used')
+        summary.total_error = sum(parts)
+    return [f'episode {summary.episode}: its summary {problem}' for problem in problems]
+
+
 def _steps_of(record: dict) -> str:
     """Return "N steps" of a file's hrc_episode record (its last step + 1, if recorded)."""
     last = record.get('last_step', '')
@@ -212,6 +247,9 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
                 + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
                 + f'): its time and errors are from {used[0].name} ('
                 + ('the attempt that finished)' if finished else 'none finished: the last)'))
+    own_tree = bool(nested(config, 'parameters', 'agent', 'task_tree_file'))
+    for summary in summaries.values():
+        notices += summary_problems(summary, three_subtasks=not own_tree)
     if not episode_files and human_topics:
         human_inputs = _human_inputs_by_episode(path, human_topics)
         notices.append('no file holds an hrc episode record (written by another tool?): the '
