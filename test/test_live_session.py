@@ -582,7 +582,7 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     report = load_session(folder)
     assert report.files_by_episode[first] == [rerun] and report.attempts[first] == [dropped,
                                                                                     rerun]
-    assert any(f'episode {first} was recorded 2 times' in notice
+    assert any(f'episode {first + 1} was recorded 2 times' in notice   # a number from 1
                and f'its time and errors are from {rerun.name}' in notice
                for notice in report.notices), report.notices
 

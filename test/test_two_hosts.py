@@ -330,7 +330,7 @@ def test_a_dropped_link_pauses_like_a_lost_joystick_and_resumes(tmp_path, ros_do
             # Episode 0 ran with the person (its summary line), so the cable is pulled during
             # episode 1. ('episode 1' alone also matches the runner's first line, "the person
             # joins at episode 1": the outage then fell before the session started.)
-            assert wait_output('| episode   0 | training]', 90), output()
+            assert wait_output('| episode   1 | training]', 90), output()
             # The cable is pulled during the episode for 4 s: the guard pauses after 1 s of
             # silence (its link_timeout), with 3 s left for a loaded machine to notice.
             lab.link.outage(4.0)

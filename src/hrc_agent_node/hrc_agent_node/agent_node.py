@@ -62,6 +62,7 @@ from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
 from hrc_common.contract import os_error_text, Phase, SimLimits
 from hrc_common.dof import set_wrench_value
+from hrc_common.episode_numbers import episode_number
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_common.session_control import (ABORT_SERVICE, FINAL_CHECKPOINT,
@@ -245,7 +246,7 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         # wait until every subscriber has it: a human node that saw the new episode's first
         # state before the announcement answered it with the old roles (a race of the graph,
         # seen under load at a role change and at the session's first state).
-        self.publish_session(f'episode {plan.episode} '
+        self.publish_session(f'episode {episode_number(plan.episode)} '
                              f'{"(evaluation)" if plan.evaluation else ""} starting: '
                              + self.core.status_line())
         self.session_pub.wait_for_all_acked(Duration(seconds=ANNOUNCE_ACK_TIMEOUT_S))
@@ -426,7 +427,8 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
                                    f'{self.core.total_episodes} episodes; next: '
                                    + self.core.status_line())
         if self.core.phase == 'updating':
-            self.publish_session(f'updating the policy after episode {result.episode} '
+            self.publish_session(f'updating the policy after episode '
+                                 f'{episode_number(result.episode)} '
                                  f'({self.core.buffered_samples} samples)')
             stats = self.core.update()
             if stats is not None:

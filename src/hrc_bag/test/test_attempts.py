@@ -119,7 +119,7 @@ def test_an_unplugged_episode_and_its_rerun_are_each_filed_as_themselves(tmp_pat
     assert session.human_inputs[1]['attempt'] == '2'
     assert human_time(session)['device']['engaged_steps'] == 2 * (RERUN_STEPS - 1)
     assert human_time(session)['device']['episodes'] == 2
-    assert any('episode 1 was recorded 2 times (s_ep0001.mcap: 5 steps, dropped, '
+    assert any('episode 2 was recorded 2 times (s_ep0001.mcap: 5 steps, dropped, '
                's_ep0001_attempt2.mcap: 10 steps, finished): its time and errors are from '
                's_ep0001_attempt2.mcap (the attempt that finished)' in notice
                for notice in session.notices), session.notices

@@ -3,6 +3,7 @@
 import copy
 import time
 
+from hrc_common.episode_numbers import episode_number
 from hrc_common import qos, topics
 from hrc_common.contract import HOLD_ABORTED, HOLD_NOT_INVOLVED, Phase, phase_label, source_label
 from hrc_common.nodes import DrainedNode, take_waiting
@@ -192,7 +193,7 @@ class Progress:
         steps = max(self.status.training_step_count, 1) if self.status else 1
         case = self.status.case_id if self.status else summary.case_id
         self._print(f'[case {case} | step {summary.training_step + 1}/{steps} | episode '
-                    f'{summary.episode:3d} | {episode_label(summary)}] return '
+                    f'{episode_number(summary.episode):3d} | {episode_label(summary)}] return '
                     f'{summary.episode_return:7.1f}  error slider '
                     f'{summary.slider_error:.3f} m  pendulum {summary.pendulum_error:.3f} rad  '
                     f'ball {summary.ball_error:.3f} m  human '

@@ -1,11 +1,13 @@
 """One episode numbering wherever a person or an experimenter reads it.
 
 Data keep the 0-based episode *index*: the ``episode`` field of every message, the journals, the
-checkpoints and every bag recorded so far (changing it would make old data read differently).
-Everything written for people -- the person's page, the console, the runner's and the operator's
-lines, bag file names, figures and tables -- shows the episode *number*, counted from 1: the
-session's first episode is "episode 1", whatever its kind (practice, training, judging or
-evaluation episodes all count, so a number names one recorded episode and one bag file).
+checkpoints and the bag file names (``<session>_ep0000.mcap`` is episode 1; renaming them would
+make old folders read differently). What is written for people -- the person's page, the runner's
+lines, the session status the agent announces (the console shows it), ``hrc operator status``
+and the report's notices -- shows the episode *number*, counted from 1: the session's first
+episode is "episode 1", whatever its kind (practice, training, judging or evaluation episodes
+all count, so a number names one recorded episode). The console's table labels the index as
+"episode index".
 """
 
 

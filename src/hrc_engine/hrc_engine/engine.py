@@ -44,6 +44,7 @@ from hrc_common import qos_table
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir as default_params_dir
+from hrc_common.episode_numbers import episode_number
 from hrc_common.session_control import FINAL_CHECKPOINT, LATEST_CHECKPOINT
 from hrc_common.session_plan import compose, new_session_id, SessionSettings, write_session_files
 from hrc_engine import messages
@@ -238,8 +239,9 @@ class InProcessSession:
     def episode_starting(self, plan) -> None:
         """Announce the episode; open its bag (the loop has given the roles)."""
         self._episode_started = time.perf_counter()
-        self._announce(f'episode {plan.episode} {"(evaluation)" if plan.evaluation else ""} '
-                       f'starting: ' + self.core.status_line())
+        evaluation = '(evaluation)' if plan.evaluation else ''
+        self._announce(f'episode {episode_number(plan.episode)} {evaluation} starting: '
+                       + self.core.status_line())
         if self.writer is not None:
             self.writer.begin_episode(plan.episode)
 
@@ -282,14 +284,15 @@ class InProcessSession:
         self.episodes.append({key: value for key, value in summary.items() if key != 'header'})
         if not self.config.quiet:
             kind = ' (evaluation)' if result.evaluation else ''
-            print(f'[engine] episode {result.episode}{kind}: return '
+            print(f'[engine] episode {episode_number(result.episode)}{kind}: return '
                   f'{result.episode_return:.2f}, total error '
                   f'{result.total_error:.4f}{", converged" if result.converged else ""}',
                   flush=True)
 
     def updating(self, result) -> None:
         """Announce the policy update, as the agent does before it."""
-        self._announce(f'updating the policy after episode {result.episode} '
+        self._announce(f'updating the policy after episode '
+                       f'{episode_number(result.episode)} '
                        f'({self.core.buffered_samples} samples)')
 
     def after_episode(self, result, update_stats) -> None:

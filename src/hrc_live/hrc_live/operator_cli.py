@@ -15,6 +15,7 @@ import argparse
 import sys
 import time
 
+from hrc_common.episode_numbers import episode_number
 from hrc_common.contract import dof_name, phase_label
 from hrc_common import topics
 from hrc_common.session_control import OPERATOR_SERVICES
@@ -51,7 +52,8 @@ def describe_status(status) -> str:
         f'training step {status.training_step + 1}/{max(status.training_step_count, 1)}; '
         f'robot drives {dof_name(status.robot_dof, "?")}, human '
         f'drives {dof_name(status.human_dof, "?")} ({human})',
-        f'episode {status.episode}; {status.total_episodes} training episodes done, '
+        f'episode {episode_number(status.episode)}; {status.total_episodes} training episodes '
+        'done, '
         f'{status.human_involved_episodes} with the human',
         f'{status.message}'])
 

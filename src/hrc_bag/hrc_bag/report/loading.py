@@ -16,6 +16,7 @@ import math
 import pathlib
 import typing
 
+from hrc_common.episode_numbers import episode_number
 from hrc_common.contract import (dof_name, episode_kind, EPISODE_SUMMARY_TYPE, EpisodeKind,
                                  HUMAN_ACTION_TYPE, SESSION_STATUS_TYPE)
 import yaml
@@ -173,7 +174,8 @@ def summary_problems(summary, three_subtasks: bool = True) -> list:
         problems.append(f'total_error {total:g} is not the sum of its errors '
                         f'({sum(parts):g}): the sum is used')
         summary.total_error = sum(parts)
-    return [f'episode {summary.episode}: its summary {problem}' for problem in problems]
+    return [f'episode {episode_number(summary.episode)}: its summary {problem}'
+            for problem in problems]
 
 
 def _steps_of(record: dict) -> str:
@@ -243,7 +245,7 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
         if len(group) > 1:
             attempts[episode] = [item[0] for item in group]
             notices.append(
-                f'episode {episode} was recorded {len(group)} times ('
+                f'episode {episode_number(episode)} was recorded {len(group)} times ('
                 + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
                 + f'): its time and errors are from {used[0].name} ('
                 + ('the attempt that finished)' if finished else 'none finished: the last)'))
