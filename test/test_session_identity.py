@@ -5,12 +5,17 @@ A second ``hrc session --session-id X`` used to file its episodes as attempts of
 (or ``--resume`` after a killed session) put the new sessions' files beside the old ones.
 """
 
+import os
 import pathlib
+import queue
+import signal
 import subprocess
+import threading
 import types
 
 from hrc_common.executables import executable_path
 from hrc_common.session_plan import SessionSettings
+import pytest
 
 from hrc_bringup.experiment_resume import earlier_files, set_aside
 
@@ -66,3 +71,36 @@ def test_a_session_run_again_by_resume_starts_clean_and_keeps_the_earlier_files(
         for path in killed.values():            # the next attempt's leftovers
             path.parent.mkdir(parents=True)
             path.write_text('the killed run')
+
+
+@pytest.mark.slow
+def test_a_session_on_the_domain_of_a_running_one_is_refused(tmp_path, ros_domain_id):
+    """Two sessions on one domain took each other's messages (one agent died of the other's)."""
+    command = [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
+               str(ros_domain_id), '--bags-dir', 'bags', '--runs-dir', 'runs']
+    first = subprocess.Popen([*command, '--session-id', 'first', '--episodes', '200'],
+                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             text=True, start_new_session=True)
+    lines = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(line) for line in first.stdout],
+                     daemon=True).start()
+    try:
+        seen = []
+        while not any(line.startswith('[session] first: case 2') for line in seen):
+            seen.append(lines.get(timeout=120))     # the first session is up
+        second = hrc('session', '--domain-id', str(ros_domain_id), '--session-id', 'second',
+                     '--bags-dir', 'bags', '--runs-dir', 'runs', cwd=tmp_path)
+        assert second.returncode == 2, second.stdout + second.stderr
+        assert second.stderr.strip() == (
+            f'session: ROS_DOMAIN_ID {ros_domain_id} is in use by session first (pid '
+            f"{first.pid}) on this machine: its nodes would take this session's messages; "
+            'give --domain-id with another id (0..101)')
+        assert not (tmp_path / 'runs' / 'second').exists()
+        assert first.poll() is None                 # the first one goes on
+    finally:
+        os.killpg(first.pid, signal.SIGINT)
+        try:
+            first.wait(timeout=120)
+        except subprocess.TimeoutExpired:
+            os.killpg(first.pid, signal.SIGKILL)
+            first.wait()

@@ -42,6 +42,7 @@ import sys
 
 from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common import paths
+from hrc_common.domains import DomainTaken, SessionOnDomain
 from hrc_common.session_claim import claim_session, SessionIdTaken
 from hrc_common.session_plan import compose, SessionSettings, write_session_files
 
@@ -118,6 +119,14 @@ def run_session(settings: SessionSettings, options) -> int:
         # with a subject id everything the session writes is owner-only (files 0600, folders
         # 0700): the nodes inherit the mask (checkpoints, run and bag folders)
         os.umask(0o077)
+    env = dict(os.environ)
+    if options.domain_id is not None:
+        env['ROS_DOMAIN_ID'] = str(options.domain_id)
+    try:    # held until this process ends (the runner is the session); before any write
+        domain = SessionOnDomain(int(env.get('ROS_DOMAIN_ID') or 0), settings.session_id)
+    except DomainTaken as error:
+        print(f'session: {error}', file=sys.stderr)
+        return 2
     try:
         notice = claim_session(settings, generated=not options.session_id)
     except (SessionIdTaken, OSError) as error:
@@ -134,12 +143,12 @@ def run_session(settings: SessionSettings, options) -> int:
         print(f'session: {error}', file=sys.stderr)
         return 2
     params_path, _ = write_session_files(settings, parameters, run_dir, params_dir)
-    env = dict(os.environ)
-    if options.domain_id is not None:
-        env['ROS_DOMAIN_ID'] = str(options.domain_id)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     run = SessionRun(settings, options, parameters, params_path, run_dir, env)
-    return run.run(params_dir, composed, live_input)
+    try:
+        return run.run(params_dir, composed, live_input)
+    finally:
+        domain.release()
 
 
 def main(argv=None) -> int:
