@@ -148,3 +148,20 @@ def task_state(data: bytes) -> typing.Optional[tuple]:
     except struct.error:
         return None
     return episode, step, bool(terminated or truncated)
+
+
+def task_state_missing(data: bytes) -> typing.Optional[tuple]:
+    """Return (robot_command_missing, human_command_missing) of a CDR TaskState, or None.
+
+    The sim sets them on a state whose period went without that actor's command (applied as
+    zero); the recorder counts them per episode. None as for :func:`task_state`.
+    """
+    if task_state(data) is None:            # the layout is known and the bytes add up
+        return None
+    order = '<' if data[1] == 1 else '>'
+    (length,) = struct.unpack_from(order + 'I', data, ENCAPSULATION + 8)
+    position = 12 + length
+    position += -position % 4 + 8                   # episode, step
+    position += -position % 8 + 8 * 8               # the eight float64
+    robot, human = struct.unpack_from('BB', data, ENCAPSULATION + position)
+    return bool(robot), bool(human)

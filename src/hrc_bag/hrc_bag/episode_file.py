@@ -12,6 +12,7 @@ import pathlib
 import typing
 
 from hrc_common.contract import PUBLIC_FILE_MODE
+from hrc_common.topics import STATE as STATE_TOPIC
 from mcap.writer import CompressionType, IndexType, Writer
 
 from hrc_bag import cdr_peek, msgdefs
@@ -48,6 +49,9 @@ class EpisodeFile:
         self.end = 0
         self.closed = False
         self.human = HumanInputTally()
+        # the period states of the file and how many of them went without an actor's command
+        self.states = 0
+        self.missing_commands = collections.Counter(robot=0, human=0)
         try:
             # O_EXCL: never overwrite a file of an earlier recording
             descriptor = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
@@ -85,6 +89,12 @@ class EpisodeFile:
         self.topic_counts[message.topic] += 1
         if message.type_name == cdr_peek.HUMAN_ACTION_TYPE:
             self.human.add_cdr(message.data)
+        elif message.topic == STATE_TOPIC:
+            missing = cdr_peek.task_state_missing(message.data)
+            if missing is not None:
+                self.states += 1
+                self.missing_commands['robot'] += missing[0]
+                self.missing_commands['human'] += missing[1]
         if self.message_count == 0:
             self.start = self.end = message.log_time
         self.start = min(self.start, message.log_time)
@@ -130,6 +140,9 @@ class EpisodeFile:
             self._writer.flush()
             self._writer.add_metadata(EPISODE_RECORD, {
                 'message_count': str(self.message_count), **self.human.record(),
+                'states': str(self.states),
+                'robot_commands_missing': str(self.missing_commands['robot']),
+                'human_commands_missing': str(self.missing_commands['human']),
                 **{str(key): str(value) for key, value in (episode_record or {}).items()}})
             own_metadata = bag_metadata([info], topic_entries(info), custom_data or {})
             self._writer.add_metadata(ROSBAG2_RECORD,

@@ -226,6 +226,18 @@ def test_the_task_state_boundary_fields_are_read_from_cdr(frame_id, applied):
         assert cdr_peek.task_state(data + bytes(4)) is None    # not a TaskState's length
 
 
+@pytest.mark.parametrize('frame_id', ['', 'w', 'world', 'abcdefgh'])
+@pytest.mark.parametrize('applied', [[], [0.5], [0.1] * 10])
+def test_the_missing_command_flags_are_read_from_cdr(frame_id, applied):
+    for robot, human in ((False, False), (True, False), (False, True), (True, True)):
+        state = TaskState(episode=3, step=9, slice=1, robot_command_missing=robot,
+                          human_command_missing=human, human_applied=applied, truncated=True)
+        state.header.frame_id = frame_id
+        data = serialize_message(state)
+        assert cdr_peek.task_state_missing(data) == (robot, human)
+        assert cdr_peek.task_state_missing(data[:-2]) is None
+
+
 def test_each_episode_records_which_input_drove_the_human(tmp_path):
     writer = SessionWriter(tmp_path, 'src', descriptions={})
     writer.begin_episode(0)

@@ -325,3 +325,19 @@ def test_a_summary_that_contradicts_itself_is_repaired_and_said(bags, tmp_path):
     records = report.load_records([folder], log=lambda text: None)
     assert math.isnan(measures(records[0])['robot_effort'])
     assert measures(records[0])['total_error'] < 99
+
+
+def test_an_episode_with_missing_commands_is_counted_in_its_file_and_said(tmp_path):
+    """A frozen actor's episode counted as normal: nothing in the bag or the report said so."""
+    plan = strategy_plan('learn_together', 2, 0, 1)
+    record_in_process(tmp_path, 'frozen', 5, 'learn_together', 1, plan, steps=8,
+                      missing={1: ((2, 3, 4), (4,))})
+    session = report.load_session(tmp_path / 'frozen')
+    records = {episode: session.human_inputs[episode] for episode in (0, 1)}
+    assert [records[0]['robot_commands_missing'], records[0]['human_commands_missing']] == \
+        ['0', '0']
+    assert [records[1]['states'], records[1]['robot_commands_missing'],
+            records[1]['human_commands_missing']] == ['8', '3', '1']
+    assert ("episode 2: of its 8 states, 3 went without the robot's command and 1 without the "
+            "person's (each applied as zero): not a normal episode") in session.notices
+    assert not any(notice.startswith('episode 1:') for notice in session.notices)

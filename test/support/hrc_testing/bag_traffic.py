@@ -116,6 +116,8 @@ class SyntheticSession:
         self.human_involved_episodes = 0
         self.publishers = {}
         self.publish_times = {}       # topic -> [wall clock ns of each publication]
+        # episode -> (steps whose state says the robot's command was missing, the human's)
+        self.missing = {}
         if node is not None:
             for topic, (message_type, qos) in TOPICS.items():
                 if history_depth:
@@ -208,6 +210,9 @@ class SyntheticSession:
             state.ball_position = 0.25 * values[4]
             state.ball_velocity = values[5]
             state.truncated = is_final
+            robot_missing, human_missing = self.missing.get(episode, ((), ()))
+            state.robot_command_missing = step in robot_missing
+            state.human_command_missing = step in human_missing
             errors += numpy.abs([state.slider_position, state.pendulum_angle,
                                  state.ball_position])
             self._publish(hrc_topics.STATE, state)
@@ -311,13 +316,16 @@ def strategy_plan(strategy: str, first: int, second: int, evaluation: int) -> li
 
 def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, seed: int,
                       plan: list, steps: int = 10, session_config: typing.Optional[dict] = None,
-                      start_time_ns: int = 1_700_000_000_000_000_000) -> SyntheticSession:
+                      start_time_ns: int = 1_700_000_000_000_000_000,
+                      missing: typing.Optional[dict] = None) -> SyntheticSession:
     """Record a synthetic session straight into an EpisodeRecorder (no DDS), deterministically.
 
     Log times follow the simulation time (1 ms apart within a step); the recorder's clock is
     advanced past ``close_grace`` after each episode. ``plan``: (training_step, human_involved,
     evaluation) per episode, optionally a fourth item, the summary's ``EpisodeSummary.KIND_*``.
-    Returns the SyntheticSession (its ``published`` holds every message).
+    ``missing``: {episode: (steps without the robot's command, steps without the human's)},
+    set on those states as the sim sets them. Returns the SyntheticSession (its ``published``
+    holds every message).
     """
     clock = [0.0]
     params = RecorderParams(output_dir=str(output_dir), session_id=session_id)
@@ -343,6 +351,7 @@ def record_in_process(output_dir, session_id: str, case_id: int, strategy: str, 
 
     robot_dof = 0 if case_id % 2 else 1
     session = SyntheticSession(None, session_id, case_id, strategy, seed, robot_dof, sink)
+    session.missing = dict(missing or {})
     for episode, entry in enumerate(plan):
         training_step, human_involved, evaluation = entry[:3]
         kind = entry[3] if len(entry) > 3 else None     # EpisodeSummary.KIND_*, None: inferred

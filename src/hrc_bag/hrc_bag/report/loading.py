@@ -178,6 +178,26 @@ def summary_problems(summary, three_subtasks: bool = True) -> list:
             for problem in problems]
 
 
+def missing_commands_notice(episode: int, record: dict) -> list:
+    """Return the notice of an episode file whose states went without commands ([] if none).
+
+    The sim applies a missing command as zero (a frozen or lost actor, a stalled graph), so
+    the episode is not what the learner or the person did; files recorded before the count
+    say nothing.
+    """
+    def count(value) -> int:
+        return int(value) if str(value).isdigit() else 0     # another tool's record: none
+
+    counts = {actor: count(record.get(f'{actor}_commands_missing'))
+              for actor in ('robot', 'human')}
+    if not any(counts.values()):
+        return []
+    states = record.get('states') or '?'
+    return [f'episode {episode_number(episode)}: of its {states} states, '
+            f"{counts['robot']} went without the robot's command and {counts['human']} "
+            "without the person's (each applied as zero): not a normal episode"]
+
+
 def _steps_of(record: dict) -> str:
     """Return "N steps" of a file's hrc_episode record (its last step + 1, if recorded)."""
     last = record.get('last_step', '')
@@ -249,6 +269,8 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
                 + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
                 + f'): its time and errors are from {used[0].name} ('
                 + ('the attempt that finished)' if finished else 'none finished: the last)'))
+    notices += [notice for episode in sorted(human_inputs)
+                for notice in missing_commands_notice(episode, human_inputs[episode])]
     own_tree = bool(nested(config, 'parameters', 'agent', 'task_tree_file'))
     for summary in summaries.values():
         notices += summary_problems(summary, three_subtasks=not own_tree)
