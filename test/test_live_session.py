@@ -148,12 +148,13 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
                                         for s in watcher.states)), output()
         code, said = operator(ros_domain_id, 'pause')
         assert code == 0, said
-        # Normally during episode 0; a slow machine may start the command after its end.
+        # Normally during the first episode; a slow machine may start the command after its end.
         requested = re.search(r'pause: (pause requested: the session pauses when episode '
                               r'(\d+) ends|paused before episode (\d+))', said)
         assert requested, said
-        paused_before = (int(requested.group(2)) + 1 if requested.group(2) is not None
-                         else int(requested.group(3)))
+        # the operator reads episode numbers (from 1); paused_before is the next's index
+        paused_before = (int(requested.group(2)) if requested.group(2) is not None
+                         else int(requested.group(3)) - 1)
         assert watcher.wait(lambda: watcher.phase() == SessionStatus.PHASE_PAUSED), output()
         paused = watcher.statuses[-1]
         assert paused.episode == paused.total_episodes == paused_before
@@ -165,13 +166,14 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
         assert len(watcher.states) == states_when_paused
         code, said = operator(ros_domain_id, 'status')
         assert code == 0 and 'phase paused' in said, said
-        assert f'episode {paused_before}; {paused_before} training episodes done' in said
+        # the number of the next episode (from 1), and the count of those done
+        assert f'episode {paused_before + 1}; {paused_before} training episodes done' in said
         assert len(watcher.states) == states_when_paused
 
         # Resume: the next episode starts; abort as soon as it runs.
         code, said = operator(ros_domain_id, 'resume')
         assert code == 0, said
-        assert f'resumed: episode {paused_before} starts next' in said
+        assert f'resumed: episode {paused_before + 1} starts next' in said
         assert watcher.wait(lambda: any(s.episode == paused_before and s.step >= 1
                                         for s in watcher.states)), output()
         code, said = operator(ros_domain_id, 'abort')
@@ -182,7 +184,7 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
         assert aborted, said
         finished = int(aborted.group(4))   # training episodes in the checkpoint
         mid_episode = aborted.group(2) is not None
-        assert int(aborted.group(2) or aborted.group(3)) == finished
+        assert int(aborted.group(2) or aborted.group(3)) == finished + 1   # from 1
         assert runner.wait(timeout=120) == EXIT_OPERATOR_ABORT, output()
     finally:
         if runner.poll() is None:

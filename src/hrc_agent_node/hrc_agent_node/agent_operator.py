@@ -7,6 +7,7 @@ abort is kept as the phase, the interrupted phase beside it).
 import numpy as np
 
 from hrc_common.contract import Phase
+from hrc_common.episode_numbers import episode_number
 
 class OperatorControls:
     def status_line(self) -> str:
@@ -16,7 +17,8 @@ class OperatorControls:
                 f'step {step.index + 1}/{len(self.case.steps)} "{step.name}": robot '
                 f'{self.robot_dof} rewarded on {list(step.robot_subtasks)}, human '
                 f'{"involved on " + str(list(step.human_subtasks)) if step.human_involved else "not involved"}; '  # noqa: E501
-                f'episode {self.episode}{" (judging)" if self._next_is_judging() else ""}, '
+                f'episode {episode_number(self.episode)}'
+                f'{" (judging)" if self._next_is_judging() else ""}, '
                 f'{self.total_episodes} episodes ({self.human_involved_episodes} with the '
                 f'human, {self.judging_episodes} judging)')
 

@@ -17,6 +17,7 @@ import os
 import time
 
 from geometry_msgs.msg import WrenchStamped
+from hrc_common.episode_numbers import episode_number
 from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 
 # Wall seconds between the last message and the exit, so reliable subscribers receive it.
@@ -40,12 +41,14 @@ class OperatorServices:
             self.pause_requested = True
             response.success = True
             response.message = (f'pause requested: the session pauses when episode '
-                                f'{self.core.episode} ends')
+                                f'{episode_number(self.core.episode)} ends')
             self.publish_session(f'pause requested: the session pauses when episode '
-                                 f'{self.core.episode} ends; ' + self.core.status_line())
+                                 f'{episode_number(self.core.episode)} ends; '
+                                 + self.core.status_line())
         else:
             self.enter_pause()
-            response.success, response.message = True, f'paused before episode {self.core.episode}'
+            response.success = True
+            response.message = f'paused before episode {episode_number(self.core.episode)}'
         self.get_logger().info(f'operator pause: {response.message}')
         return response
 
@@ -53,7 +56,8 @@ class OperatorServices:
         """Pause the core between two episodes and announce it."""
         self.pause_requested = False
         self.core.pause()
-        self.publish_session(f'paused by the operator before episode {self.core.episode}: '
+        self.publish_session(f'paused by the operator before episode '
+                             f'{episode_number(self.core.episode)}: '
                              + self.core.status_line())
 
     def on_resume(self, request, response):
@@ -65,7 +69,7 @@ class OperatorServices:
             # A person gets the same break before the next episode as after an episode.
             self.next_episode_at = time.monotonic() + self.break_seconds()
             response.success = True
-            response.message = f'resumed: episode {self.core.episode} starts next'
+            response.message = f'resumed: episode {episode_number(self.core.episode)} starts next'
             self.publish_session('resumed by the operator: ' + self.core.status_line())
         elif self.pause_requested:
             self.pause_requested = False
@@ -88,9 +92,9 @@ class OperatorServices:
             self.abort(f'by the operator {where}', EXIT_OPERATOR_ABORT)
             response.success, response.message = True, f'aborted {where}'
             return response
-        where = f'before episode {self.core.episode}'
+        where = f'before episode {episode_number(self.core.episode)}'
         if self.core.in_episode and self.newest_state is not None:
-            where = (f'in episode {self.newest_state.episode} at step '
+            where = (f'in episode {episode_number(self.newest_state.episode)} at step '
                      f'{self.newest_state.step} (dropped, not learned from)')
         self.publish_zero_wrench(self.newest_state)
         checkpoint = self.latest_checkpoint_path()
