@@ -25,7 +25,7 @@ import time
 from hrc_common import bounded_yaml
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
-from hrc_common.nodes import DrainedNode, run_node, take_waiting
+from hrc_common.nodes import closing_log, DrainedNode, run_node, take_waiting
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -214,15 +214,16 @@ class RecorderNode(DrainedNode):
                 try:
                     batch = self._take_waiting()
                 except Exception as error:  # RCLError/InvalidHandle once the context is gone
-                    self.get_logger().warning(f'messages still waiting in DDS are not '
-                                              f'recorded: {error}')
+                    closing_log(self, 'warning', f'messages still waiting in DDS are not '
+                                                 f'recorded: {error}')
                 else:
                     self.core.record_batch(batch)
             self.core.close()
         except RecordingError as error:
-            self.get_logger().error(f'recording stopped: {error}')
+            closing_log(self, 'error', f'recording stopped: {error}')
         # what the recording cost this process (bench/middleware.py reads this line)
-        self.get_logger().info(
+        closing_log(
+            self, 'info',
             f'{sum(info.message_count for info in self.core.closed_files)} messages recorded '
             f'in {len(self.core.closed_files)} files; process CPU {time.process_time():.2f} s')
 

@@ -118,6 +118,19 @@ def run_node(node_factory, executable: str, summary: str, params_cls=None, args=
     return run_nodes([node_factory], executable, summary, params_cls, args)
 
 
+def closing_log(node, level: str, text: str) -> None:
+    """Log ``text`` while a node closes: to /rosout while the context lives, else to stderr.
+
+    Ctrl-C shuts the context down before the nodes close (rclpy's signal handler), and a
+    logger then fails to publish to /rosout ("publisher's context is invalid") on top of the
+    line; the line goes to the terminal alone, in the logger's form.
+    """
+    if rclpy.ok():
+        getattr(node.get_logger(), level)(text)
+    else:
+        print(f'[{level.upper()}] [{node.get_name()}]: {text}', file=sys.stderr, flush=True)
+
+
 def run_nodes(node_factories, executable: str, summary: str, params_cls=None,
               args=None) -> int:
     """Run several nodes in this process on one executor (a component container), as run_node.
