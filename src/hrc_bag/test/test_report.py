@@ -341,3 +341,30 @@ def test_an_episode_with_missing_commands_is_counted_in_its_file_and_said(tmp_pa
     assert ("episode 2: of its 8 states, 3 went without the robot's command and 1 without the "
             "person's (each applied as zero): not a normal episode") in session.notices
     assert not any(notice.startswith('episode 1:') for notice in session.notices)
+
+
+def test_episodes_the_recorder_missed_are_said(tmp_path):
+    """A stalled recorder lost episodes 2-3 of 4 and the report showed 2 episodes silently."""
+    plan = strategy_plan('learn_together', 3, 0, 1)
+    record_in_process(tmp_path, 'stalled', 5, 'learn_together', 1, plan, steps=6)
+    folder = tmp_path / 'stalled'
+    (folder / 'metadata.yaml').unlink()             # as if the recorder never wrote them
+    for index in (1, 2):
+        (folder / f'stalled_ep{index:04d}.mcap').unlink()
+    session = report.load_session(folder)
+    assert [summary.episode for summary in session.summaries] == [0, 3]
+    assert ('episodes 2, 3 have no file in the bags (the recorder missed them: stalled, '
+            'stopped or started late)') in session.notices, session.notices
+
+
+def test_an_episode_with_fewer_states_than_steps_is_said():
+    from types import SimpleNamespace
+
+    from hrc_bag.report.loading import recording_gaps
+    files = {0: ['a'], 1: ['b']}
+    summaries = {0: SimpleNamespace(steps=200), 1: SimpleNamespace(steps=200)}
+    assert recording_gaps(files, summaries, {0: {'states': '201'}, 1: {'states': '201'}}) == []
+    assert recording_gaps(files, summaries, {0: {'states': '201'}, 1: {'states': '57'}}) == [
+        'episode 2: the bags hold 57 of its 200+ states (the recorder missed the others)']
+    # a recording without /hrc/state says nothing about states
+    assert recording_gaps(files, summaries, {0: {'states': '0'}, 1: {}}) == []

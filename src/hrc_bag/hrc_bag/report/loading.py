@@ -198,6 +198,36 @@ def missing_commands_notice(episode: int, record: dict) -> list:
             "without the person's (each applied as zero): not a normal episode"]
 
 
+def recording_gaps(episode_files: dict, summaries: dict, human_inputs: dict) -> list:
+    """Return a notice per kind of loss the recorder left: episodes without a file, states.
+
+    A stalled, stopped or late recorder misses whole episodes (their summary may still come,
+    transient local) or the states of part of one; the numbers of such an episode are not in
+    the bags. States are compared with the summary's steps (a lower bound: the sim also
+    publishes the initial state) when the recording holds states.
+    """
+    if not episode_files:
+        return []
+    known = set(episode_files) | set(summaries)
+    absent = sorted(set(range(max(known) + 1)) - set(episode_files))
+    notices = []
+    if absent:
+        named = ', '.join(str(episode_number(episode)) for episode in absent)
+        notices.append(f'episodes {named} have no file in the bags (the recorder missed '
+                       'them: stalled, stopped or started late)')
+    counted = {episode: str((record or {}).get('states', ''))
+               for episode, record in human_inputs.items()}
+    if not any(states.isdigit() and int(states) for states in counted.values()):
+        return notices              # no state recorded at all (not a topic of this recording)
+    for episode in sorted(set(episode_files) & set(summaries)):
+        states = counted.get(episode, '')
+        steps = int(getattr(summaries[episode], 'steps', 0) or 0)
+        if states.isdigit() and int(states) < steps:
+            notices.append(f'episode {episode_number(episode)}: the bags hold {states} of its '
+                           f'{steps}+ states (the recorder missed the others)')
+    return notices
+
+
 def _steps_of(record: dict) -> str:
     """Return "N steps" of a file's hrc_episode record (its last step + 1, if recorded)."""
     last = record.get('last_step', '')
@@ -269,6 +299,7 @@ def load_session(path, decoder: typing.Optional[bag_reader.MessageDecoder] = Non
                 + ', '.join(f'{item[0].name}: {_steps_of(item[1])}' for item in group)
                 + f'): its time and errors are from {used[0].name} ('
                 + ('the attempt that finished)' if finished else 'none finished: the last)'))
+    notices += recording_gaps(episode_files, summaries, human_inputs)
     notices += [notice for episode in sorted(human_inputs)
                 for notice in missing_commands_notice(episode, human_inputs[episode])]
     own_tree = bool(nested(config, 'parameters', 'agent', 'task_tree_file'))
