@@ -265,7 +265,10 @@ class SessionRun:
                 print('[session] no episode had finished: there is no checkpoint to resume '
                       'from', flush=True)
         if settings.record and self.options.report and (code == 0 or self.progress.episodes):
-            report(settings, self.run_dir)
+            if report(settings, self.run_dir) and code == 0:
+                print('[session] the bags miss part of what the session ran (above): exit 1',
+                      file=sys.stderr, flush=True)
+                code = 1
         index_session(settings, self.options, 'condition', self.started, code)
         if settings.subject_id:
             owner_only(settings, parameters)

@@ -198,6 +198,10 @@ def missing_commands_notice(episode: int, record: dict) -> list:
             "without the person's (each applied as zero): not a normal episode"]
 
 
+# the words of every notice of a loss the recorder left (the session runner looks for them)
+RECORDER_MISSED = 'the recorder missed'
+
+
 def recording_gaps(episode_files: dict, summaries: dict, human_inputs: dict) -> list:
     """Return a notice per kind of loss the recorder left: episodes without a file, states.
 
@@ -213,7 +217,7 @@ def recording_gaps(episode_files: dict, summaries: dict, human_inputs: dict) -> 
     notices = []
     if absent:
         named = ', '.join(str(episode_number(episode)) for episode in absent)
-        notices.append(f'episodes {named} have no file in the bags (the recorder missed '
+        notices.append(f'episodes {named} have no file in the bags ({RECORDER_MISSED} '
                        'them: stalled, stopped or started late)')
     counted = {episode: str((record or {}).get('states', ''))
                for episode, record in human_inputs.items()}
@@ -224,7 +228,7 @@ def recording_gaps(episode_files: dict, summaries: dict, human_inputs: dict) -> 
         steps = int(getattr(summaries[episode], 'steps', 0) or 0)
         if states.isdigit() and int(states) < steps:
             notices.append(f'episode {episode_number(episode)}: the bags hold {states} of its '
-                           f'{steps}+ states (the recorder missed the others)')
+                           f'{steps}+ states ({RECORDER_MISSED} the others)')
     return notices
 
 
