@@ -45,3 +45,14 @@ def test_the_temporaries_of_a_killed_checkpoint_write_are_removed(tmp_path):
     assert remove_stale_temporaries(tmp_path) == ['.final.pt.c3d4.tmp', '.latest.pt.a1b2.tmp']
     assert sorted(path.name for path in tmp_path.iterdir()) == ['.other.tmp', 'latest.pt']
     assert remove_stale_temporaries(tmp_path / 'missing') == []
+
+
+def test_session_files_that_cannot_be_written_exit_1_before_any_node(tmp_path):
+    """A full runs folder at the start ended in an OSError traceback."""
+    (tmp_path / 'runs' / 's' / 'parameters.yaml').mkdir(parents=True)
+    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'session', *SHORT],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert result.stderr.strip() == ('session: cannot write the session files: '
+                                     'runs/s/parameters.yaml: Is a directory (EISDIR)')
+    assert not (tmp_path / 'bags').exists()

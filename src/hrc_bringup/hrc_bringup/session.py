@@ -42,6 +42,7 @@ import sys
 
 from hrc_agent_node.strategies import pretrains_with_population
 from hrc_common import paths
+from hrc_common.contract import os_error_text
 from hrc_common.domains import DomainTaken, SessionOnDomain
 from hrc_common.session_claim import claim_session, SessionIdTaken
 from hrc_common.session_plan import compose, SessionSettings, write_session_files
@@ -142,7 +143,12 @@ def run_session(settings: SessionSettings, options) -> int:
     except (ValueError, OSError) as error:
         print(f'session: {error}', file=sys.stderr)
         return 2
-    params_path, _ = write_session_files(settings, parameters, run_dir, params_dir)
+    try:
+        params_path, _ = write_session_files(settings, parameters, run_dir, params_dir)
+    except OSError as error:    # a full or read-only runs folder: not the user's parameters
+        print(f'session: cannot write the session files: {os_error_text(error)}',
+              file=sys.stderr)
+        return 1
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     run = SessionRun(settings, options, parameters, params_path, run_dir, env)
     try:
