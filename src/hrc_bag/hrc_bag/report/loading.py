@@ -205,20 +205,23 @@ RECORDER_MISSED = 'the recorder missed'
 def recording_gaps(episode_files: dict, summaries: dict, human_inputs: dict) -> list:
     """Return a notice per kind of loss the recorder left: episodes without a file, states.
 
-    A stalled, stopped or late recorder misses whole episodes (their summary may still come,
+    A stalled or stopped recorder misses whole episodes (their summary may still come,
     transient local) or the states of part of one; the numbers of such an episode are not in
-    the bags. States are compared with the summary's steps (a lower bound: the sim also
+    the bags. Episodes before the first recorded one are not asked for (a recorder started
+    late is not seen). States are compared with the summary's steps (a lower bound: the sim also
     publishes the initial state) when the recording holds states.
     """
     if not episode_files:
         return []
+    # from the first episode recorded on: the episodes before it may never have been the
+    # graph's (a partners-first pre-training runs in process, unrecorded)
     known = set(episode_files) | set(summaries)
-    absent = sorted(set(range(max(known) + 1)) - set(episode_files))
+    absent = sorted(set(range(min(episode_files), max(known) + 1)) - set(episode_files))
     notices = []
     if absent:
         named = ', '.join(str(episode_number(episode)) for episode in absent)
         notices.append(f'episodes {named} have no file in the bags ({RECORDER_MISSED} '
-                       'them: stalled, stopped or started late)')
+                       'them: stalled or stopped)')
     counted = {episode: str((record or {}).get('states', ''))
                for episode, record in human_inputs.items()}
     if not any(states.isdigit() and int(states) for states in counted.values()):
