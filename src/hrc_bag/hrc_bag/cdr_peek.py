@@ -116,13 +116,12 @@ def _task_state_readable() -> bool:
         return False
 
 
-def task_state(data: bytes) -> typing.Optional[tuple]:
-    """Return (episode, step, final) of a CDR TaskState (final: terminated or truncated).
+def _task_state_fields(data: bytes) -> typing.Optional[tuple]:
+    """Return (episode, step, robot missing, human missing, final) of a CDR TaskState, or None.
 
-    What the recorder needs of every state to find the episode boundaries, without a
-    deserialization (which costs ten times more). None when the installed TaskState has other
-    fields than this reader knows or the bytes do not add up (the caller then deserializes):
-    the two bools are the last bytes of the payload, up to 3 bytes of end padding.
+    One walk over the payload for both readers below; None when the installed TaskState has
+    other fields than this reader knows or the bytes do not add up (the two end bools are the
+    last bytes of the payload, up to 3 bytes of end padding).
     """
     if not _task_state_readable() or len(data) < ENCAPSULATION + 12:
         return None
@@ -135,6 +134,7 @@ def task_state(data: bytes) -> typing.Optional[tuple]:
         episode, step = struct.unpack_from(order + 'II', data, ENCAPSULATION + position)
         position += 8
         position += -position % 8 + 8 * 8           # the eight float64
+        robot, human = struct.unpack_from('BB', data, ENCAPSULATION + position)
         position += 2                               # the two command_missing bools
         position += -position % 2 + 2               # uint16 slice
         position += -position % 4
@@ -147,7 +147,18 @@ def task_state(data: bytes) -> typing.Optional[tuple]:
         terminated, truncated = struct.unpack_from('BB', data, ENCAPSULATION + position)
     except struct.error:
         return None
-    return episode, step, bool(terminated or truncated)
+    return episode, step, bool(robot), bool(human), bool(terminated or truncated)
+
+
+def task_state(data: bytes) -> typing.Optional[tuple]:
+    """Return (episode, step, final) of a CDR TaskState (final: terminated or truncated).
+
+    What the recorder needs of every state to find the episode boundaries, without a
+    deserialization (which costs ten times more). None as :func:`_task_state_fields` (the
+    caller then deserializes).
+    """
+    fields = _task_state_fields(data)
+    return None if fields is None else (fields[0], fields[1], fields[4])
 
 
 def task_state_missing(data: bytes) -> typing.Optional[tuple]:
@@ -156,12 +167,5 @@ def task_state_missing(data: bytes) -> typing.Optional[tuple]:
     The sim sets them on a state whose period went without that actor's command (applied as
     zero); the recorder counts them per episode. None as for :func:`task_state`.
     """
-    if task_state(data) is None:            # the layout is known and the bytes add up
-        return None
-    order = '<' if data[1] == 1 else '>'
-    (length,) = struct.unpack_from(order + 'I', data, ENCAPSULATION + 8)
-    position = 12 + length
-    position += -position % 4 + 8                   # episode, step
-    position += -position % 8 + 8 * 8               # the eight float64
-    robot, human = struct.unpack_from('BB', data, ENCAPSULATION + position)
-    return bool(robot), bool(human)
+    fields = _task_state_fields(data)
+    return None if fields is None else (fields[2], fields[3])

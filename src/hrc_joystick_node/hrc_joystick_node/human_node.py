@@ -101,8 +101,7 @@ class HumanNode(Node):
     def __init__(self):
         super().__init__('human')
         self.params = params = self._declare()
-        profiles_path = params.profiles_file or default_profiles_path()
-        self.core = HumanCore(params, load_profiles(profiles_path), str(profiles_path))
+        self.core = HumanCore(params, self._profiles, str(self._profiles_path))
         self.profile = self.core.profile
 
         self.device = JoystickDevice(params.device) if params.input in ('auto', DEVICE) else None
@@ -172,7 +171,8 @@ class HumanNode(Node):
         """Declare the parameters; ParameterError with every reason, the profile's among them.
 
         The profile is checked against the profiles file also when other values are wrong,
-        and a bad profiles file is named as the parameter ``profiles_file``.
+        and a bad profiles file is named as the parameter ``profiles_file``. The profiles read
+        are kept (``_profiles``, ``_profiles_path``) for the core.
         """
         try:
             params, reasons = declare_parameters(self, HumanParams), []
@@ -181,9 +181,9 @@ class HumanNode(Node):
         values = {name: self.get_parameter(name).value for name in ('profile', 'profiles_file',
                                                                     'person')
                   if self.has_parameter(name)}
-        path = values.get('profiles_file') or default_profiles_path()
+        path = self._profiles_path = values.get('profiles_file') or default_profiles_path()
         try:
-            profiles = load_profiles(path)
+            profiles = self._profiles = load_profiles(path)
             if params is not None or 'profile' in values:
                 resolve_profile(params or HumanParams(**values), profiles, str(path))
         except ParameterError as error:
