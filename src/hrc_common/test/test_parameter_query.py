@@ -65,10 +65,9 @@ def test_a_request_never_answered_is_asked_again(rclpy_context):
     owner.destroy_node()
 
 
-def _ask_until(query, executor, condition, rounds=600):
-    for _ in range(rounds):
-        if condition():
-            return True
+def _ask_until(query, executor, condition, timeout=120.0):
+    deadline = time.monotonic() + timeout       # generous: discovery on a busy machine
+    while not condition() and time.monotonic() < deadline:
         query.poll()
         executor.spin_once(timeout_sec=0.05)
     return condition()
