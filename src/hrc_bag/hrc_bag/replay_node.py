@@ -19,11 +19,13 @@ import time
 from hrc_common.contract import NS_PER_S
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
-from hrc_common.topics import CLOCK
+from hrc_common import qos as hrc_qos
+from hrc_common.topics import CLOCK, REPLAY
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
+from std_msgs.msg import String
 
 from hrc_bag import bag_reader
 from hrc_bag.recorder_node import message_class
@@ -140,6 +142,9 @@ class ReplayNode(Node):
             self._clock_publisher = self.create_publisher(Clock, CLOCK, CLOCK_QOS)
             self.create_timer(1.0 / self.params.clock_rate, self._publish_clock)
         self.create_timer(0.05, self._check_done)
+        # The pages mark what they show as a replay while this says so ('' at the end).
+        self._replay_marker = self.create_publisher(String, REPLAY, hrc_qos.SESSION_QOS)
+        self._replay_marker.publish(String(data=f'{self.params.path} at rate {self.params.rate}'))
         self.get_logger().info(
             f'replaying {sorted(self._publishers_by_topic)} from {self.params.path} at rate '
             f'{self.params.rate}' + (', looping' if self.params.loop else ''))
@@ -220,11 +225,16 @@ class ReplayNode(Node):
     def _check_done(self) -> None:
         if self._done.is_set():
             self.get_logger().info(f'replay finished: {self.published} messages published')
+            self._replay_marker.publish(String(data=''))
             self.context.try_shutdown()
 
     def close(self) -> None:
-        """Stop the playback thread."""
+        """Stop the playback thread; the pages are told the replay ended."""
         self._stop.set()
+        try:
+            self._replay_marker.publish(String(data=''))
+        except Exception:   # noqa: BLE001 - the context is already shut down: nothing to tell
+            pass
         self._thread.join(timeout=5.0)
 
 

@@ -266,20 +266,29 @@ class InputGuard:
 
 
 def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: list) -> bool:
-    """Wait until the person's input is there; say what is missing and how to fix it."""
+    """Wait until the person's input is there; say what is missing and how to fix it.
+
+    Said on the terminal and on ``/hrc/session/runner_waiting`` (the console shows it; the
+    person's page only asks them to wait); cleared when the wait ends.
+    """
     deadline = time.monotonic() + timeout
+    waiting = guard.node.create_publisher(String, topics.RUNNER_WAITING, qos.SESSION_QOS)
     said = ''
     while True:
         present, why = guard.present()
         if present:
             if said:
                 print(f'[session] the input is there now: {why}', flush=True)
+                waiting.publish(String(data=''))
             return True
         if why != said:
             print(f"[session] waiting for the person's input (up to {timeout:.0f} s): {why}",
                   flush=True)
+            waiting.publish(String(data=f"waiting for the person's input (up to "
+                                   f'{timeout:.0f} s): {why}'))
             said = why
         if time.monotonic() > deadline or stop_reason:
             print(f'[session] not started: {why}', file=sys.stderr, flush=True)
+            waiting.publish(String(data=f'not started: {why}'))
             return False
         executor.spin_once(timeout_sec=0.2)

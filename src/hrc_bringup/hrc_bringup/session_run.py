@@ -27,7 +27,7 @@ from hrc_bringup.practice import run_practice
 from hrc_bringup.session_args import resume_command
 from hrc_bringup.session_progress import Progress
 from hrc_bringup.session_report import report
-from hrc_bringup.study_hooks import index_session, owner_only, wait_for_tlx
+from hrc_bringup.study_hooks import condition_words, index_session, owner_only, wait_for_tlx
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
 # Seconds the runner waits for the display's address in its log before going on.
@@ -105,7 +105,8 @@ class SessionRun:
         options = self.options
         if options.display:
             # served from the start (the waiting-for-the-joystick screen included)
-            self.supervisor.start('display', display_command(options, params_dir, self.run_dir))
+            self.supervisor.start('display', display_command(options, params_dir, self.run_dir,
+                                                             self.settings))
             print_display_address(self.supervisor.processes['display'], self.executor,
                                   self.stop_reason)
         if live_input and not wait_for_input(
@@ -294,8 +295,9 @@ def print_display_address(display, executor, stop_reason: list) -> None:
           f's: see {display.log_path}', file=sys.stderr, flush=True)
 
 
-def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) -> list:
-    """Return the command line of the display node of this session."""
+def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path,
+                    settings: SessionSettings) -> list:
+    """Return the command line of the display node of this session (subject: the console)."""
     command = [str(executable_path('hrc_live', 'display_node')), '--ros-args']
     display_params = params_dir / 'display.yaml'
     if display_params.is_file():
@@ -304,6 +306,9 @@ def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path) ->
         command += ['-p', f'port:={options.display_port}']
     if options.tlx:
         command += ['-p', f'tlx_file:={(run_dir / "tlx.yaml").resolve()}']
+    if settings.subject_id:
+        command += ['-p', f'subject_id:={settings.subject_id}',
+                    '-p', f'condition:={condition_words(settings, options)}']
     return command
 
 

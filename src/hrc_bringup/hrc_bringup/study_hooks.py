@@ -50,6 +50,22 @@ def warn_out_of_order(settings: SessionSettings, options) -> None:
         print(f'[session] WARNING: {warning}', file=sys.stderr, flush=True)
 
 
+def condition_words(settings: SessionSettings, options) -> str:
+    """Return the condition and its place in the subject's order, for the console."""
+    words = f'case {settings.case}'
+    if not options.study_dir:
+        return words
+    try:
+        subjects = load_registry(options.study_dir)
+    except StudyError:
+        return words + ' (the study registry cannot be read)'
+    subject = next((item for item in subjects if item.id == settings.subject_id), None)
+    position = position_of(subjects, settings.subject_id, settings.case)
+    if subject is None or not position:
+        return words + " (not in the subject's registered order)"
+    return f'condition {position} of {len(subject.order)} in the order ({words})'
+
+
 def index_session(settings: SessionSettings, options, kind: str, started: str,
                   code: int) -> None:
     """Add this run of the session to the study's per-subject index (with --study-dir).

@@ -25,6 +25,12 @@ RESET_SERVICE = '/hrc/sim/reset'
 HUMAN_INPUT = '/hrc/human/input'
 # The session runner's "joystick disconnected" words for the pages (std_msgs/String).
 INPUT_LOST = '/hrc/session/input_lost'
+# Why the session runner waits before it starts the nodes ('' = it does not), and what to do
+# (std_msgs/String, transient local): the console says it, the person's page says "please wait".
+RUNNER_WAITING = '/hrc/session/runner_waiting'
+# What a replay node replays ('' = nothing: live), std_msgs/String, transient local: the pages
+# mark a replay as one.
+REPLAY = '/hrc/replay'
 
 # The type of each topic of the session graph (by default name): what a recording holds.
 TYPES = {

@@ -124,10 +124,10 @@ class AloneRun:
                                       else 0.0)
         return max(0.0, end - self.started - paused)
 
-    def words(self, now: float) -> str:
-        """Return "the robot practised alone: N episodes in T s"."""
+    def words(self, now: float, unit: str = 'episode') -> str:
+        """Return "the robot practised alone: N episodes in T s" (``unit`` 'round': the page)."""
         verb = 'practised' if self.ended is not None else 'is practising'
-        return (f'The robot {verb} alone: {self.episodes} episode'
+        return (f'The robot {verb} alone: {self.episodes} {unit}'
                 f'{"s" if self.episodes != 1 else ""} in {self.seconds(now):.0f} s.')
 
     def wait_estimate(self, now: float, cap: typing.Optional[int],
@@ -149,6 +149,7 @@ class EpisodeErrors:
 
     episode: int = -1
     steps: int = 0
+    last_step: int = -1         # the newest state's step (a smaller one: the episode restarted)
     slider: float = 0.0         # sum |S_x| (m)
     pendulum: float = 0.0       # sum |P_z| (rad)
     ball: float = 0.0           # sum |B_y| (m)
@@ -156,11 +157,17 @@ class EpisodeErrors:
     robot_missing: int = 0
 
     def add(self, state: StateView) -> 'EpisodeErrors':
-        """Return the errors with ``state`` added (a new episode starts them again)."""
-        base = self if state.episode == self.episode else EpisodeErrors(episode=state.episode)
+        """Return the errors with ``state`` added.
+
+        A new episode starts them again, and so does an attempt of the same episode run again
+        after an interruption (its step goes back): the numbers are the current attempt's.
+        """
+        restarted = state.episode == self.episode and state.step <= self.last_step
+        base = (self if state.episode == self.episode and not restarted
+                else EpisodeErrors(episode=state.episode))
         if not state.finite():
             return base
-        return replace(base, steps=base.steps + 1,
+        return replace(base, steps=base.steps + 1, last_step=state.step,
                        slider=base.slider + abs(state.slider_position),
                        pendulum=base.pendulum + abs(state.pendulum_angle),
                        ball=base.ball + abs(state.ball_position),
@@ -201,6 +208,11 @@ class Snapshot:
     # the running episode was stopped (pause, abort, lost input): it does not run again until
     # a new first state (step 0) comes, so the countdown of the resume shows meanwhile
     interrupted: bool = False
+    # the person has played (part of) a round of this session: after a resume mid-round the
+    # next one is not "your first"
+    person_played: bool = False
+    replay: str = ''            # what a replay node replays ('' = a live session)
+    runner_waiting: str = ''    # why the session runner waits before starting ('' = it does not)
 
 
 @dataclass(frozen=True)
@@ -249,6 +261,10 @@ class DisplayModel:
                 changes['episode_started'] = now
             if state.step == 0:
                 changes['interrupted'] = False
+            session = self._snapshot.session
+            if (state.step > 0 and session is not None and session.human_involved
+                    and state.episode >= session.episode):
+                changes['person_played'] = True
             if state.final and not (previous is not None and previous.final
                                     and previous.episode == state.episode):
                 changes['break_started'] = now
@@ -262,7 +278,7 @@ class DisplayModel:
             changes = {'session': session}
             if previous is not None and previous.session_id != session.session_id:
                 changes.update(plan=None, alone=None, evaluation_with_human=frozenset(),
-                               evaluation_done=0, session_started=now)
+                               evaluation_done=0, session_started=now, person_played=False)
                 current = replace(current, alone=None)
             if current.session_started is None:
                 changes['session_started'] = now
@@ -316,6 +332,16 @@ class DisplayModel:
             if reason != self._snapshot.input_lost:
                 self._update(input_lost=reason,
                              interrupted=self._snapshot.interrupted or bool(reason))
+
+    def set_replay(self, source: str) -> None:
+        """Set (or clear, with '') what a replay node replays."""
+        with self._lock:
+            self._update(replay=source)
+
+    def set_runner_waiting(self, reason: str) -> None:
+        """Set (or clear, with '') why the session runner waits before it starts the nodes."""
+        with self._lock:
+            self._update(runner_waiting=reason)
 
     def set_plan(self, plan: typing.Optional[AgentPlan]) -> None:
         """Set what the agent's parameters say (episodes, break)."""

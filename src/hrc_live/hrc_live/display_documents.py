@@ -105,8 +105,30 @@ def overlay_document(words: Overlay) -> dict:
             'episode_label': words.episode_label, 'notice': words.notice}
 
 
-def console_document(snapshot: Snapshot) -> dict:
-    """Return what the experimenter's console shows (JSON-safe)."""
+def input_tone(snapshot: Snapshot, healthy: bool) -> str:
+    """Return the console's colour of the person's input: 'bad' only when it asks for action.
+
+    Red means "act now": the input is lost, or stale while the person should be acting in a
+    running episode. While the robot learns alone, during a pause or between sessions a
+    missing command is normal and shown without colour.
+    """
+    session = snapshot.session
+    if snapshot.input_lost:
+        return 'bad'
+    acting = (session is not None and session.human_involved
+              and session.phase in ('training', 'evaluation') and not snapshot.interrupted
+              and snapshot.state is not None and not snapshot.state.final)
+    if not acting:
+        return ''
+    return 'ok' if healthy else 'bad'
+
+
+def console_document(snapshot: Snapshot, study: dict = None, tlx: str = '') -> dict:
+    """Return what the experimenter's console shows (JSON-safe).
+
+    ``study``: the subject id and the condition with its place in the subject's order (given
+    to the display by the session runner); ``tlx``: where the NASA-TLX of this condition is.
+    """
     session, human, now = snapshot.session, snapshot.human, snapshot.now
     source = {'source': 'unknown', 'detail': 'no human command received yet', 'age_s': None,
               'engaged': False, 'healthy': False}
@@ -126,6 +148,7 @@ def console_document(snapshot: Snapshot) -> dict:
         source['detail'] = snapshot.input_lost
         if not source['detail'].startswith('joystick disconnected'):
             source['detail'] = f'joystick disconnected: {source["detail"]}'
+    source['tone'] = input_tone(snapshot, source['healthy'])
     errors = snapshot.errors
     means = errors.means()
     totals = {'elapsed_s': (round(now - snapshot.session_started, 1)
@@ -154,6 +177,10 @@ def console_document(snapshot: Snapshot) -> dict:
         'practice': session is not None and session.strategy == 'practice',
         'milestone': milestone(snapshot),
         'invalid_state': snapshot.invalid_state,
+        'runner_waiting': snapshot.runner_waiting,
+        'replay': snapshot.replay,
+        'study': dict(study or {}),
+        'tlx': tlx,
     }
 
 

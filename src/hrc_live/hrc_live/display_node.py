@@ -57,7 +57,7 @@ from hrc_live.display_core import (AgentPlan, DisplayModel, HumanView, ResultVie
                                    SOURCE_NAMES, StateView)
 from hrc_live.display_documents import (console_document, overlay_document, scene_geometry,
                                         state_document, status_document)
-from hrc_live.display_words import overlay
+from hrc_live.display_words import overlay, SteadyBanner
 from hrc_live.display_params import DisplayParams
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_live.page_server import EventHub, PageServer, tlx_body
@@ -128,6 +128,9 @@ class DisplayNode(Node):
                                  qos.HUMAN_ACTION_QOS)
         self.create_subscription(String, INPUT_LOST_TOPIC, self.on_input_lost,
                                  qos.SESSION_QOS)
+        self.create_subscription(String, topics.RUNNER_WAITING, self.on_runner_waiting,
+                                 qos.SESSION_QOS)
+        self.create_subscription(String, topics.REPLAY, self.on_replay, qos.SESSION_QOS)
         self.controls = {command: self.create_client(Trigger, service)
                          for command, service in OPERATOR_SERVICES.items()}
         self.sim_query = ParameterQuery(self, params.sim_node, SIM_PARAMETERS, self.on_sim)
@@ -137,7 +140,11 @@ class DisplayNode(Node):
         self.create_timer(1.0 / params.words_rate, self.push_words)
         self.session_id = None
         self.tlx_stored = set()       # session ids whose questionnaire was answered
+        self.tlx_saved = {}           # session id -> (time, raw TLX) stored by this display
         self._pushed = {}             # event name -> the JSON last pushed
+        self.steady = SteadyBanner()  # no banner flickers on the person's page
+        self._push_lock = threading.Lock()  # the timer and a TLX answer (HTTP thread) push
+        self.words = None             # the words last pushed (status.json shows the same)
         self.hub.publish('geometry', scene_geometry(PhysicsParams()))
         try:
             self.server = PageServer(self, params.port)
@@ -220,16 +227,34 @@ class DisplayNode(Node):
         self.model.set_input_lost(message.data)
         self.push_words()
 
+    def on_runner_waiting(self, message: String):
+        """Take the session runner's word on why it waits ('' = it does not)."""
+        self.model.set_runner_waiting(message.data)
+        self.push_words()
+
+    def on_replay(self, message: String):
+        """Take a replay node's word on what it replays ('' = the replay ended)."""
+        self.model.set_replay(message.data)
+        self.push_words()
+
     # ------------------------------------------------------------------ outputs
 
     def push_words(self):
         """Recompute the words, the console and the TLX request; push what changed."""
-        snapshot = self.model.snapshot(time.monotonic())
-        words = overlay(snapshot, self.params.result_seconds)
+        with self._push_lock:
+            self._push_words()
+
+    def _push_words(self):
+        now = time.monotonic()
+        snapshot = self.model.snapshot(now)
+        words = self.words = self.steady.shown(overlay(snapshot, self.params.result_seconds),
+                                               now)
         session = snapshot.session
         wanted = bool(self.params.tlx_file and session is not None and session.phase == 'done'
                       and session.session_id not in self.tlx_stored)
-        documents = {'words': overlay_document(words), 'console': console_document(snapshot),
+        documents = {'words': overlay_document(words),
+                     'console': console_document(snapshot, self.study(),
+                                                 self.tlx_status(session)),
                      'tlx': {'wanted': wanted, 'condition': session.session_id if session
                              else '', 'title': self.params.tlx_title}}
         for name, document in documents.items():
@@ -238,10 +263,30 @@ class DisplayNode(Node):
                 self._pushed[name] = text
                 self.hub.publish(name, document)
 
+    def study(self) -> dict:
+        """Return the subject and condition the console shows (empty without a subject)."""
+        if not self.params.subject_id:
+            return {}
+        return {'subject_id': self.params.subject_id, 'condition': self.params.condition}
+
+    def tlx_status(self, session) -> str:
+        """Return where the NASA-TLX of the shown condition is, for the console."""
+        if not self.params.tlx_file:
+            return 'not asked in this session (no --tlx)'
+        if session is None or session.phase != 'done':
+            return "asked on the person's page when the condition ends"
+        stored = self.tlx_saved.get(session.session_id)
+        if stored is None and session.session_id in self.tlx_stored:
+            return 'stored earlier'
+        if stored is None:
+            return "waiting for the person's answers on the page"
+        return f'stored at {stored[0]} (raw TLX {stored[1]})'
+
     def status(self) -> dict:
         """Return the /status.json document."""
         snapshot = self.model.snapshot(time.monotonic())
-        document = status_document(snapshot, overlay(snapshot, self.params.result_seconds))
+        words = self.words or overlay(snapshot, self.params.result_seconds)
+        document = status_document(snapshot, words)
         document['pages_connected'] = self.hub.client_count
         return document
 
@@ -312,6 +357,7 @@ class DisplayNode(Node):
                      mode=PERSONAL_FILE_MODE)
         os.chmod(path, PERSONAL_FILE_MODE)
         self.tlx_stored.add(record['session_id'])
+        self.tlx_saved[record['session_id']] = (record['answered'][11:], record['raw_tlx'])
         self.get_logger().info(f'NASA-TLX {"correction " if earlier else ""}stored in {path}: '
                                f'raw TLX {record["raw_tlx"]}')
         self.push_words()

@@ -21,6 +21,10 @@ class DisplayParams:
                           '0600); empty = no questionnaire on the page')
     tlx_title: str = param('', 'what the questionnaire asks about, shown above it (e.g. the '
                            'condition without naming the case)')
+    subject_id: str = param('', 'pseudonymous subject id shown on the console (never on the '
+                            "person's page); empty = no subject")
+    condition: str = param('', "the condition and its place in the subject's order, shown on "
+                           'the console (e.g. "condition 2 of 6 in the order (case 3)")')
     sim_node: str = param('sim', 'node whose parameters give the geometry and timing')
     agent_node: str = param('agent', 'node whose parameters give the episode counts and the '
                             'break between episodes')

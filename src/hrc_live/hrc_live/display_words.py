@@ -1,10 +1,15 @@
 """The words of the person's page: banner, panel, result, countdown and the console's milestone.
 
 Pure: computed from a :class:`hrc_live.display_core.Snapshot` (what the display node last
-received). :func:`overlay` is the one place of the person's words; the numbering is the same
-everywhere (episode x of y, test episode k of n, episodes with you so far).
+received). :func:`overlay` is the one place of the person's words. They are written for a
+participant, not an RL engineer: an episode is a "round", a training step a "part", an
+evaluation episode a "test round"; the numbers are the experimenter's (episode N on the console
+and in the runner's lines is round N on the page, both counted from 1).
+:class:`SteadyBanner` keeps a banner up at least ``BANNER_HOLD_S`` unless the situation (its
+tone) changes, so that a person never reads a flickering text.
 """
 
+from dataclasses import replace
 import math
 import re
 import typing
@@ -18,6 +23,22 @@ SUBTASK_WORDS = {'slider': 'keep the slider in the middle of the rod',
                  'ball': 'keep the ball in the middle of the pendulum'}
 CONTROL_WORDS = {'translation': 'You move the slider up and down (stick up = up).',
                  'rotation': 'You tilt the pendulum (stick up = right end up).'}
+# What the person's action does to the subtasks they are asked for, by their degree of freedom
+# (the couplings of hrc_sim_node.physics: accelerating the slider up presses the beam's free,
+# right end down; turning the beam pushes the slider the other way; the ball rolls toward the
+# lower end of the beam).
+EFFECT_WORDS = {
+    ('translation', 'ball'): 'Your moves tilt the beam: a quick move up dips its right end, a '
+                             'quick move down lifts it. The ball rolls toward the lower end.',
+    ('translation', 'pendulum'): 'A quick move up dips the right end of the beam, a quick move '
+                                 'down lifts it: move smoothly to keep it level.',
+    ('rotation', 'ball'): 'The ball rolls toward the lower end of the beam: lift the end it '
+                          'is rolling to.',
+    ('rotation', 'slider'): 'Turning the beam fast pushes the slider the other way: turn '
+                            'smoothly to keep it still.'}
+BANNER_HOLD_S = 1.0     # s a banner stays up at least, unless its tone changes
+ALONE_BANNER = 'The robot is practising alone: please wait'
+REPLAY_BANNER = 'Replay of a recorded session: nothing you do now is used'
 INVALID_STATE_NOTICE = ('The simulation sent an invalid state (not a finite number): the '
                         'picture is frozen. Operator: see the sim log.')
 # What the person reads when their joystick is lost (the technical reason is on the console).
@@ -35,7 +56,7 @@ def is_evaluating(session: SessionView, plan: typing.Optional[AgentPlan]) -> boo
 
 
 def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str:
-    """Return "Episode x of y" (or "Test episode k of n") for the current or next episode.
+    """Return "Round x of at most y" (or "Test round k of n") for the current or next episode.
 
     Training episode x is ``total_episodes + 1``; test episode k counts from the first
     evaluation episode, whose index is the number of training episodes. The result box uses
@@ -48,29 +69,29 @@ def episode_label(session: SessionView, plan: typing.Optional[AgentPlan]) -> str
         number = session.total_episodes + 1 if count is None else min(
             session.total_episodes + 1, count)
         if count is not None and session.total_episodes >= count:
-            return f'Practice: {count} episodes done'
-        return f'Practice episode {number}' + (f' of {count}' if count else '')
+            return f'Practice: {count} rounds done'
+        return f'Practice round {number}' + (f' of {count}' if count else '')
     if session.phase == 'done':
-        return f'{session.total_episodes} training episodes done'
+        return f'{session.total_episodes} rounds done'
     if is_evaluating(session, plan):
         index = session.episode - session.total_episodes + 1
         if plan is not None:    # never "3 of 2": a counter stays within its maximum
             index = min(index, plan.evaluation_episodes)
         total = f' of {plan.evaluation_episodes}' if plan is not None else ''
-        return f'Test episode {max(index, 1)}{total}'
+        return f'Test round {max(index, 1)}{total}'
     number = session.total_episodes + 1
     if plan is not None:
         number = min(number, plan.max_training_episodes)
     total = f' of at most {plan.max_training_episodes}' if plan is not None else ''
-    return f'Episode {number}{total}'
+    return f'Round {number}{total}'
 
 
 def result_number(result: ResultView, session: typing.Optional[SessionView]) -> str:
-    """Return "Episode x" or "Test episode k" of a finished episode, numbered as the label."""
+    """Return "Round x" or "Test round k" of a finished episode, numbered as the label."""
     if not result.evaluation:
-        return f'Episode {result.episode + 1}'
+        return f'Round {result.episode + 1}'
     training = session.total_episodes if session is not None else 0
-    return f'Test episode {result.episode - training + 1}'
+    return f'Test round {result.episode - training + 1}'
 
 
 def result_lines(result: ResultView, previous: typing.Optional[ResultView],
@@ -84,13 +105,13 @@ def result_lines(result: ResultView, previous: typing.Optional[ResultView],
             previous.evaluation == result.evaluation):
         change = (result.total_error - previous.total_error) / previous.total_error
         if change < -0.05:
-            lines.append('Better than the episode before.')
+            lines.append('Better than the round before.')
         elif change > 0.05:
-            lines.append('Not as good as the episode before.')
+            lines.append('Not as good as the round before.')
         else:
-            lines.append('About as good as the episode before.')
+            lines.append('About as good as the round before.')
     if result.converged:
-        lines.append('Goal reached for this training step.')
+        lines.append('The team reached the goal of this part.')
     return tuple(lines)
 
 
@@ -109,6 +130,72 @@ def countdown_of(snapshot: Snapshot, in_episode: bool) -> typing.Optional[int]:
     return max(0, math.ceil(snapshot.break_started + plan.episode_break - snapshot.now))
 
 
+def role_lines(session: SessionView) -> list:
+    """Return what the person does, their task and what their action does to it."""
+    if not session.human_involved:
+        return ['The robot works alone in this part.']
+    lines = [CONTROL_WORDS.get(session.human_dof, '')]
+    lines += [f'Your task: {SUBTASK_WORDS.get(subtask, subtask)}.'
+              for subtask in session.human_subtasks]
+    lines += [EFFECT_WORDS[(session.human_dof, subtask)] for subtask in session.human_subtasks
+              if (session.human_dof, subtask) in EFFECT_WORDS]
+    return lines
+
+
+def panel_lines(snapshot: Snapshot, label: str, in_episode: bool) -> list:
+    """Return the panel's lines: the round, the part, the role, the wait, the time left."""
+    session, state, now = snapshot.session, snapshot.state, snapshot.now
+    lines = ['Replay: ' + snapshot.replay] if snapshot.replay else []
+    lines.append(label)
+    if session.training_step_count > 1:
+        lines.append(f'Part {session.training_step + 1} of {session.training_step_count}')
+    lines += role_lines(session)
+    if snapshot.alone is not None and (snapshot.alone.episodes or snapshot.alone.ended is None):
+        lines.append(snapshot.alone.words(now, unit='round'))
+        wait = alone_wait(snapshot)
+        if wait is not None:
+            lines.append(f'You join in at most about {wait_words(wait)} (the robot may be '
+                         f'ready sooner).')
+    if in_episode and session.human_involved:   # lonely episodes run faster than the clock
+        steps_left = max(0, snapshot.physics.steps_per_episode - state.step)
+        lines.append(f'Time left: {steps_left * snapshot.physics.control_period:.0f} s')
+    lines.append(f'Rounds you played so far: {episodes_with_person(snapshot)}')
+    if snapshot.result is not None:
+        lines.append(f'Last round: ball {100 * snapshot.result.ball_error:.1f} cm off centre')
+    return lines
+
+
+def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
+    """Return (banner, tone) of ``snapshot``: what to do now, one text per situation."""
+    session, phase = snapshot.session, snapshot.session.phase
+    if snapshot.input_lost:     # first: the runner stops the agent (phase aborted) for it
+        return INPUT_LOST_BANNER, 'stop'
+    if snapshot.replay:
+        return REPLAY_BANNER, 'info'
+    if phase == 'aborted':
+        return 'Stopped by the operator. Please let go of the joystick.', 'stop'
+    if phase == 'done':
+        return 'The session is finished. Thank you!', 'info'
+    if phase == 'paused' and 'joystick disconnected' in session.message.lower():
+        # the runner's pause for a lost input: the joystick is back, the operator resumes
+        return 'The joystick is connected again: please wait for the operator', 'wait'
+    if phase == 'paused':
+        return 'Paused by the operator: please wait', 'wait'
+    if not session.human_involved:
+        # one text in and between the robot's own rounds (they come many times a second)
+        return ALONE_BANNER, 'wait'
+    if in_episode:
+        tasks = [SUBTASK_WORDS.get(subtask, subtask) for subtask in session.human_subtasks]
+        return (('Your turn: ' + ' and '.join(tasks)) if tasks else 'Your turn'), 'act'
+    if phase == 'updating':
+        return 'The robot is learning from the last round: please wait', 'wait'
+    if countdown and not snapshot.person_played and episodes_with_person(snapshot) == 0:
+        return f'Get ready: your first round starts in {countdown} s', 'wait'
+    if countdown:
+        return f'Get ready: the next round starts in {countdown} s', 'wait'
+    return 'The next round is starting', 'wait'
+
+
 def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
     """Return the banner, panel lines, result box and countdown of ``snapshot``."""
     session, state, now = snapshot.session, snapshot.state, snapshot.now
@@ -117,31 +204,10 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
         notice = INPUT_LOST_NOTICE      # the person needs no device path or FIFO detail
     if session is None:
         return Overlay('Please wait: the session is starting', 'info',
-                       ('Waiting for the robot to announce the session.',), notice=notice)
+                       ('The experimenter is preparing the session.',), notice=notice)
     label = episode_label(session, snapshot.plan)
-    lines = [label]
-    if session.training_step_count > 1:
-        lines.append(f'Training step {session.training_step + 1} of '
-                     f'{session.training_step_count}')
     in_episode = (state is not None and not state.final and state.episode >= session.episode
                   and not snapshot.interrupted)
-    if session.human_involved:
-        lines.append(CONTROL_WORDS.get(session.human_dof, ''))
-        tasks = [SUBTASK_WORDS.get(subtask, subtask) for subtask in session.human_subtasks]
-        lines += [f'Your task: {task}.' for task in tasks]
-    else:
-        lines.append('The robot works alone in this step.')
-    if snapshot.alone is not None and (snapshot.alone.episodes or snapshot.alone.ended is None):
-        lines.append(snapshot.alone.words(now))
-        wait = alone_wait(snapshot)
-        if wait is not None:
-            lines.append(f'You join in at most about {wait_words(wait)} (the robot may be '
-                         f'ready sooner).')
-    if in_episode and session.human_involved:   # lonely episodes run faster than the clock
-        steps_left = max(0, snapshot.physics.steps_per_episode - state.step)
-        lines.append(f'Time left: {steps_left * snapshot.physics.control_period:.0f} s')
-    lines.append(f'Episodes with you so far: {episodes_with_person(snapshot)}')
-
     result = ()
     # The result stays up during the break and the first seconds of the next episode.
     showing_result = snapshot.result is not None and (
@@ -149,46 +215,31 @@ def overlay(snapshot: Snapshot, result_seconds: float = 5.0) -> Overlay:
                            and now - snapshot.episode_started < result_seconds))
     if showing_result:
         result = result_lines(snapshot.result, snapshot.previous_result, session)
-    if snapshot.result is not None:
-        lines.append(f'Last episode: ball {100 * snapshot.result.ball_error:.1f} cm off centre')
-
     countdown = countdown_of(snapshot, in_episode)
-    phase = session.phase
-    first_with_person = session.human_involved and episodes_with_person(snapshot) == 0
-    if snapshot.input_lost:     # first: the runner stops the agent (phase aborted) for it
-        banner, tone = INPUT_LOST_BANNER, 'stop'
-    elif phase == 'aborted':
-        banner, tone = 'Stopped by the operator. Please let go of the joystick.', 'stop'
-    elif phase == 'done':
-        banner, tone = 'The session is finished. Thank you!', 'info'
-    elif phase == 'paused' and 'joystick disconnected' in session.message.lower():
-        # the runner's pause for a lost input: the joystick is back, the operator resumes
-        banner, tone = 'The joystick is connected again: please wait for the operator', 'wait'
-    elif phase == 'paused':
-        banner, tone = 'Paused by the operator: please wait', 'wait'
-    elif not in_episode:
-        if not session.human_involved:
-            banner = 'The robot is learning alone, please wait'
-            wait = alone_wait(snapshot)
-            if wait is not None:
-                banner += f' (at most about {wait_words(wait)})'
-        elif phase == 'updating':
-            banner = 'The robot is learning from the last episode: please wait'
-        elif first_with_person and countdown:
-            banner = f'Get ready: your first episode starts in {countdown} s'
-        elif countdown:
-            banner = f'Get ready: the next episode starts in {countdown} s'
-        else:
-            banner = 'The next episode is starting'
-        tone = 'wait'
-    elif not session.human_involved:
-        banner, tone = 'The robot is learning alone, please wait', 'wait'
-    else:
-        tasks = [SUBTASK_WORDS.get(subtask, subtask) for subtask in session.human_subtasks]
-        banner = ('Your turn: ' + ' and '.join(tasks)) if tasks else 'Your turn'
-        tone = 'act'
+    banner, tone = banner_of(snapshot, in_episode, countdown)
+    lines = panel_lines(snapshot, label, in_episode)
     return Overlay(banner, tone, tuple(line for line in lines if line), result, countdown,
                    label, notice)
+
+
+class SteadyBanner:
+    """Holds a banner at least ``hold`` s unless its tone (the situation) changes.
+
+    A text that would replace another of the same tone sooner waits; the newest text is then
+    shown once the hold is over (:meth:`shown` is called at the words' rate).
+    """
+
+    def __init__(self, hold: float = BANNER_HOLD_S):
+        self.hold = hold
+        self.text, self.tone, self.since = None, None, -math.inf
+
+    def shown(self, words: Overlay, now: float) -> Overlay:
+        """Return ``words`` with the banner that is shown at ``now`` (monotonic s)."""
+        changed = words.banner != self.text
+        if changed and (words.tone != self.tone or now - self.since >= self.hold
+                        or words.countdown is not None):
+            self.text, self.tone, self.since = words.banner, words.tone, now
+        return replace(words, banner=self.text, tone=self.tone)
 
 
 def alone_wait(snapshot: Snapshot) -> typing.Optional[float]:

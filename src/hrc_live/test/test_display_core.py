@@ -42,8 +42,8 @@ def test_the_person_is_told_their_task_and_their_control_during_an_episode():
     assert words.tone == 'act'
     assert words.banner == ('Your turn: keep the pendulum level and keep the ball in the '
                             'middle of the pendulum')
-    assert words.lines[0] == 'Episode 7 of at most 30' == words.episode_label
-    assert 'Training step 2 of 2' in words.lines
+    assert words.lines[0] == 'Round 7 of at most 30' == words.episode_label
+    assert 'Part 2 of 2' in words.lines
     assert 'You tilt the pendulum (stick up = right end up).' in words.lines
     # 12 of 200 steps done at 0.2 s each: 37.6 s left, shown whole.
     assert 'Time left: 38 s' in words.lines
@@ -53,9 +53,9 @@ def test_the_person_is_told_their_task_and_their_control_during_an_episode():
 def test_the_robot_learning_alone_asks_the_person_to_wait():
     words = overlay(model_in_episode(human_involved=False, human_subtasks=(),
                                      training_step=0).snapshot(now=3.5))
-    assert words.banner == 'The robot is learning alone, please wait'
+    assert words.banner == 'The robot is practising alone: please wait'
     assert words.tone == 'wait'
-    assert 'The robot works alone in this step.' in words.lines
+    assert 'The robot works alone in this part.' in words.lines
     assert not any(line.startswith('You ') for line in words.lines)
 
 
@@ -76,17 +76,17 @@ def test_after_an_episode_the_result_and_a_countdown_to_the_next_one():
     model.on_session(session(episode=7, total_episodes=7, human_involved_episodes=3), now=10.2)
     words = overlay(model.snapshot(now=11.5))
     assert words.countdown == 3  # the break of 4 s began at 10.0
-    assert words.banner == 'Get ready: the next episode starts in 3 s'
-    assert words.lines[0] == 'Episode 8 of at most 30'
-    assert words.result[0] == 'Episode 7 done'
+    assert words.banner == 'Get ready: the next round starts in 3 s'
+    assert words.lines[0] == 'Round 8 of at most 30'
+    assert words.result[0] == 'Round 7 done'
     assert words.result[1] == 'ball off centre: 3.0 cm on average'
     assert words.result[2] == f'pendulum tilt: {math.degrees(0.08):.1f} deg, slider: 1.0 cm'
-    assert 'Better than the episode before.' in words.result
-    assert 'Goal reached for this training step.' in words.result
+    assert 'Better than the round before.' in words.result
+    assert 'The team reached the goal of this part.' in words.result
     # The break is over: "starting", and the result stays up 5 s into the next episode.
-    assert overlay(model.snapshot(now=14.5)).banner == 'The next episode is starting'
+    assert overlay(model.snapshot(now=14.5)).banner == 'The next round is starting'
     model.on_state(StateView(7, 0, 0.0, 0.0, 0.0, False), now=14.6)
-    assert overlay(model.snapshot(now=16.0), result_seconds=5.0).result[0] == 'Episode 7 done'
+    assert overlay(model.snapshot(now=16.0), result_seconds=5.0).result[0] == 'Round 7 done'
     assert overlay(model.snapshot(now=20.0), result_seconds=5.0).result == ()
 
 
@@ -107,9 +107,9 @@ def test_updating_paused_aborted_done_and_evaluation_words():
     model.on_session(session(phase='done', total_episodes=7), now=42.0)
     words = overlay(model.snapshot(now=42.1))
     assert words.banner == 'The session is finished. Thank you!'
-    assert words.episode_label == '7 training episodes done'
+    assert words.episode_label == '7 rounds done'
     model.on_session(session(phase='evaluation', episode=8, total_episodes=7), now=43.0)
-    assert overlay(model.snapshot(now=43.1)).episode_label == 'Test episode 2 of 2'
+    assert overlay(model.snapshot(now=43.1)).episode_label == 'Test round 2 of 2'
 
 
 def test_without_session_or_plan_the_display_still_says_something_sensible():
@@ -117,7 +117,7 @@ def test_without_session_or_plan_the_display_still_says_something_sensible():
     words = overlay(model.snapshot(now=0.0))
     assert words.banner == 'Please wait: the session is starting'
     model.on_session(session(), now=0.0)
-    assert overlay(model.snapshot(now=0.0)).episode_label == 'Episode 7'  # no "of y" yet
+    assert overlay(model.snapshot(now=0.0)).episode_label == 'Round 7'  # no "of y" yet
     # A new session id forgets the old agent's plan.
     model.set_plan(PLAN)
     model.on_session(session(session_id='other'), now=1.0)
@@ -136,10 +136,10 @@ def test_numbering_agrees_between_the_label_and_the_result_in_evaluation():
                         now=1.0)
     model.on_state(StateView(11, 200, 0.0, 0.0, 0.0, True), now=1.0)
     words = overlay(model.snapshot(now=1.5))
-    assert words.episode_label == 'Test episode 3 of 3'
-    assert words.result[0] == 'Test episode 2 done'
+    assert words.episode_label == 'Test round 3 of 3'
+    assert words.result[0] == 'Test round 2 done'
     # The person played 10 training and 2 test episodes so far.
-    assert 'Episodes with you so far: 12' in words.lines
+    assert 'Rounds you played so far: 12' in words.lines
 
 
 def test_the_robot_practising_alone_is_told_and_the_first_episode_is_counted_down():
@@ -150,15 +150,15 @@ def test_the_robot_practising_alone_is_told_and_the_first_episode_is_counted_dow
     model.on_session(session(human_involved=False, human_subtasks=(), training_step=0,
                              episode=50, total_episodes=50, human_involved_episodes=0), now=20.0)
     words = overlay(model.snapshot(now=20.0))
-    assert 'The robot is practising alone: 50 episodes in 20 s.' in words.lines
-    assert words.banner == 'The robot is learning alone, please wait'
+    assert 'The robot is practising alone: 50 rounds in 20 s.' in words.lines
+    assert words.banner == 'The robot is practising alone: please wait'
     # The last lonely episode ends at 39.6 s; the person joins with a 4 s break.
     model.on_state(StateView(107, 200, 0.0, 0.0, 0.0, True), now=39.6)
     model.on_session(session(episode=108, total_episodes=108, human_involved_episodes=0),
                      now=40.0)
     words = overlay(model.snapshot(now=40.1))
-    assert 'The robot practised alone: 108 episodes in 40 s.' in words.lines
-    assert words.banner == 'Get ready: your first episode starts in 4 s'
+    assert 'The robot practised alone: 108 rounds in 40 s.' in words.lines
+    assert words.banner == 'Get ready: your first round starts in 4 s'
     assert words.countdown == 4
 
 
@@ -236,7 +236,7 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     model.on_session(session(phase='training'), now=20.0)
     words = overlay(model.snapshot(now=21.2))
     assert (words.banner, words.countdown, words.notice) == (
-        'Get ready: the next episode starts in 3 s', 3, '')
+        'Get ready: the next round starts in 3 s', 3, '')
     assert not any(line.startswith('Time left') for line in words.lines)
     model.on_state(StateView(6, 0, 0.0, 0.0, 0.0, False), now=24.0)   # the re-run starts
     assert overlay(model.snapshot(now=24.1)).banner.startswith('Your turn')
@@ -249,16 +249,16 @@ def test_every_resume_counts_down_the_next_episode():
         model.on_session(session(phase='paused', total_episodes=7, episode=7), now=pause)
         model.on_session(session(phase='training', total_episodes=7, episode=7), now=resume)
         words = overlay(model.snapshot(now=resume + 0.5))
-        assert words.banner == 'Get ready: the next episode starts in 4 s', resume
+        assert words.banner == 'Get ready: the next round starts in 4 s', resume
 
 
 def test_episode_counters_never_exceed_their_maximum():
     model = DisplayModel()
     model.set_plan(PLAN)                            # at most 30 training, 2 test episodes
     model.on_session(session(phase='aborted', episode=30, total_episodes=30), now=0.0)
-    assert overlay(model.snapshot(now=0.1)).episode_label == 'Episode 30 of at most 30'
+    assert overlay(model.snapshot(now=0.1)).episode_label == 'Round 30 of at most 30'
     model.on_session(session(phase='evaluation', episode=33, total_episodes=30), now=1.0)
-    assert overlay(model.snapshot(now=1.1)).episode_label == 'Test episode 2 of 2'
+    assert overlay(model.snapshot(now=1.1)).episode_label == 'Test round 2 of 2'
 
 
 def alone_status(done, phase='training'):
@@ -278,9 +278,9 @@ def test_the_robots_lonely_count_survives_a_pause_and_the_wait_is_estimated():
     words = overlay(model.snapshot(now=40.0))
     # 40 episodes in 20 s of practice (not 20 episodes: the count goes on after the pause);
     # 60 episodes left under the cap at 0.5 s each: at most about 30 s.
-    assert 'The robot is practising alone: 40 episodes in 20 s.' in words.lines
+    assert 'The robot is practising alone: 40 rounds in 20 s.' in words.lines
     assert 'You join in at most about 30 s (the robot may be ready sooner).' in words.lines
-    assert words.banner == 'The robot is learning alone, please wait (at most about 30 s)'
+    assert words.banner == 'The robot is practising alone: please wait'
     console = console_document(model.snapshot(now=40.0))
     assert console['milestone'] == ('The robot is practising alone: 40 episodes in 20 s; the '
                                     'person joins in at most about 30 s')
@@ -313,10 +313,10 @@ def test_practice_is_labelled_as_practice_on_the_page_and_the_console():
                              message='practice: episode 2 of 3, the person alone (the robot '
                                      'does not act)'), now=0.0)
     snapshot = model.snapshot(now=0.5)
-    assert overlay(snapshot).episode_label == 'Practice episode 2 of 3'
+    assert overlay(snapshot).episode_label == 'Practice round 2 of 3'
     console = console_document(snapshot)
     assert console['practice'] is True and console['milestone'] == '' and console['alone'] == ''
     model.on_session(session(strategy='practice', training_step=0, training_step_count=1,
                              episode=3, total_episodes=3, human_involved_episodes=3,
                              message='practice: episode 3 of 3, the person alone'), now=1.0)
-    assert overlay(model.snapshot(now=1.1)).episode_label == 'Practice: 3 episodes done'
+    assert overlay(model.snapshot(now=1.1)).episode_label == 'Practice: 3 rounds done'

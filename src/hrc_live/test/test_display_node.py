@@ -23,23 +23,22 @@ import time
 import urllib.error
 import urllib.request
 
-from hrc_common import qos, topics
+from hrc_common import qos
 from hrc_common.contract import BODY_COLOURS, rgb8
 from hrc_testing.nodes import wait_for
 from hrc_live.display_documents import COLORS
 from hrc_live.input_check import INPUT_LOST_TOPIC
-from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
+from hrc_msgs.msg import HumanAction, SessionStatus
 from hrc_sim_node.body_geometry import body_poses
-from hrc_sim_node.physics import PhysicsParams, PhysicsState
+from hrc_sim_node.physics import PhysicsState
 import pytest
-from std_srvs.srv import Trigger
 import yaml
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from browser import open_browser, screenshot, set_viewport  # noqa: E402
+from browser import screenshot, set_viewport  # noqa: E402
+from page_graph import (close_to, fetch, PENDULUM_LENGTH, PHYSICS,  # noqa: E402
+                        session_status, status, task_state)
 
-PENDULUM_LENGTH = 0.4  # not the default 0.5: the display must take it from the sim
-PHYSICS = PhysicsParams(pendulum_length=PENDULUM_LENGTH)
 BALL, PENDULUM, SLIDER, ROD = (rgb8(BODY_COLOURS[name]) for name in
                                ('ball', 'pendulum', 'slider', 'rod'))
 
@@ -52,116 +51,6 @@ def test_a_port_in_use_is_refused_with_the_reason(start_node):
         display = start_node('hrc_live', 'display_node', parameters={'port': port})
         assert display.wait(timeout=60) == 2
     assert f'cannot serve on 127.0.0.1:{port}' in display.output
-
-
-def served_port(process) -> int:
-    found = []
-
-    def logged():
-        match = re.search(r'serving the display on http://127\.0\.0\.1:(\d+)/', process.output)
-        if match:
-            found.append(int(match.group(1)))
-        return bool(found)
-
-    assert wait_for(logged, timeout=60), process.output
-    return found[0]
-
-
-def fetch(port, path):
-    with urllib.request.urlopen(f'http://127.0.0.1:{port}{path}', timeout=10) as answer:
-        return answer.status, answer.read()
-
-
-def status(port) -> dict:
-    return json.loads(fetch(port, '/status.json')[1])
-
-
-def task_state(episode, step, slider, angle, ball, final=False):
-    message = TaskState(episode=episode, step=step, slider_position=slider, pendulum_angle=angle,
-                        ball_position=ball, truncated=final)
-    message.header.stamp.sec = step
-    return message
-
-
-def session_status(**values):
-    message = SessionStatus(session_id='display-test', case_id=2,
-                            strategy='responsibility_guided', training_step=1,
-                            training_step_count=2, robot_dof=SessionStatus.DOF_ROTATION,
-                            human_dof=SessionStatus.DOF_TRANSLATION, human_involved=True,
-                            human_subtasks=['slider', 'ball'], episode=3, total_episodes=3,
-                            human_involved_episodes=1, phase=SessionStatus.PHASE_TRAINING)
-    for name, value in values.items():
-        setattr(message, name, value)
-    return message
-
-
-def close_to(pixel, color, tolerance=14):
-    return all(abs(int(a) - int(b)) <= tolerance for a, b in zip(pixel, color))
-
-
-class FakeAgent:
-    """The agent's side of the display: parameters, topics, operator services; spun in a thread."""
-
-    def __init__(self, context):
-        import rclpy
-        from rclpy.executors import SingleThreadedExecutor
-
-        self.node = rclpy.create_node('agent', context=context)
-        for name, value in (('max_training_episodes', 30), ('evaluation_episodes', 2),
-                            ('episode_break', 4.0), ('mode', 'realtime')):
-            self.node.declare_parameter(name, value)
-        self.session = self.node.create_publisher(SessionStatus, topics.SESSION,
-                                                  qos.SESSION_QOS)
-        self.state = self.node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
-        self.slice_state = self.node.create_publisher(TaskState, topics.SLICE_STATE,
-                                                      qos.STATE_QOS)
-        self.episode = self.node.create_publisher(EpisodeSummary, topics.EPISODE,
-                                                  qos.EPISODE_QOS)
-        self.human = self.node.create_publisher(HumanAction, topics.HUMAN_ACTION,
-                                                qos.HUMAN_ACTION_QOS)
-        self.calls = []
-
-        def serve(name):
-            def answer(request, response):
-                self.calls.append(name)
-                response.success, response.message = True, f'{name} requested (test agent)'
-                return response
-            return answer
-
-        for name in ('pause', 'resume', 'abort'):
-            self.node.create_service(Trigger, f'/hrc/agent/{name}', serve(name))
-        self.executor = SingleThreadedExecutor(context=context)
-        self.executor.add_node(self.node)
-        self.thread = threading.Thread(target=self.spin, daemon=True)
-        self.running = True
-        self.thread.start()
-
-    def spin(self):
-        while self.running:
-            self.executor.spin_once(timeout_sec=0.05)
-
-    def close(self):
-        self.running = False
-        self.thread.join(5)
-        self.executor.shutdown()
-        self.node.destroy_node()
-
-
-@pytest.fixture
-def graph(start_node, rclpy_context, tmp_path):
-    start_node('hrc_sim_node', 'sim_node', parameters={
-        'pendulum_length': PENDULUM_LENGTH, 'marker_rate': 0.0})
-    display = start_node('hrc_live', 'display_node', parameters={
-        'port': 0, 'tlx_file': str(tmp_path / 'tlx.yaml'), 'tlx_title': 'the part you played'})
-    agent = FakeAgent(rclpy_context)
-    port = served_port(display)
-    agent.session.publish(session_status())
-    assert wait_for(lambda: (status(port)['geometry_from_sim'] and status(port)['plan']
-                             and status(port)['session']), 60, 0.2), display.output
-    browser = open_browser(1920, 1080)
-    yield agent, port, browser, display
-    browser.quit()
-    agent.close()
 
 
 def show(agent, browser, episode, step, slider, angle, ball):
@@ -218,7 +107,7 @@ def test_the_page_draws_the_state_at_full_hd_and_phone_size(graph, tmp_path):
     banner = browser.find_element('id', 'banner')
     assert banner.text == ('Your turn: keep the slider in the middle of the rod and keep the '
                            'ball in the middle of the pendulum')
-    assert browser.find_element('id', 'label').text == 'Episode 4 of at most 30'
+    assert browser.find_element('id', 'label').text == 'Round 4 of at most 30'
     # The reachable extremes stay in the picture, at full HD and at a phone's size.
     limit = PHYSICS.pendulum_limit
     extremes = [(0.1, limit, PENDULUM_LENGTH / 2), (-0.1, -limit, -PENDULUM_LENGTH / 2),
