@@ -145,8 +145,7 @@ def role_lines(session: SessionView) -> list:
 def panel_lines(snapshot: Snapshot, label: str, in_episode: bool) -> list:
     """Return the panel's lines: the round, the part, the role, the wait, the time left."""
     session, state, now = snapshot.session, snapshot.state, snapshot.now
-    lines = ['Replay: ' + snapshot.replay] if snapshot.replay else []
-    lines.append(label)
+    lines = [label] + (['Replay: ' + snapshot.replay] if snapshot.replay else [])
     if session.training_step_count > 1:
         lines.append(f'Part {session.training_step + 1} of {session.training_step_count}')
     lines += role_lines(session)

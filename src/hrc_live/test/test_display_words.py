@@ -106,7 +106,7 @@ def test_a_replay_is_marked_as_one():
     model.set_replay('bags/case2-seed0 at rate 1.0')
     words = overlay(model.snapshot(now=1.0))
     assert words.banner == REPLAY_BANNER and words.tone == 'info'
-    assert words.lines[0] == 'Replay: bags/case2-seed0 at rate 1.0'
+    assert words.lines[1] == 'Replay: bags/case2-seed0 at rate 1.0'
     model.set_replay('')
     assert overlay(model.snapshot(now=1.0)).banner.startswith('Your turn')
 
