@@ -39,6 +39,12 @@ TABLE2_NOTE = (
     "radians (mixed units, as the paper's sum). " + INTERVAL_NOTE + ' Sessions that hit the '
     'episode limit enter the episode counts at the limit: those columns are restricted means '
     '(a lower bound of the unrestricted mean).')
+OUTCOME_TITLE = 'converged / at the cap / unfinished'
+OUTCOME_NOTE = (
+    'Converged / at the cap / unfinished: sessions whose training met the convergence rule in '
+    'its last step; that ran to the episode cap without meeting it (their episode counts are '
+    'the cap); that did not finish (no final evaluation, or bags not closed: an abort, a '
+    'crash). A case whose sessions stopped at the cap did not learn the task in the budget.')
 PERSON_TIME_NOTE = (
     "The person's minutes: the human-involved episodes of training (judging episodes "
     "included) at the session's episode duration; breaks, practice and the final evaluation "
@@ -57,6 +63,21 @@ def _units_of(key: str, robot: str) -> str:
     return ' ' + EFFORT_UNITS[dof]
 
 
+def session_outcome(session) -> str:
+    """Return 'converged', 'cap' or 'unfinished' of one session (from its bags)."""
+    values = measures(session)
+    bag = session.extra.get('bag_session')
+    if (bag is not None and not bag.complete) or not values['evaluation_episodes']:
+        return 'unfinished'
+    return 'converged' if values['converged'] else 'cap'
+
+
+def outcome_cell(members) -> str:
+    """Return "converged / at the cap / unfinished" counts of a case's sessions."""
+    outcomes = [session_outcome(member) for member in members]
+    return ' / '.join(str(outcomes.count(name)) for name in ('converged', 'cap', 'unfinished'))
+
+
 def table2_intervals(groups: dict, seed: int = 0, resamples: int = RESAMPLES) -> dict:
     """Return {case_id: {measure: Interval}} of ``groups`` ({case_id: [SessionRecord]})."""
     result = {}
@@ -71,7 +92,8 @@ def table2_markdown(groups: dict, seed: int = 0, resamples: int = RESAMPLES,
                     intervals: dict = None) -> str:
     """Return Table II: mean and 95% interval over seeds per cell (see column_interval)."""
     intervals = intervals or table2_intervals(groups, seed, resamples)
-    header = ['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
+    header = (['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
+              + [OUTCOME_TITLE])
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for case_id, members in groups.items():
         strategy, robot = _roles(members)
@@ -82,6 +104,7 @@ def table2_markdown(groups: dict, seed: int = 0, resamples: int = RESAMPLES,
             if key in PHYSICAL_EFFORT_KEYS and text != 'n/a':
                 text += _units_of(key, robot)
             cells.append(text)
+        cells.append(outcome_cell(members))
         lines.append('| ' + ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'
 
@@ -97,6 +120,7 @@ def table2_csv(groups: dict, intervals: dict) -> str:
     header = ['strategy', 'case_id', 'robot_dof', 'sessions']
     for key, _, _ in COLUMNS:
         header += [f'{key}_mean', f'{key}_low', f'{key}_high', f'{key}_n']
+    header += ['sessions_converged', 'sessions_at_cap', 'sessions_unfinished']
     writer.writerow(header)
     for case_id, members in groups.items():
         strategy, robot = _roles(members)
@@ -105,6 +129,8 @@ def table2_csv(groups: dict, intervals: dict) -> str:
             interval = intervals[case_id][key]
             cells += [_csv_number(interval.estimate), _csv_number(interval.low),
                       _csv_number(interval.high), interval.count]
+        outcomes = [session_outcome(member) for member in members]
+        cells += [outcomes.count(name) for name in ('converged', 'cap', 'unfinished')]
         writer.writerow(cells)
     return buffer.getvalue()
 
