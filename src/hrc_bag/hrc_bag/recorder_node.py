@@ -26,6 +26,7 @@ from hrc_common import bounded_yaml
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
 from hrc_common.nodes import closing_log, DrainedNode, run_node, take_waiting
+from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
@@ -71,6 +72,7 @@ class RecorderNode(DrainedNode):
     def __init__(self):
         super().__init__('recorder')
         self.params = declare_parameters(self, RecorderParams)
+        self.session_end = SessionEndWatch(self, self.params.exit_after_session)
         config, config_text = self._load_session_config(self.params.session_config)
         self._subscriptions_by_topic = {}
         self._waiting = []                  # topics whose type is not known yet

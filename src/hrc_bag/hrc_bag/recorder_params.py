@@ -58,6 +58,9 @@ class RecorderParams:
         'messages in one batch (not an executor turn and a callback per message: the '
         "recorder's cost); at least twice per flush_period; longer costs less CPU and adds to "
         'what a SIGKILL can lose of the open episode', low=0.001, high=1.0)
+    exit_after_session: bool = param(
+        True, 'exit once the agent says the session is done (phase done on /hrc/session), as a '
+        'node started by hand should; hrc session turns it off for the nodes it stops itself')
     discovery_period: float = param(
         0.5, 'period (s) of the graph check for topics of not yet known type', low=0.05,
         high=10.0)

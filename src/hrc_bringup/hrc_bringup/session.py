@@ -76,6 +76,10 @@ def prepare_parameters(settings: SessionSettings, options, params_dir: pathlib.P
     Raises ValueError (or OSError) with the reason when the session cannot start.
     """
     parameters = compose(settings, params_dir)
+    for node in ('sim', 'human', 'recorder'):
+        if node in parameters and node not in options.remote_nodes:
+            # this runner stops them in its order (the recorder last), not the agent's "done"
+            parameters[node]['exit_after_session'] = False
     if settings.record:
         parameters['recorder']['session_config'] = str(run_dir / 'session.yaml')
     if live_input:

@@ -108,6 +108,9 @@ class HumanParams:
     script_file: str = param('', 'stick script (CSV "time,axis[,enable]", time in s from each '
                              "episode's start; hrc_joystick_node.stick_script) used with input "
                              'script')
+    exit_after_session: bool = param(
+        True, 'exit once the agent says the session is done (phase done on /hrc/session), as a '
+        'node started by hand should; hrc session turns it off for the nodes it stops itself')
 
     def check(self):
         """Return the reasons the parameters do not fit together."""

@@ -38,6 +38,7 @@ from hrc_common.contract import NS_PER_S, SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
+from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from rclpy.node import Node
@@ -101,6 +102,7 @@ class HumanNode(Node):
     def __init__(self):
         super().__init__('human')
         self.params = params = self._declare()
+        self.session_end = SessionEndWatch(self, params.exit_after_session)
         self.core = HumanCore(params, self._profiles, str(self._profiles_path))
         self.profile = self.core.profile
 

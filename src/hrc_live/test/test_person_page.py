@@ -64,7 +64,7 @@ def check_page(browser, folder, name, banner_start, boxes):
 
 
 def lonely_rounds(agent, first, count):
-    """The robot practises alone: ``count`` rounds of a few states each, as fast as DDS goes."""
+    """Publish ``count`` rounds of the robot practising alone (a few states each, at once)."""
     for episode in range(first, first + count):
         agent.session.publish(session_status(
             human_involved=False, human_subtasks=[], training_step=0, episode=episode,

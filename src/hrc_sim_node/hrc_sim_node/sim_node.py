@@ -33,6 +33,7 @@ from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
+from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
@@ -83,6 +84,7 @@ class SimNode(Node):
     def __init__(self):
         super().__init__('sim')
         self.params = params = declare_parameters(self, SimParams)
+        self.session_end = SessionEndWatch(self, params.exit_after_session)
         try:
             self.physics = SliderPendulumBall(physics_params_of(params), gui=params.gui)
         except RuntimeError as error:

@@ -46,6 +46,9 @@ class SimParams(PhysicsParams):
                                low=0.0, high=60.0)
     gui: bool = param(False, 'open the PyBullet GUI window (needs a display); default: '
                       'headless (DIRECT)')
+    exit_after_session: bool = param(
+        True, 'exit once the agent says the session is done (phase done on /hrc/session), as a '
+        'node started by hand should; hrc session turns it off for the nodes it stops itself')
 
     def check(self) -> list:
         """Return the reasons why the fields do not fit together (empty if they do)."""
