@@ -1,4 +1,4 @@
-"""Nodes started by hand end with their session: after the agent's "done" they exit 0 by themselves.
+"""Nodes started by hand end with their session: after the agent's "done" they exit 0 on their own.
 
 The README's hand-started graph (sim, human, recorder, agent as separate ``ros2 run``
 processes): once the agent is done, the sim, the human node and the recorder exit 0 with a
