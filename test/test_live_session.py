@@ -543,12 +543,12 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     assert (INPUT_LOST_BANNER, INPUT_LOST_NOTICE) in {(b, n) for b, n, _ in page_words.seen}
     after = banners[lost:]
     countdown = next(i for i, b in enumerate(after) if b.startswith('Get ready: the next '
-                                                                   'episode starts in'))
+                                                                   'round starts in'))
     assert any(b.startswith('Your turn') for b in after[countdown:]), after
-    # (a label shown before the display has read the agent's plan has no maximum: "Episode N")
+    # (a label shown before the display has read the agent's plan has no maximum: "Round N")
     assert all(int(re.search(r'of at most (\d+)', label).group(1)) >= int(
-        re.search(r'Episode (\d+)', label).group(1)) for _, _, label in page_words.seen
-        if label.startswith('Episode ') and 'of at most' in label), page_words.seen
+        re.search(r'Round (\d+)', label).group(1)) for _, _, label in page_words.seen
+        if label.startswith('Round ') and 'of at most' in label), page_words.seen
     summaries = watcher.summaries
     check_clock_switch(episode_durations(tmp_path / 'bags' / 'case2', rosbags_typestore),
                        summaries, (tmp_path / 'runs' / 'case2' / 'logs' / 'sim.log').read_text())

@@ -8,6 +8,7 @@ keeps them up: the session may be resumed (``--resume-from``) against the same n
 
 from hrc_common import qos, topics
 from hrc_common.contract import Phase
+from hrc_msgs.msg import SessionStatus
 
 # Seconds between the agent's "done" and the exit: the last messages of the session (its final
 # status, a late summary) are still taken, and a recorder writes them before it closes.
@@ -21,7 +22,6 @@ class SessionEndWatch:
         self.node, self.grace = node, grace
         self.ending = False
         if enabled:
-            from hrc_msgs.msg import SessionStatus  # here: the module is importable without ROS
             node.create_subscription(SessionStatus, topics.SESSION, self._on_status,
                                      qos.SESSION_QOS)
 
