@@ -21,13 +21,13 @@ import sys
 
 from hrc_common.executables import executable_path
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
+from hrc_testing.live import loose_task_tree, operator, plug_in
 from hrc_testing.nodes import wait_for
 import yaml
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'src' / 'hrc_live'
                        / 'test'))
 from browser import open_browser  # noqa: E402
-from test_live_session import loose_task_tree, operator, plug_in  # noqa: E402
 
 SHORT = ['--set', 'sim.episode_duration=3.0', '--set', 'agent.horizon=64',
          '--set', 'agent.episode_break=0.5', '--set', 'agent.convergence_window=1',
@@ -73,11 +73,10 @@ class Runner:
             if self.process.poll() is None:
                 self.process.kill()
                 self.process.wait()
-            self.log.close()
 
 
 def answer_tlx(browser, page: str) -> None:
-    """The person answers the NASA-TLX on their page; the page thanks them."""
+    """Answer the NASA-TLX on the person's page as they would; wait for the thank-you."""
     browser.get(page)
     form = browser.find_element('id', 'tlx')
     assert wait_for(form.is_displayed, 120, 0.2), browser.find_element('tag name', 'body').text
@@ -126,7 +125,7 @@ def test_an_experimenter_runs_two_conditions_with_an_abort_and_an_unplug(tmp_pat
         # Condition 1: aborted by the operator while the person acts, then resumed.
         first = Runner(session_command(commands[0], ros_domain_id, 'cond1', tmp_path), tmp_path,
                        tmp_path / 'cond1.log')
-        first.wait_for_output(r"the person joins|human yes", 240)
+        first.wait_for_output(r'the person joins|human yes', 240)
         code, said = operator(ros_domain_id, 'abort')
         assert code == 0, said
         assert first.finish() == EXIT_OPERATOR_ABORT, first.output()

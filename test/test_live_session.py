@@ -23,8 +23,8 @@ from hrc_bringup import cli
 from hrc_common import qos, topics
 from hrc_common.session_control import EXIT_OPERATOR_ABORT
 from hrc_common.executables import executable_path
+from hrc_testing.live import loose_task_tree, operator, plug_in
 from hrc_testing.nodes import wait_for
-from hrc_joystick_node.js_event import JS_EVENT_AXIS, JS_EVENT_INIT, pack_event
 from hrc_live.study import assign_orders, load_index, register, save_registry
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from mcap.reader import make_reader
@@ -76,14 +76,6 @@ class Watcher:
     def close(self):
         self.executor.shutdown()
         self.node.destroy_node()
-
-
-def operator(domain_id, command):
-    """Run ``hrc operator <command>``; return (exit code, output)."""
-    result = subprocess.run([str(executable_path('hrc_bringup', 'hrc')), 'operator', command,
-                             '--domain-id', str(domain_id), '--timeout', '30'],
-                            capture_output=True, text=True, timeout=120)
-    return result.returncode, result.stdout + result.stderr
 
 
 def session_records(folder):
@@ -268,13 +260,6 @@ def test_pause_resume_abort_over_dds_then_resume_from_the_checkpoint(tmp_path, r
 SHORT_STEPS = 15  # control steps per episode (episode_duration 3 s)
 
 
-def loose_task_tree(folder) -> str:
-    source = pathlib.Path(__file__).resolve().parents[1] / 'params' / 'task_tree.yaml'
-    path = pathlib.Path(folder) / 'loose_task_tree.yaml'
-    path.write_text(re.sub(r'tolerance: .*', 'tolerance: 10.0', source.read_text()))
-    return str(path)
-
-
 def case2_command(tmp_path, domain_id, *extra):
     return [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id', str(domain_id),
             '--bags-dir', str(tmp_path / 'bags'), '--runs-dir', str(tmp_path / 'runs'),
@@ -408,18 +393,6 @@ def test_case2_robot_alone_in_lockstep_then_realtime_with_the_simulated_human(
     assert {a.source for a in bag['/hrc/human/action']} <= {HumanAction.SOURCE_SIMULATED,
                                                              HumanAction.SOURCE_NONE}
     assert (tmp_path / 'runs' / 'checkpoints' / 'case2' / 'latest.pt').is_file()
-
-
-def js_bytes(event_type, number, value, init=False):
-    return pack_event(0, value, event_type | (JS_EVENT_INIT if init else 0), number)
-
-
-def plug_in(fifo, stick=-16384):
-    """Open the FIFO as the joystick (O_RDWR never blocks) and send its INIT state."""
-    writer = os.open(fifo, os.O_RDWR)
-    os.write(writer, js_bytes(JS_EVENT_AXIS, 0, 0, init=True)
-             + js_bytes(JS_EVENT_AXIS, 1, stick, init=True))
-    return writer
 
 
 class PageWords:
