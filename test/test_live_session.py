@@ -56,6 +56,12 @@ class Watcher:
                                       qos.EPISODE_QOS)
         # The nodes publishing /hrc/session, each time the set changed (sampled while waiting).
         self.session_publishers = []
+        # Every status of /diagnostics: (name, level) in order of arrival.
+        from diagnostic_msgs.msg import DiagnosticArray
+        self.diagnostics = []
+        self.node.create_subscription(DiagnosticArray, '/diagnostics', lambda message: (
+            self.diagnostics.extend((status.name, status.level[0])
+                                    for status in message.status)), 50)
 
     def sample_session_publishers(self):
         names = tuple(sorted(info.node_name for info in
@@ -492,6 +498,11 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             page_words.banners()
         code, said = operator(ros_domain_id, 'resume')
         assert code == 0 and 'resuming' in said, said
+        # /diagnostics: the human node's input went to ERROR while unplugged, and back to OK
+        lost_at = next(index for index, item in enumerate(watcher.diagnostics)
+                       if item == ('human: input', 2))
+        assert watcher.wait(lambda: ('human: input', 0) in watcher.diagnostics[lost_at:], 30), \
+            watcher.diagnostics
         assert watcher.wait(lambda: runner.poll() is not None, timeout=240), output()
     finally:
         page_words.stop()
@@ -502,6 +513,8 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
+    assert {'sim: timing', 'recorder: writing', 'human: input'} <= {
+        name for name, _ in watcher.diagnostics}, watcher.diagnostics
     # The terminal says a pause for the joystick, never an operator's abort.
     assert 'phase aborted' not in text and 'session aborted by the operator' not in text, text
     assert 'the joystick is connected again' in text, text

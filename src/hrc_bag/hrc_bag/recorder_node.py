@@ -18,6 +18,8 @@ written (disk full, permissions): the session must stop, nothing is dropped sile
 import faulthandler
 import functools
 import importlib
+import pathlib
+import shutil
 import signal
 import sys
 import time
@@ -26,6 +28,7 @@ from hrc_common import bounded_yaml
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
 from hrc_common.nodes import closing_log, DrainedNode, run_node, take_waiting
+from hrc_common.diagnostics import DiagnosticsReporter, disk_level, status
 from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -73,6 +76,7 @@ class RecorderNode(DrainedNode):
         super().__init__('recorder')
         self.params = declare_parameters(self, RecorderParams)
         self.session_end = SessionEndWatch(self, self.params.exit_after_session)
+        self.diagnostics = DiagnosticsReporter(self, self._diagnostics)
         config, config_text = self._load_session_config(self.params.session_config)
         self._subscriptions_by_topic = {}
         self._waiting = []                  # topics whose type is not known yet
@@ -208,6 +212,26 @@ class RecorderNode(DrainedNode):
         hashes = [str(info.topic_type_hash) for info in publishers
                   if info.topic_type == type_name]
         return TopicDescription(type_name, profiles, hashes[0] if hashes else '')
+
+    def _diagnostics(self) -> list:
+        """Return ``recorder: writing`` (levels and thresholds: hrc_common.diagnostics)."""
+        folder = pathlib.Path(self.params.output_dir)
+        while not folder.exists() and folder != folder.parent:
+            folder = folder.parent              # the bags folder is made at the first file
+        try:
+            free = shutil.disk_usage(folder).free
+        except OSError:
+            free = 0
+        failed = str(self.core.failed) if self.core.failed is not None else ''
+        level, words = disk_level(free, failed)
+        closed = self.core.closed_files
+        return [status('recorder: writing', str(folder), level, words, {
+            'session': self.core.session_id or '(not known yet)',
+            'files_closed': len(closed),
+            'messages_written': sum(info.message_count for info in closed),
+            'files_open': len(self.core.open_files),
+            'messages_waiting': self.core.waiting,
+            'disk_free_mib': free >> 20})]
 
     def close(self) -> None:
         """Take what is still waiting, close the open episode file (called on shutdown)."""

@@ -332,6 +332,11 @@ class EpisodeRecorder:
     # -- the interface the node uses --------------------------------------------------------
 
     @property
+    def waiting(self) -> int:
+        """Return the messages buffered, not yet written (their episode file is not open)."""
+        return len(self._pending)
+
+    @property
     def current_episode(self) -> typing.Optional[int]:
         """Return the episode of the newest open file (None between episodes)."""
         return self.current.episode if self.current is not None else None

@@ -38,6 +38,7 @@ from hrc_common.contract import NS_PER_S, SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME, set_wrench_value
 from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
+from hrc_common.diagnostics import DiagnosticsReporter
 from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
@@ -103,6 +104,7 @@ class HumanNode(Node):
         super().__init__('human')
         self.params = params = self._declare()
         self.session_end = SessionEndWatch(self, params.exit_after_session)
+        self.diagnostics = DiagnosticsReporter(self, self._diagnostics)
         self.core = HumanCore(params, self._profiles, str(self._profiles_path))
         self.profile = self.core.profile
 
@@ -114,6 +116,7 @@ class HumanNode(Node):
         self._last_messages = None  # (answer, HumanAction, WrenchStamped) of the last answer
         self._last_status = None
         self._last_status_time = 0.0
+        self._last_status_message = None   # the newest input status, also on /diagnostics
 
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.action_publisher = self.create_publisher(HumanAction, topics.HUMAN_ACTION,
@@ -279,6 +282,15 @@ class HumanNode(Node):
                 logger.warning(change)
         self.publish_status(now)
 
+    def _diagnostics(self) -> list:
+        """Return the input status as ``human: input`` (none before the first)."""
+        message = self._last_status_message
+        if message is None:
+            return []
+        return [DiagnosticStatus(level=message.level, name='human: input',
+                                 message=message.message, hardware_id=message.hardware_id,
+                                 values=list(message.values))]
+
     def publish_status(self, now: float) -> None:
         """Publish the input status on a change, and every STATUS_HEARTBEAT s."""
         status = self.core.input_status
@@ -295,7 +307,9 @@ class HumanNode(Node):
             extra['garbage_bytes'] = self.device.parser.garbage_bytes
         if self.joy is not None:
             extra['joy_status'] = self.joy.status(now)
-        self.status_publisher.publish(status_message(status, hardware, extra))
+        message = status_message(status, hardware, extra)
+        self._last_status_message = message
+        self.status_publisher.publish(message)
 
     def on_joy(self, message: Joy) -> None:
         """Keep the latest /joy axes and buttons; forward a move of the stick at once."""

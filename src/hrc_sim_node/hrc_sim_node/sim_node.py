@@ -33,6 +33,7 @@ from hrc_common import qos, topics
 from hrc_common.contract import SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
+from hrc_common.diagnostics import DiagnosticsReporter, TimingHealth
 from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
@@ -85,6 +86,10 @@ class SimNode(Node):
         super().__init__('sim')
         self.params = params = declare_parameters(self, SimParams)
         self.session_end = SessionEndWatch(self, params.exit_after_session)
+        # /diagnostics: the period jitter and the running episode's missing or stale commands
+        self.health = TimingHealth(params.control_period)
+        self.diagnostics = DiagnosticsReporter(self, lambda: [self.health.status(
+            self.protocol.mode != LOCKSTEP, self.protocol.mode, self.episode)])
         try:
             self.physics = SliderPendulumBall(physics_params_of(params), gui=params.gui)
         except RuntimeError as error:
@@ -291,6 +296,7 @@ class SimNode(Node):
         if advanced.period_end:
             self._state = state
             self._state_pub.publish(message)
+            self.health.on_state(state.step, advanced.missing, time.monotonic())
         else:
             self._slice_pub.publish(message)
         if lockstep and not last:
@@ -378,6 +384,7 @@ class SimNode(Node):
 
     def _warn_stale(self, actor: str, stamp: tuple, awaited) -> None:
         """Report a command that answers no state the sim waits for, with its publishers."""
+        self.health.on_stale()
         kind = actor + '_stale'
         suffix = self._throttle.admit(kind, time.monotonic())
         if suffix is None:
