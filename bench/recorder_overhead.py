@@ -153,7 +153,7 @@ def measure(episodes: int, steps: int, with_recorder: bool, output_dir: str,
             os.killpg(recorder.pid, signal.SIGINT)
             result['recorder_exit_code'] = recorder.wait(timeout=20)
     if recorder:
-        files = sorted(pathlib.Path(output_dir, 'bench').glob('bench_ep*.mcap'))
+        files = sorted(pathlib.Path(output_dir, 'bench').glob('bench_episode*.mcap'))
         result['files'] = [path.name for path in files]
         sizes = [path.stat().st_size for path in files]
         result['episode_files'] = len(files)

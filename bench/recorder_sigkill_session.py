@@ -127,7 +127,7 @@ def examine(folder: pathlib.Path, session_id: str, heard: dict, kill_ns: int,
     done = {episode: info for episode, info in heard.items()
             if kill_ns - info[0] > finished * 1e9}
     for episode, (_, steps, human_involved) in sorted(done.items()):
-        name = f'{session_id}_ep{episode:04d}.mcap'
+        name = f'{session_id}_episode{episode + 1:04d}.mcap'
         if name not in closed:
             problems[episode] = ['not closed before the kill']
         else:
@@ -143,7 +143,8 @@ def examine(folder: pathlib.Path, session_id: str, heard: dict, kill_ns: int,
             if message.log_time <= kill_ns:
                 newest = max(newest, message.log_time)
     waiting = [kill_ns - info[0] for episode, info in heard.items()
-               if info[0] < kill_ns and f'{session_id}_ep{episode:04d}.mcap' not in closed]
+               if info[0] < kill_ns
+               and f'{session_id}_episode{episode + 1:04d}.mcap' not in closed]
     return {'episodes_heard': len([e for e, info in heard.items() if info[0] < kill_ns]),
             'checked': len(done), 'problems': problems,
             'newest_recorded_before_kill': (kill_ns - newest) / 1e9 if newest else None,

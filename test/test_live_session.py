@@ -552,8 +552,8 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
     # the report counts the re-run and says so.
     from hrc_bag import bag_reader
     folder = tmp_path / 'bags' / 'case2'
-    dropped = folder / f'case2_ep{first:04d}.mcap'
-    rerun = folder / f'case2_ep{first:04d}_attempt2.mcap'
+    dropped = folder / f'case2_episode{first + 1:04d}.mcap'
+    rerun = folder / f'case2_episode{first + 1:04d}_attempt2.mcap'
 
     def states_of(path):
         decoder = bag_reader.MessageDecoder()

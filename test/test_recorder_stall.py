@@ -43,7 +43,7 @@ def test_a_stalled_recorder_makes_the_session_say_what_is_missing(tmp_path, ros_
         return log.read()
 
     try:
-        first = tmp_path / 'bags' / 'stall' / 'stall_ep0000.mcap'
+        first = tmp_path / 'bags' / 'stall' / 'stall_episode0001.mcap'
         assert wait_for(lambda: first.exists() and recorder_pid(ros_domain_id), 120), output()
         pid = recorder_pid(ros_domain_id)
         assert pid > 0 and runner.poll() is None, output()

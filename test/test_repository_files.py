@@ -24,7 +24,7 @@ def ignored(path: str) -> bool:
 
 @pytest.mark.parametrize('path', ['study/subjects.yaml', 'study/index.yaml', 'study/tlx.yaml',
                                   'report/table2.md', 'results/results.md', 'runs/x/final.pt',
-                                  'bags/s/s_ep0001.mcap'])
+                                  'bags/s/s_episode0002.mcap'])
 def test_what_a_session_writes_is_ignored(path):
     assert ignored(path)
 

@@ -28,7 +28,7 @@ def hrc(*arguments, cwd):
 def test_a_second_session_with_an_id_in_use_is_refused_and_writes_nothing(tmp_path):
     bag = tmp_path / 'bags' / 'pilot'
     bag.mkdir(parents=True)
-    (bag / 'pilot_ep0000.mcap').write_bytes(b'an earlier session')
+    (bag / 'pilot_episode0001.mcap').write_bytes(b'an earlier session')
     result = hrc('session', '--session-id', 'pilot', '--bags-dir', 'bags', '--runs-dir', 'runs',
                  cwd=tmp_path)
     assert result.returncode == 2, result.stdout + result.stderr
@@ -36,27 +36,27 @@ def test_a_second_session_with_an_id_in_use_is_refused_and_writes_nothing(tmp_pa
         'session: --session-id pilot: in use by another session (bags bags/pilot (1 file)): '
         'give another --session-id')
     assert not (tmp_path / 'runs').exists()
-    assert [path.name for path in bag.iterdir()] == ['pilot_ep0000.mcap']
+    assert [path.name for path in bag.iterdir()] == ['pilot_episode0001.mcap']
 
 
 def test_an_experiment_run_again_under_its_name_is_refused_without_resume(tmp_path):
     earlier = tmp_path / 'bags' / 'sweep' / 'case2-seed0'
     earlier.mkdir(parents=True)
-    (earlier / 'case2-seed0_ep0000.mcap').write_bytes(b'an earlier sweep')
+    (earlier / 'case2-seed0_episode0001.mcap').write_bytes(b'an earlier sweep')
     result = hrc('experiment', '--name', 'sweep', '--cases', '2', '--seeds', '1', '--no-report',
                  '--bags-dir', 'bags', '--runs-dir', 'runs', cwd=tmp_path)
     assert result.returncode == 2, result.stdout + result.stderr
     assert ('[experiment] sweep: session case2-seed0 holds files of an earlier run (bags '
             f'{earlier} (1 file))') in result.stderr
     assert '--resume continues it' in result.stderr and 'Traceback' not in result.stderr
-    assert (earlier / 'case2-seed0_ep0000.mcap').read_bytes() == b'an earlier sweep'
+    assert (earlier / 'case2-seed0_episode0001.mcap').read_bytes() == b'an earlier sweep'
 
 
 def test_a_session_run_again_by_resume_starts_clean_and_keeps_the_earlier_files(tmp_path):
     settings = SessionSettings(session_id='case2-seed0', bags_dir=str(tmp_path / 'bags'),
                                runs_dir=str(tmp_path / 'runs' / 'case2-seed0'))
     task = types.SimpleNamespace(session_id='case2-seed0', settings=settings)
-    killed = {'bags': pathlib.Path(settings.bags_dir) / 'case2-seed0' / 'x_ep0000.mcap',
+    killed = {'bags': pathlib.Path(settings.bags_dir) / 'case2-seed0' / 'x_episode0001.mcap',
               'run': pathlib.Path(settings.runs_dir) / 'case2-seed0' / 'session.yaml'}
     for path in killed.values():
         path.parent.mkdir(parents=True)
@@ -66,7 +66,7 @@ def test_a_session_run_again_by_resume_starts_clean_and_keeps_the_earlier_files(
         moved = set_aside([task], tmp_path / 'runs')
         assert len(moved) == 2 and earlier_files([task]) == {}
         kept = tmp_path / 'runs' / 'earlier-runs' / f'case2-seed0-{attempt}'
-        assert (kept / 'bags' / 'x_ep0000.mcap').read_text() == 'the killed run'
+        assert (kept / 'bags' / 'x_episode0001.mcap').read_text() == 'the killed run'
         assert (kept / 'run-folder' / 'session.yaml').read_text() == 'the killed run'
         for path in killed.values():            # the next attempt's leftovers
             path.parent.mkdir(parents=True)

@@ -17,7 +17,7 @@ def test_the_runner_prints_the_reports_notices(tmp_path, capsys):
     folder = tmp_path / 'bags' / 'cut'
     # as a killed recorder leaves its open episode: not finished, not listed
     (folder / 'metadata.yaml').write_text('- not\n- rosbag2 metadata\n')
-    last = folder / 'cut_ep0001.mcap'
+    last = folder / 'cut_episode0002.mcap'
     data = last.read_bytes()
     last.write_bytes(data[:len(data) - 600])
     settings = SessionSettings(case=5, session_id='cut', bags_dir=str(tmp_path / 'bags'))

@@ -10,7 +10,6 @@ is reported as incomplete. Decoding uses the ``ros2msg`` schemas stored in the f
 from dataclasses import dataclass, field
 import io
 import pathlib
-import re
 import stat
 import struct
 import typing
@@ -22,7 +21,7 @@ from mcap.stream_reader import StreamReader
 from mcap_ros2.decoder import DecoderFactory
 import yaml
 
-from hrc_bag.format import END_FILE_SUFFIX, METADATA_FILE
+from hrc_bag.format import END_FILE_SUFFIX, episode_file_key, METADATA_FILE
 from hrc_bag.qos_yaml import load_yaml
 from hrc_common import bounded_yaml
 
@@ -292,10 +291,9 @@ def session_files(path) -> list:
 def recording_order(path) -> tuple:
     """Return a sort key of episode files: by episode number, the end file last."""
     stem = pathlib.Path(path).stem
-    # <id>_ep0060, <id>_ep0060_attempt2 (a re-run, hrc_bag.recording), <id>_ep0060_2 (a name taken)
-    match = re.search(r'_ep(\d+)(?:_attempt(\d+)|_(\d+))?$', stem)
-    if match:
-        return (0, int(match.group(1)), int(match.group(2) or match.group(3) or 1), stem)
+    key = episode_file_key(stem)
+    if key is not None:
+        return (0, *key, stem)
     return (2 if stem.endswith(END_FILE_SUFFIX) else 1, 0, 0, stem)
 
 

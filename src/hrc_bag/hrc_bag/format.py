@@ -7,7 +7,8 @@ imports none of them. What one session folder holds (``<output_dir>/<session_id>
     metadata.yaml                 rosbag2 bag metadata (version 9, storage mcap), rewritten
                                   atomically each time an episode file is closed; it lists
                                   closed files only (:mod:`hrc_bag.session_index`)
-    <session_id>_ep0000.mcap      one MCAP file per episode (episode_file_stem) ...
+    <session_id>_episode0001.mcap one MCAP file per episode, named by the episode's number
+                                  (counted from 1, as people read it; episode_file_stem) ...
     <session_id>_end.mcap         messages after the last episode (only if there are any)
 
 Each MCAP file (:class:`hrc_bag.episode_file.EpisodeFile`) has profile ``ros2``, zstd chunks,
@@ -46,9 +47,11 @@ import functools
 import importlib.metadata
 import json
 import pathlib
+import re
 import typing
 
 from hrc_common.contract import DOF_NAME, NS_PER_S, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
+from hrc_common.episode_numbers import episode_number
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.qos_yaml import dump_yaml
@@ -237,9 +240,33 @@ def session_record(session_id: str, episode: typing.Optional[int], config: dict,
 
 
 def episode_file_stem(session_id: str, episode: typing.Optional[int]) -> str:
-    """Return the file name (without .mcap) of an episode (None: the end file)."""
-    return (f'{session_id}_ep{episode:04d}' if episode is not None
+    """Return the file name (without .mcap) of the episode with this 0-based index.
+
+    ``<id>_episode0001`` for index 0: the number the page and the runner show. None: the end
+    file.
+    """
+    return (f'{session_id}_episode{episode_number(episode):04d}' if episode is not None
             else f'{session_id}{END_FILE_SUFFIX}')
+
+
+def index_named_file_stem(session_id: str, episode: int) -> str:
+    """Return the name folders written before hrc 1.0 gave an episode: ``_ep<index>``."""
+    return f'{session_id}_ep{episode:04d}'
+
+
+# <id>_episode0061 (number 61 = index 60) or, before hrc 1.0, <id>_ep0060 (index 60); then
+# _attempt2 (a re-run, hrc_bag.recording) or _2 (the name was taken)
+_EPISODE_FILE_NAME = re.compile(r'_(episode|ep)(\d+)(?:_attempt(\d+)|_(\d+))?$')
+
+
+def episode_file_key(stem: str) -> typing.Optional[tuple]:
+    """Return (episode index, attempt) of an episode file's stem, None if it names none."""
+    match = _EPISODE_FILE_NAME.search(stem)
+    if match is None:
+        return None
+    counted, digits = match.group(1), int(match.group(2))
+    index = digits - 1 if counted == 'episode' else digits
+    return index, int(match.group(3) or match.group(4) or 1)
 
 
 def unused_path(folder, stem: str) -> pathlib.Path:

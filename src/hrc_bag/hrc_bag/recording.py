@@ -5,9 +5,9 @@ layer, :mod:`hrc_bag.format`. Layout of a session (``<output_dir>/<session_id>/`
 
     metadata.yaml                 rosbag2 bag metadata (version 9, storage mcap), rewritten
                                   atomically each time an episode file is closed
-    <session_id>_ep0000.mcap      everything recorded during episode 0, ...
-    <session_id>_ep0001.mcap
-    <session_id>_ep0001_attempt2.mcap   a second attempt of episode 1 (see below)
+    <session_id>_episode0001.mcap everything recorded during episode 1 (index 0), ...
+    <session_id>_episode0002.mcap
+    <session_id>_episode0002_attempt2.mcap   a second attempt of episode 2 (see below)
     <session_id>_end.mcap         messages after the last episode (only if there are any)
 
 Episode boundaries (the rule; the node turns messages into the events of
@@ -29,7 +29,7 @@ Episode boundaries (the rule; the node turns messages into the events of
   step 0 of an episode whose file is closed, or whose file has seen later steps: the agent
   re-runs an episode after a lost joystick and a resume, or a resumed session re-runs the
   episode it was aborted in) closes the earlier attempt's file at once and opens
-  ``<session_id>_ep<n>_attempt<k>.mcap``. The ``hrc_episode`` record of such a file (and of
+  ``<session_id>_episode<n>_attempt<k>.mcap``. The ``hrc_episode`` record of such a file (and of
   any file whose EpisodeSummary never came) says which attempt it holds (``attempt``), the
   files of the episode so far (``attempt_files``), its last step and whether its
   EpisodeSummary came (``finished``); metadata.yaml's custom data
@@ -72,7 +72,8 @@ from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
 from hrc_bag.boundaries import SessionSeen, StateSeen, SummarySeen
 from hrc_bag.episode_file import EpisodeFile
-from hrc_bag.format import (describe_error, episode_file_stem, file_mode, RawMessage,
+from hrc_bag.format import (describe_error, episode_file_stem, file_mode,
+                            index_named_file_stem, RawMessage,
                             RecordingError, session_custom_data, SESSION_RECORD, session_record,
                             TopicDescription, unused_path)
 from hrc_bag.qos_yaml import load_yaml
@@ -233,8 +234,11 @@ class EpisodeRecorder:
     def _earlier_attempts(self, episode: int) -> list:
         """Return the names of the files of ``episode`` so far (this recorder's or before)."""
         if episode not in self._attempt_files:
-            stem = episode_file_stem(self.session_id, episode)
-            found = [self.folder / f'{stem}.mcap'] + list(self.folder.glob(f'{stem}_*.mcap'))
+            found = []
+            # a folder of a session begun before hrc 1.0 holds its first attempts by index
+            for stem in (episode_file_stem(self.session_id, episode),
+                         index_named_file_stem(self.session_id, episode)):
+                found += [self.folder / f'{stem}.mcap'] + list(self.folder.glob(f'{stem}_*.mcap'))
             self._attempt_files[episode] = [path.name for path in sorted(
                 (path for path in found if path.exists()), key=recording_order)]
         return self._attempt_files[episode]
@@ -264,7 +268,7 @@ class EpisodeRecorder:
                 listed = listed if isinstance(listed, dict) else {}
                 listed.update({number: files for number, files in self._attempt_files.items()
                                if len(files) > 1})
-                # one line in metadata.yaml: {6: [<id>_ep0006.mcap, <id>_ep0006_attempt2.mcap]}
+                # in metadata.yaml: {6: [<id>_episode0007.mcap, <id>_episode0007_attempt2.mcap]}
                 self.index.custom_data[ATTEMPTS_KEY] = yaml.safe_dump(
                     dict(sorted(listed.items())), default_flow_style=True, width=10**6).strip()
         self._last_flush = self._clock()

@@ -13,7 +13,7 @@ Usage::
                            session_config={'case': 2, 'strategy': 'responsibility_guided',
                                            'seeds': {'session': 0}, ...})
     writer.write('/hrc/session', {'session_id': ..., 'episode': 0, 'phase': 0, ...}, t_ns)
-    writer.begin_episode(0)                 # opens <session_id>_ep0000.mcap
+    writer.begin_episode(0)                 # opens <session_id>_episode0001.mcap
     writer.write('/hrc/state', {'header': {'stamp': {'sec': 0, 'nanosec': 0},
                                            'frame_id': 'world'}, 'episode': 0, ...}, t_ns)
     ...                                     # commands, human action, agent step per step

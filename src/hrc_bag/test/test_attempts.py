@@ -12,8 +12,8 @@ from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 import pytest
 import yaml
 
-from hrc_bag import bag_reader
-from hrc_bag.format import EPISODE_RECORD, TopicDescription
+from hrc_bag import bag_reader, recording
+from hrc_bag.format import EPISODE_RECORD, index_named_file_stem, TopicDescription
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import ATTEMPTS_KEY, EpisodeRecorder
 from hrc_bag.report.loading import load_session
@@ -91,9 +91,9 @@ def test_an_unplugged_episode_and_its_rerun_are_each_filed_as_themselves(tmp_pat
     recorder.close()
 
     folder = tmp_path / 's'
-    dropped, rerun = folder / 's_ep0001.mcap', folder / 's_ep0001_attempt2.mcap'
+    dropped, rerun = folder / 's_episode0002.mcap', folder / 's_episode0002_attempt2.mcap'
     assert {path.name for path in folder.glob('*.mcap')} - {'s_end.mcap'} == {
-        's_ep0000.mcap', 's_ep0001.mcap', 's_ep0001_attempt2.mcap'}
+        's_episode0001.mcap', 's_episode0002.mcap', 's_episode0002_attempt2.mcap'}
     if (folder / 's_end.mcap').exists():            # never the re-run's states
         assert states(folder / 's_end.mcap') == 0
     assert (states(dropped), states(rerun)) == (DROPPED_STEPS, RERUN_STEPS)
@@ -102,14 +102,15 @@ def test_an_unplugged_episode_and_its_rerun_are_each_filed_as_themselves(tmp_pat
                                                                                  rerun)]
     assert [(r['attempt'], r['last_step'], r['finished']) for r in records] == [
         ('1', str(DROPPED_STEPS - 1), 'false'), ('2', str(RERUN_STEPS - 1), 'true')]
-    assert records[1]['attempt_files'] == 's_ep0001.mcap,s_ep0001_attempt2.mcap'
+    assert records[1]['attempt_files'] == 's_episode0002.mcap,s_episode0002_attempt2.mcap'
     assert yaml.safe_load(records[0]['human_steps']) == {'device': DROPPED_STEPS}
     assert yaml.safe_load(records[1]['human_steps']) == {'device': RERUN_STEPS - 1}
     # metadata.yaml lists both attempts, and says they are attempts of one episode.
     metadata = bag_reader.read_bag_metadata_yaml(folder)
-    assert {'s_ep0001.mcap', 's_ep0001_attempt2.mcap'} <= set(metadata['relative_file_paths'])
+    assert {'s_episode0002.mcap', 's_episode0002_attempt2.mcap'} <= set(
+        metadata['relative_file_paths'])
     assert yaml.safe_load(metadata['custom_data'][ATTEMPTS_KEY]) == {
-        1: ['s_ep0001.mcap', 's_ep0001_attempt2.mcap']}
+        1: ['s_episode0002.mcap', 's_episode0002_attempt2.mcap']}
 
     # The report: time and errors of the same (finished) attempt, and it says which.
     session = load_session(folder)
@@ -119,9 +120,9 @@ def test_an_unplugged_episode_and_its_rerun_are_each_filed_as_themselves(tmp_pat
     assert session.human_inputs[1]['attempt'] == '2'
     assert human_time(session)['device']['engaged_steps'] == 2 * (RERUN_STEPS - 1)
     assert human_time(session)['device']['episodes'] == 2
-    assert any('episode 2 was recorded 2 times (s_ep0001.mcap: 5 steps, dropped, '
-               's_ep0001_attempt2.mcap: 10 steps, finished): its time and errors are from '
-               's_ep0001_attempt2.mcap (the attempt that finished)' in notice
+    assert any('episode 2 was recorded 2 times (s_episode0002.mcap: 5 steps, dropped, '
+               's_episode0002_attempt2.mcap: 10 steps, finished): its time and errors are from '
+               's_episode0002_attempt2.mcap (the attempt that finished)' in notice
                for notice in session.notices), session.notices
 
 
@@ -140,10 +141,10 @@ def test_a_later_recorder_of_a_resumed_session_continues_the_attempt_count(tmp_p
     second.tick()
     second.close()
     folder = tmp_path / 's'
-    rerun = folder / 's_ep0000_attempt2.mcap'
+    rerun = folder / 's_episode0001_attempt2.mcap'
     assert states(rerun) == RERUN_STEPS
     assert bag_reader.scan_file(rerun).metadata[EPISODE_RECORD]['attempt'] == '2'
-    assert bag_reader.session_files(folder) == [folder / 's_ep0000.mcap', rerun]
+    assert bag_reader.session_files(folder) == [folder / 's_episode0001.mcap', rerun]
     assert load_session(folder).files_by_episode[0] == [rerun]
 
 
@@ -155,4 +156,33 @@ def test_a_repeated_first_state_is_not_a_new_attempt(tmp_path):
     feed.send('/hrc/state', TaskState(episode=0, step=0))
     feed.episode(0, RERUN_STEPS, final=True, summary=True, human=False)
     recorder.close()
-    assert sorted(path.name for path in (tmp_path / 's').glob('*.mcap')) == ['s_ep0000.mcap']
+    assert sorted(path.name for path in (tmp_path / 's').glob('*.mcap')) == ['s_episode0001.mcap']
+
+
+def test_a_session_begun_with_index_names_resumes_as_the_next_attempt(tmp_path, monkeypatch):
+    """A folder from before hrc 1.0 (``s_ep0000.mcap`` for episode 1) resumed: attempt 2 follows.
+
+    The first recorder writes the old names; the second, after a resume, must find that file
+    as the episode's first attempt, so the re-run is ``s_episode0001_attempt2.mcap`` and the
+    report reads the re-run as the attempt that finished.
+    """
+    clock = Clock()
+    with monkeypatch.context() as patch:
+        patch.setattr(recording, 'episode_file_stem', index_named_file_stem)
+        first = recorder_in(tmp_path, clock)
+        Session(first).episode(0, DROPPED_STEPS, final=False, summary=False)
+        first.close()
+    folder = tmp_path / 's'
+    assert sorted(path.name for path in folder.glob('*.mcap')) == ['s_ep0000.mcap']
+    second = recorder_in(tmp_path, clock)
+    feed = Session(second)
+    feed.log_time += 10_000_000_000
+    feed.episode(0, RERUN_STEPS, final=True, summary=True)
+    clock.now += 0.1
+    second.tick()
+    second.close()
+    rerun = folder / 's_episode0001_attempt2.mcap'
+    assert bag_reader.session_files(folder) == [folder / 's_ep0000.mcap', rerun]
+    assert bag_reader.scan_file(rerun).metadata[EPISODE_RECORD]['attempt_files'] == (
+        's_ep0000.mcap,s_episode0001_attempt2.mcap')
+    assert load_session(folder).files_by_episode[0] == [rerun]

@@ -14,8 +14,9 @@ import yaml
 
 from hrc_bag import bag_reader, cdr_peek, report
 from hrc_bag.boundaries import boundary_event
-from hrc_bag.format import (contract_description, EPISODE_RECORD, FileInfo, plain_values,
-                            RawMessage, SESSION_RECORD)
+from hrc_bag.format import (contract_description, EPISODE_RECORD, episode_file_key,
+                            episode_file_stem, FileInfo, plain_values, RawMessage,
+                            SESSION_RECORD)
 from hrc_bag.qos_yaml import dump_yaml
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import EpisodeRecorder
@@ -173,7 +174,7 @@ def test_the_files_are_the_recorders_files(both):
     recorded = bag_reader.read_bag_metadata_yaml(recorder_folder)
     written = bag_reader.read_bag_metadata_yaml(writer_folder)
     assert written['relative_file_paths'] == recorded['relative_file_paths'] == [
-        'fmt_ep0000.mcap', 'fmt_ep0001.mcap', 'fmt_ep0002.mcap', 'fmt_end.mcap']
+        'fmt_episode0001.mcap', 'fmt_episode0002.mcap', 'fmt_episode0003.mcap', 'fmt_end.mcap']
     for key in ('version', 'storage_identifier', 'message_count', 'topics_with_message_count',
                 'files', 'starting_time', 'duration', 'custom_data'):
         assert written[key] == recorded[key], key
@@ -193,6 +194,24 @@ def test_the_files_are_the_recorders_files(both):
         assert yaml.safe_load(ours_record['session_status']) == (
             yaml.safe_load(theirs_record['session_status']))
         assert ours['records']['rosbag2'] == theirs['records']['rosbag2'], name
+
+
+@pytest.mark.parametrize('stem, key', [
+    ('s_episode0001', (0, 1)), ('s_episode0061_attempt2', (60, 2)), ('s_episode0002_2', (1, 2)),
+    ('s_ep0000', (0, 1)), ('s_ep0060_attempt3', (60, 3)),     # before hrc 1.0: the index
+    ('case2-seed0_episode0120', (119, 1)), ('s_end', None), ('notes', None)])
+def test_an_episode_file_name_gives_its_index_and_attempt(stem, key):
+    assert episode_file_key(stem) == key
+
+
+def test_files_are_named_by_the_episode_number_people_read_and_ordered_with_old_names():
+    assert episode_file_stem('s', 0) == 's_episode0001'
+    assert episode_file_stem('s', None) == 's_end'
+    names = ['s_end.mcap', 's_episode0010.mcap', 's_ep0000.mcap', 's_episode0002_attempt2.mcap',
+             's_episode0002.mcap', 's_ep0008.mcap']
+    assert sorted(names, key=bag_reader.recording_order) == [
+        's_ep0000.mcap', 's_episode0002.mcap', 's_episode0002_attempt2.mcap', 's_ep0008.mcap',
+        's_episode0010.mcap', 's_end.mcap']
 
 
 def test_default_descriptions_are_the_contract_offers():
@@ -250,20 +269,20 @@ def test_each_episode_records_which_input_drove_the_human(tmp_path):
     writer.end_episode()
     writer.begin_episode(1)
     writer.end_episode()
-    record = bag_reader.read_metadata(tmp_path / 'src' / 'src_ep0000.mcap')[EPISODE_RECORD]
+    record = bag_reader.read_metadata(tmp_path / 'src' / 'src_episode0001.mcap')[EPISODE_RECORD]
     assert record['human_source'] == 'simulated'           # 4 engaged steps against 3
     assert record['human_sources'] == 'simulated,device'
     assert yaml.safe_load(record['human_steps']) == {'device': 3, 'simulated': 5}
     assert yaml.safe_load(record['human_engaged_steps']) == {'device': 3, 'simulated': 4}
     assert float(record['control_period']) == pytest.approx(0.2)
     assert record['message_count'] == '16'
-    empty = bag_reader.read_metadata(tmp_path / 'src' / 'src_ep0001.mcap')[EPISODE_RECORD]
+    empty = bag_reader.read_metadata(tmp_path / 'src' / 'src_episode0002.mcap')[EPISODE_RECORD]
     assert empty['human_source'] == '' and empty['control_period'] == ''
 
 
 @pytest.mark.parametrize('names', [
     [],
-    [f'case2-seed0-20261203-054508_ep{episode:04d}.mcap' for episode in range(120)],
+    [f'case2-seed0-20261203-054508_episode{episode + 1:04d}.mcap' for episode in range(120)],
     # names a plain YAML scalar cannot hold, and a long one with spaces (the dumper may fold it)
     ['odd: name.mcap', "it's #1.mcap", '- dash.mcap', 'x ' * 60 + '.mcap', 'ü.mcap'],
 ])

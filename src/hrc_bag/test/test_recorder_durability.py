@@ -70,10 +70,10 @@ def test_with_the_defaults_a_finished_episode_is_closed_soon_after_its_summary(t
     recorder = Recorder(tmp_path)
     send_episode(recorder, 0, steps=5)
     recorder.run(CLOSED_WITHIN)
-    assert recorder.closed() == ['d_ep0000.mcap']
+    assert recorder.closed() == ['d_episode0001.mcap']
     assert bag_reader.read_bag_metadata_yaml(recorder.folder)['relative_file_paths'] == [
-        'd_ep0000.mcap']
-    assert bag_reader.is_complete(recorder.folder / 'd_ep0000.mcap')
+        'd_episode0001.mcap']
+    assert bag_reader.is_complete(recorder.folder / 'd_episode0001.mcap')
     recorder.core.close()
 
 
@@ -81,7 +81,7 @@ def test_with_the_defaults_the_open_episode_is_on_disk_soon_after_it_was_receive
     recorder = Recorder(tmp_path)
     send_episode(recorder, 0, steps=4, summary=False)   # running when the recorder is killed
     recorder.run(WRITTEN_WITHIN)
-    scan = bag_reader.scan_file(recorder.folder / 'd_ep0000.mcap')
+    scan = bag_reader.scan_file(recorder.folder / 'd_episode0001.mcap')
     assert not scan.complete and len(scan.messages) == 8
     recorder.core.close()
 
@@ -94,7 +94,7 @@ def test_the_old_defaults_fail_these_bounds(tmp_path, changes):
     send_episode(recorder, 0, steps=4)
     send_episode(recorder, 1, steps=4, summary=False)
     recorder.run(max(CLOSED_WITHIN, WRITTEN_WITHIN))
-    open_file = recorder.folder / 'd_ep0001.mcap'
+    open_file = recorder.folder / 'd_episode0002.mcap'
     open_messages = len(bag_reader.scan_file(open_file).messages) if open_file.exists() else 0
-    assert recorder.closed() != ['d_ep0000.mcap'] or open_messages < 8
+    assert recorder.closed() != ['d_episode0001.mcap'] or open_messages < 8
     recorder.core.close()

@@ -109,8 +109,8 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, is
     # recorded names carry the test's prefix (the recorder was remapped onto it)
     published = {isolation.name(topic): messages
                  for topic, messages in session.published.by_topic.items()}
-    assert listed_files(folder) == ['rt_ep0000.mcap', 'rt_ep0001.mcap', 'rt_ep0002.mcap',
-                                    'rt_end.mcap']
+    assert listed_files(folder) == ['rt_episode0001.mcap', 'rt_episode0002.mcap',
+                                    'rt_episode0003.mcap', 'rt_end.mcap']
     # 1. rosbags on the session folder: exact counts and values per topic
     hashes = {topic: str(test_node.get_publishers_info_by_topic(topic)[0].topic_type_hash)
               for topic in published}
@@ -172,7 +172,7 @@ def test_round_trip_read_by_rosbags_and_mcap(start_node, test_node, tmp_path, is
         == [(summary.episode, summary.evaluation, summary.total_error)
             for summary in published[isolation.name('/hrc/episode')]]
     # the status announcing episode 1 arrived between episodes: it opens episode 1's file
-    first = by_topic(bag_reader.scan_file(folder / 'rt_ep0001.mcap').messages)
+    first = by_topic(bag_reader.scan_file(folder / 'rt_episode0002.mcap').messages)
     assert [deserialize_message(message.data, SessionStatus).episode
             for message in first[isolation.name('/hrc/session')]] == [1]
     end = bag_reader.scan_file(folder / 'rt_end.mcap').messages
@@ -214,8 +214,8 @@ def test_the_batched_recorder_records_every_published_message_in_its_episodes_fi
         return recorded
 
     from_batches = files(tmp_path / 'batched' / 'eq')
-    assert list(from_batches) == ['eq_ep0000.mcap', 'eq_ep0001.mcap', 'eq_ep0002.mcap',
-                                  'eq_end.mcap']
+    assert list(from_batches) == ['eq_episode0001.mcap', 'eq_episode0002.mcap',
+                                  'eq_episode0003.mcap', 'eq_end.mcap']
     published = {isolation.name(topic): messages
                  for topic, messages in session.published.by_topic.items()}
     everything = {}
@@ -241,14 +241,14 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
     before = session.published.count()
     session.publish_status(1)
     session.publish_episode(1, steps=6, final=False, step_period=0.01)  # running ...
-    open_file = folder / 'kill_ep0001.mcap'
+    open_file = folder / 'kill_episode0002.mcap'
     # ... written to disk by a flush (every 0.2 s here) ...
     assert wait_for(lambda: open_file.exists() and len(bag_reader.scan_file(open_file).messages)
                     == session.published.count() - before, 60.0), recorder.output
     os.killpg(recorder.process.pid, signal.SIGKILL)     # ... when the recorder is killed
     recorder.process.wait(timeout=30)
 
-    finished = folder / 'kill_ep0000.mcap'
+    finished = folder / 'kill_episode0001.mcap'
     with Reader(finished) as reader:
         assert reader.message_count == before
     with Reader(folder) as reader:                      # metadata.yaml lists closed files only
@@ -270,7 +270,7 @@ def test_sigkill_keeps_finished_episodes_and_the_open_one_up_to_its_last_chunk(
 
     # a new recorder of the same session finishes the open file and lists it
     again = start_recorder(start_node, isolation, tmp_path, 'kill')
-    assert wait_for(lambda: 'kill_ep0001.mcap' in listed_files(folder), 60.0), again.output
+    assert wait_for(lambda: 'kill_episode0002.mcap' in listed_files(folder), 60.0), again.output
     assert again.stop() == 0, again.output
     with Reader(folder) as reader:
         assert sum(1 for _ in reader.messages()) == session.published.count()
@@ -307,7 +307,7 @@ def test_sigkill_at_random_moments_keeps_every_finished_episode(start_node, test
         recorder.process.wait(timeout=30)
         assert result.closed_before_kill, (trial, result.closed)
         for episode in result.closed_before_kill:
-            name = f'{session_id}_ep{episode:04d}.mcap'
+            name = f'{session_id}_episode{episode + 1:04d}.mcap'
             assert name in result.closed, (trial, episode, result.closed)
             assert bag_reader.is_complete(folder / name)
         # the files left open were finished by recovery
@@ -391,7 +391,7 @@ def test_a_full_disk_stops_the_recorder_and_keeps_earlier_episodes(ros_env, test
         output, _ = process.communicate(timeout=60)
         assert process.returncode == EXIT_RECORDING_FAILED, output
         expected = 'No space left on device (ENOSPC)' if mounted else 'File too large (EFBIG)'
-        assert f'cannot write {folder}/denied_ep0001.mcap: {expected}' in output, output
+        assert f'cannot write {folder}/denied_episode0002.mcap: {expected}' in output, output
         assert 'the session must stop' in output
         with Reader(folder) as reader:
             assert sum(1 for _ in reader.messages()) == first

@@ -67,7 +67,7 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
     feed.send('/hrc/agent/step', AgentStep(episode=0, step=1))               # late, episode 0
     clock.now += 0.2
     recorder.tick()                                                          # grace over
-    assert [info.name for info in recorder.closed_files] == ['s_ep0000.mcap']
+    assert [info.name for info in recorder.closed_files] == ['s_episode0001.mcap']
     feed.send('/hrc/session', SessionStatus(session_id='s', episode=1, phase=1))  # between
     # episode 1 has no summary: closes summary_timeout after its final state
     feed.send('/hrc/state', TaskState(episode=1, step=0))
@@ -91,17 +91,17 @@ def test_boundaries_grace_timeout_and_end_file(tmp_path):
     recorder.close()
 
     folder = tmp_path / 's'
-    assert file_topics(folder / 's_ep0000.mcap') == [
+    assert file_topics(folder / 's_episode0001.mcap') == [
         '/hrc/session', '/hrc/state', '/hrc/state', '/hrc/state', '/hrc/episode',
         '/hrc/agent/step']
-    assert file_topics(folder / 's_ep0001.mcap') == ['/hrc/session', '/hrc/state',
+    assert file_topics(folder / 's_episode0002.mcap') == ['/hrc/session', '/hrc/state',
                                                      '/hrc/state']
-    assert file_topics(folder / 's_ep0002.mcap') == ['/hrc/state', '/hrc/agent/step']
-    assert file_topics(folder / 's_ep0003.mcap') == ['/hrc/state', '/hrc/session']
+    assert file_topics(folder / 's_episode0003.mcap') == ['/hrc/state', '/hrc/agent/step']
+    assert file_topics(folder / 's_episode0004.mcap') == ['/hrc/state', '/hrc/session']
     assert file_topics(folder / 's_end.mcap') == ['/hrc/session']
     listed = bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths']
-    assert listed == ['s_ep0000.mcap', 's_ep0001.mcap', 's_ep0002.mcap', 's_ep0003.mcap',
-                      's_end.mcap']
+    assert listed == ['s_episode0001.mcap', 's_episode0002.mcap', 's_episode0003.mcap',
+                      's_episode0004.mcap', 's_end.mcap']
 
 
 def test_messages_are_handled_in_reception_order_after_the_reorder_window(tmp_path):
@@ -134,11 +134,12 @@ def test_messages_are_handled_in_reception_order_after_the_reorder_window(tmp_pa
     clock.now += 1.0
     recorder.tick()
     recorder.close()
-    assert file_topics(tmp_path / 'w' / 'w_ep0000.mcap') == ['/hrc/state', '/hrc/state',
+    assert file_topics(tmp_path / 'w' / 'w_episode0001.mcap') == ['/hrc/state', '/hrc/state',
                                                              '/hrc/episode']
-    assert file_topics(tmp_path / 'w' / 'w_ep0001.mcap') == ['/hrc/state', '/hrc/human/action']
+    assert file_topics(tmp_path / 'w' / 'w_episode0002.mcap') == ['/hrc/state',
+                                                                  '/hrc/human/action']
     assert sorted(path.name for path in (tmp_path / 'w').glob('*.mcap')) == [
-        'w_ep0000.mcap', 'w_ep0001.mcap']
+        'w_episode0001.mcap', 'w_episode0002.mcap']
 
 
 def test_the_wait_follows_the_executors_lag_so_a_file_closes_with_all_its_messages(tmp_path):
@@ -171,8 +172,8 @@ def test_the_wait_follows_the_executors_lag_so_a_file_closes_with_all_its_messag
             start + 40 * millisecond, start + 860 * millisecond)
     wall[0] = start + 3000 * millisecond
     recorder.tick()
-    assert [info.name for info in recorder.closed_files] == ['lag_ep0000.mcap']
-    assert file_topics(tmp_path / 'lag' / 'lag_ep0000.mcap') == ['/hrc/state'] * 5 + [
+    assert [info.name for info in recorder.closed_files] == ['lag_episode0001.mcap']
+    assert file_topics(tmp_path / 'lag' / 'lag_episode0001.mcap') == ['/hrc/state'] * 5 + [
         '/hrc/episode']
     recorder.close()
 
@@ -202,9 +203,9 @@ def test_messages_go_to_the_file_of_their_episode_whatever_their_order(tmp_path)
     feed.send('/hrc/human/action', HumanAction(episode=0, step=0))
     recorder.close()
     folder = tmp_path / 's'
-    assert file_topics(folder / 's_ep0000.mcap') == [
+    assert file_topics(folder / 's_episode0001.mcap') == [
         '/hrc/state', '/hrc/state', '/hrc/robot/cmd_wrench', '/hrc/human/action']
-    assert file_topics(folder / 's_ep0001.mcap') == [
+    assert file_topics(folder / 's_episode0002.mcap') == [
         '/hrc/agent/step', '/hrc/state', '/hrc/robot/cmd_wrench']
 
 
@@ -221,7 +222,8 @@ def test_rosbags_reads_the_session_folder_with_exact_counts_and_values(recorded,
                                                                        rosbags_typestore):
     folder, session = recorded
     assert bag_reader.read_bag_metadata_yaml(folder)['relative_file_paths'] == [
-        'core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap', 'core_ep0003.mcap',
+        'core_episode0001.mcap', 'core_episode0002.mcap', 'core_episode0003.mcap',
+        'core_episode0004.mcap',
         'core_end.mcap']
     with Reader(folder) as reader:
         assert reader.ros_distro == 'jazzy' and reader.duration > 0
@@ -247,7 +249,7 @@ def test_rosbags_reads_the_session_folder_with_exact_counts_and_values(recorded,
 
 def test_each_episode_file_plays_alone_and_carries_the_session_config(recorded):
     folder, session = recorded
-    files = sorted(folder.glob('*_ep*.mcap'))
+    files = sorted(folder.glob('*_episode*.mcap'))
     assert len(files) == 4
     for index, path in enumerate(files):
         with Reader(path) as reader:
@@ -263,7 +265,7 @@ def test_each_episode_file_plays_alone_and_carries_the_session_config(recorded):
 
 def test_mcap_layout_is_the_rosbag2_profile(recorded):
     folder, session = recorded
-    with open(folder / 'core_ep0001.mcap', 'rb') as stream:
+    with open(folder / 'core_episode0002.mcap', 'rb') as stream:
         reader = make_reader(stream)
         assert reader.get_header().profile == 'ros2'
         summary = reader.get_summary()
@@ -282,7 +284,7 @@ def test_mcap_layout_is_the_rosbag2_profile(recorded):
 
 def test_a_file_cut_anywhere_reads_up_to_its_last_complete_chunk(recorded, tmp_path):
     folder, session = recorded
-    source = folder / 'core_ep0002.mcap'
+    source = folder / 'core_episode0003.mcap'
     complete = bag_reader.scan_file(source)
     data = source.read_bytes()
     previous = 0
@@ -307,7 +309,7 @@ def test_a_later_recorder_finishes_a_left_open_file_and_continues(recorded, tmp_
     information['files'] = information['files'][:3]
     (copy / 'metadata.yaml').write_text(yaml.safe_dump(document))
     (copy / 'core_end.mcap').unlink()
-    path = copy / 'core_ep0003.mcap'
+    path = copy / 'core_episode0004.mcap'
     expected = bag_reader.scan_file(path).messages
     data = path.read_bytes()
     path.write_bytes(data[:len(data) - 700])         # cuts into the summary section
@@ -316,15 +318,16 @@ def test_a_later_recorder_finishes_a_left_open_file_and_continues(recorded, tmp_
     assert 0 < len(kept) <= len(expected)
 
     recorder = make_recorder(tmp_path, FakeClock(), session_id='core')
-    assert recorder.index.listed('core_ep0003.mcap')
+    assert recorder.index.listed('core_episode0004.mcap')
     assert bag_reader.is_complete(path)
     assert bag_reader.scan_file(path).messages == kept
     feed = Feeder(recorder)
     feed.send('/hrc/state', TaskState(episode=4, step=0))
     recorder.close()
     assert bag_reader.read_bag_metadata_yaml(copy)['relative_file_paths'] == [
-        'core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap', 'core_ep0003.mcap',
-        'core_ep0004.mcap']
+        'core_episode0001.mcap', 'core_episode0002.mcap', 'core_episode0003.mcap',
+        'core_episode0004.mcap',
+        'core_episode0005.mcap']
     with Reader(copy) as reader:
         assert sum(1 for _ in reader.messages()) == reader.message_count == (
             sum(len(bag_reader.scan_file(file).messages) for file in copy.glob('*.mcap')))
@@ -340,14 +343,14 @@ def test_an_unwritable_output_dir_is_a_recording_error(tmp_path):
 def test_a_recovered_file_names_itself_not_its_temporary_file(recorded, tmp_path):
     from hrc_bag.recovery import recover_file
     folder, _ = recorded
-    path = tmp_path / 'core_ep0001.mcap'
-    data = (folder / 'core_ep0001.mcap').read_bytes()
+    path = tmp_path / 'core_episode0002.mcap'
+    data = (folder / 'core_episode0002.mcap').read_bytes()
     path.write_bytes(data[:len(data) - 700])            # as a killed recorder leaves it
     info = recover_file(path)
-    assert info.name == 'core_ep0001.mcap'
+    assert info.name == 'core_episode0002.mcap'
     rosbag2 = yaml.safe_load(bag_reader.read_metadata(path)['rosbag2']['serialized_metadata'])
-    assert rosbag2['relative_file_paths'] == ['core_ep0001.mcap']
-    assert [entry['path'] for entry in rosbag2['files']] == ['core_ep0001.mcap']
+    assert rosbag2['relative_file_paths'] == ['core_episode0002.mcap']
+    assert [entry['path'] for entry in rosbag2['files']] == ['core_episode0002.mcap']
     assert not list(tmp_path.glob('.*recovering'))
 
 
@@ -365,10 +368,10 @@ def test_bags_naming_a_subject_or_notes_are_owner_only(tmp_path, personal):
         os.umask(old_umask)
     expected = 0o600 if personal else 0o644
     paths = sorted((tmp_path / 'p').iterdir())
-    assert {path.name for path in paths} == {'metadata.yaml', 'p_ep0000.mcap', 'p_end.mcap'}
+    assert {path.name for path in paths} == {'metadata.yaml', 'p_episode0001.mcap', 'p_end.mcap'}
     assert {path.name: path.stat().st_mode & 0o777 for path in paths} == {
         path.name: expected for path in paths}
-    episode = tmp_path / 'p' / 'p_ep0000.mcap'
+    episode = tmp_path / 'p' / 'p_episode0001.mcap'
     data = episode.read_bytes()
     episode.write_bytes(data[:len(data) - 300])
     recover_file(episode)                                # recovery keeps the mode
@@ -396,8 +399,8 @@ def test_a_recorder_on_a_folder_with_an_unusable_metadata_yaml_lists_the_files_a
     recorder.close()
     assert any('metadata.yaml cannot be used' in text for text in warnings), warnings
     listed = bag_reader.read_bag_metadata_yaml(copy)['relative_file_paths']
-    assert listed == ['core_ep0000.mcap', 'core_ep0001.mcap', 'core_ep0002.mcap',
-                      'core_ep0003.mcap', 'core_end.mcap']
+    assert listed == ['core_episode0001.mcap', 'core_episode0002.mcap', 'core_episode0003.mcap',
+                      'core_episode0004.mcap', 'core_end.mcap']
     with Reader(copy) as reader:
         assert reader.message_count == sum(
             len(bag_reader.scan_file(path).messages) for path in copy.glob('*.mcap'))
@@ -486,10 +489,10 @@ def test_batches_give_the_files_of_one_message_at_a_time(tmp_path):
                 for path in sorted((folder / 'b').glob('*.mcap'))}
 
     one_at_a_time = record(tmp_path / 'one', 1)
-    assert list(one_at_a_time) == ['b_end.mcap', 'b_ep0000.mcap', 'b_ep0001.mcap',
-                                   'b_ep0002.mcap']
+    assert list(one_at_a_time) == ['b_end.mcap', 'b_episode0001.mcap', 'b_episode0002.mcap',
+                                   'b_episode0003.mcap']
     # each status announcing an episode opens its file; the last (done) is the end file's
-    assert [topic for topic, *_ in one_at_a_time['b_ep0001.mcap']][:2] == ['/hrc/session',
+    assert [topic for topic, *_ in one_at_a_time['b_episode0002.mcap']][:2] == ['/hrc/session',
                                                                           '/hrc/state']
     assert [topic for topic, *_ in one_at_a_time['b_end.mcap']] == ['/hrc/session']
     assert sum(len(file) for file in one_at_a_time.values()) == len(messages)

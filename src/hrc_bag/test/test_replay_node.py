@@ -144,7 +144,7 @@ def test_a_session_is_replayed_with_the_same_bytes_and_timing(start_node, test_n
 
 def test_one_file_with_topic_selection_offset_clock_and_loop(start_node, test_node,
                                                             session_folder, isolation):
-    episode_file = session_folder / 'rp_ep0001.mcap'
+    episode_file = session_folder / 'rp_episode0002.mcap'
     offset = 0.5
     threshold = bag_start(episode_file) + int(offset * 1e9)
     expected = [message.data for message in bag_reader.scan_file(episode_file).messages
@@ -188,11 +188,11 @@ def test_fifo_empty_and_non_mcap_paths_are_refused_with_the_reason(tmp_path):
     text.write_text('not a bag')
     folder = tmp_path / 'session'
     folder.mkdir()
-    (folder / 'a_ep0000.mcap').write_bytes(b'')
+    (folder / 'a_episode0001.mcap').write_bytes(b'')
     for path, reason in ((fifo, 'is a FIFO, not an MCAP file'),
                          (empty, 'is empty, not an MCAP file'),
                          (text, 'is not an MCAP file'),
-                         (folder, 'a_ep0000.mcap: is empty, not an MCAP file')):
+                         (folder, 'a_episode0001.mcap: is empty, not an MCAP file')):
         assert [problem for problem in ReplayParams(path=str(path)).check()
                 if reason in problem], (path, ReplayParams(path=str(path)).check())
 
@@ -249,7 +249,7 @@ def test_corrupt_empty_and_file_less_inputs_are_refused_with_the_reason(tmp_path
     # A file cut by a killed recorder is still replayed up to its last chunk.
     plan = strategy_plan('learn_together', 1, 0, 0)
     record_in_process(tmp_path, 'cut', 5, 'learn_together', 3, plan, steps=4)
-    first = sorted((tmp_path / 'cut').glob('*_ep0000.mcap'))[0]
+    first = sorted((tmp_path / 'cut').glob('*_episode0001.mcap'))[0]
     os.truncate(first, first.stat().st_size * 2 // 3)
     assert replay_problems(first) == []
 

@@ -359,12 +359,12 @@ def test_episodes_the_recorder_missed_are_said(tmp_path):
     folder = tmp_path / 'stalled'
     (folder / 'metadata.yaml').unlink()             # as if the recorder never wrote them
     for index in (1, 2):
-        (folder / f'stalled_ep{index:04d}.mcap').unlink()
+        (folder / f'stalled_episode{index + 1:04d}.mcap').unlink()
     session = report.load_session(folder)
     assert [summary.episode for summary in session.summaries] == [0, 3]
     assert ('episodes 2, 3 have no file in the bags (the recorder missed them: stalled or '
             'stopped)') in session.notices, session.notices
-    (folder / 'stalled_ep0000.mcap').unlink()   # not recorded at all: a pre-training, say
+    (folder / 'stalled_episode0001.mcap').unlink()   # not recorded at all: a pre-training, say
     assert not any('no file in the bags' in notice
                    for notice in report.load_session(folder).notices)
 

@@ -28,8 +28,8 @@ def _finish(folder, settings, exit_code=0, bag=True, engine='inprocess'):
                                    'git abc1234') + '\n')
     if bag:
         (folder / settings['session_id']).mkdir(exist_ok=True)
-        (folder / settings['session_id'] / f'{settings["session_id"]}_ep0000.mcap').write_bytes(
-            b'')
+        session_id = settings['session_id']
+        (folder / session_id / f'{session_id}_episode0001.mcap').write_bytes(b'')
 
 
 def test_the_key_ignores_names_and_folders_but_not_what_changes_the_result():

@@ -1,10 +1,11 @@
 """One episode numbering wherever a person or an experimenter reads it.
 
-Data keep the 0-based episode *index*: the ``episode`` field of every message, the journals, the
-checkpoints and the bag file names (``<session>_ep0000.mcap`` is episode 1; renaming them would
-make old folders read differently). What is written for people -- the person's page, the runner's
-lines, the session status the agent announces (the console shows it), ``hrc operator status``
-and the report's notices -- shows the episode *number*, counted from 1: the session's first
+Data keep the 0-based episode *index*: the ``episode`` field of every message, the journals and
+the checkpoints. What is written for people -- the person's page, the runner's lines, the
+session status the agent announces (the console shows it), ``hrc operator status``, the
+report's notices and the bag file names (``<session>_episode0001.mcap``; folders written before
+hrc 1.0 hold ``<session>_ep0000.mcap``, by index, and are still read) -- shows the episode
+*number*, counted from 1: the session's first
 episode is "episode 1", whatever its kind (practice, training, judging or evaluation episodes
 all count, so a number names one recorded episode). The console's table labels the index as
 "episode index".

@@ -49,8 +49,8 @@ def test_a_session_runs_without_rclpy_and_its_result_pickles(tmp_path):
     assert [episode['evaluation'] for episode in result.episodes] == [False, False, True]
     assert result.evaluation['episodes'] == 1 and result.counters == {}
     names = sorted(path.name for path in (tmp_path / 'bags' / 'tiny').iterdir())
-    assert names == ['metadata.yaml', 'tiny_end.mcap', 'tiny_ep0000.mcap', 'tiny_ep0001.mcap',
-                     'tiny_ep0002.mcap']
+    assert names == ['metadata.yaml', 'tiny_end.mcap', 'tiny_episode0001.mcap',
+                     'tiny_episode0002.mcap', 'tiny_episode0003.mcap']
     assert (tmp_path / 'runs' / 'checkpoints' / 'tiny' / 'final.pt').is_file()
 
 

@@ -105,9 +105,9 @@ def test_a_partners_first_session_in_the_engine_runs_its_phases_in_order(tmp_pat
     assert result.human_involved_episodes == 1
     assert result.training_episodes == record['episodes'] + 1
     assert result.episodes[0]['episode'] == record['episodes']   # numbering goes on
-    bags = sorted(path.name for path in (tmp_path / 'bags' / f'pf{case}').glob('*_ep*.mcap'))
+    bags = sorted(path.name for path in (tmp_path / 'bags' / f'pf{case}').glob('*_episode*.mcap'))
     first = record['episodes']
-    assert bags == [f'pf{case}_ep{first:04d}.mcap', f'pf{case}_ep{first + 1:04d}.mcap']
+    assert bags == [f'pf{case}_episode{number:04d}.mcap' for number in (first + 1, first + 2)]
     # the paper's cases need no pre-training
     _, paper = compose_parameters(EngineConfig(SessionSettings(case=2,
                                                                     overrides=dict(SHORT))))

@@ -138,7 +138,7 @@ def test_a_file_that_is_not_mcap_is_named_without_a_traceback(tmp_path, capsys):
 
     session = tmp_path / 'bags' / 'broken'
     session.mkdir(parents=True)
-    (session / 'broken_ep0000.mcap').write_text('not an MCAP file')
+    (session / 'broken_episode0001.mcap').write_text('not an MCAP file')
     assert main([str(tmp_path / 'bags'), '--out', str(tmp_path / 'out')]) == 1
     assert 'is not an MCAP file' in capsys.readouterr().err
 

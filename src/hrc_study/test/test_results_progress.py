@@ -57,8 +57,8 @@ def test_results_names_every_unreadable_session_at_once(tmp_path, capsys):
     for name in ('broken1', 'broken2'):
         session = tmp_path / 'bags' / name
         session.mkdir(parents=True)
-        (session / f'{name}_ep0000.mcap').write_text('not an MCAP file')
+        (session / f'{name}_episode0001.mcap').write_text('not an MCAP file')
     assert results_cli.main([str(tmp_path / 'bags'), '--out', str(tmp_path / 'out')]) == 1
     error = capsys.readouterr().err
-    assert 'broken1_ep0000.mcap' in error and 'broken2_ep0000.mcap' in error
+    assert 'broken1_episode0001.mcap' in error and 'broken2_episode0001.mcap' in error
     assert 'Traceback' not in error

@@ -18,7 +18,7 @@ import typing
 from hrc_common import topics as hrc_topics
 from hrc_common.contract import NS_PER_S
 
-from hrc_bag import bag_reader, cdr_peek
+from hrc_bag import bag_reader, cdr_peek, format
 from hrc_bag.recovery import recover_file
 from hrc_testing.bag_traffic import episode_messages, SyntheticSession
 
@@ -190,6 +190,5 @@ def _wait(condition, timeout: float, interval: float = 0.05) -> bool:
 
 
 def _episode_of_file(name: str) -> typing.Optional[int]:
-    stem = name.rsplit('.', 1)[0]
-    number = stem.rsplit('_ep', 1)[-1] if '_ep' in stem else ''
-    return int(number) if number.isdigit() else None
+    key = format.episode_file_key(name.rsplit('.', 1)[0])
+    return None if key is None else key[0]
