@@ -513,11 +513,13 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
             runner.wait()
     text = output()
     assert runner.returncode == 0, text
-    assert {'sim: timing', 'recorder: writing', 'human: input'} <= {
+    assert {'sim: timing', 'recorder: writing', 'human: input', 'agent: learner'} <= {
         name for name, _ in watcher.diagnostics}, watcher.diagnostics
     # The terminal says a pause for the joystick, never an operator's abort.
     assert 'phase aborted' not in text and 'session aborted by the operator' not in text, text
     assert 'the joystick is connected again' in text, text
+    # From the resume until the restarted agent spoke, the runner said "resuming" for it.
+    assert re.search(r'the agent runs again \(\d+\.\d s after the resume\)', text), text
     # What the person read, in order: the lost joystick (never "stopped by the
     # operator", no FIFO detail), then the countdown of the resume, then their turn again.
     from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE

@@ -2,36 +2,16 @@
 
 Thin: messages in and out, the reset service client, timers and parameters. Everything the
 robot decides lives in :class:`hrc_agent_node.agent_core.AgentCore` (shared with the engine).
-The step protocol (docs/architecture.md):
-
-* at start: publish ``/hrc/session`` (transient local), wait for ``/hrc/sim/reset``, call it
-  for episode 0 with a seed derived from the session seed. The reset response carries what the
-  sim owns (control period, ``max_force``, ``max_torque``): the agent scales its actions and
-  reads the human's applied command with those, never with values of its own; states that
-  arrive before the first response wait for it;
-* every non-final ``/hrc/state`` of the running episode is answered on
-  ``/hrc/robot/cmd_wrench`` with the state's stamp, on the robot's degree of freedom only. The
-  observed human action is by default (``human_action_source: applied``) the human's command
-  the sim applied in the last period, read from the state itself: robot and human act on the
-  same state at the same time, as at a real joystick, in both clock modes. With ``same_step``
-  the agent observes the human's answer to the same state: in lockstep it waits for the
-  ``/hrc/human/action`` of the same step (stamp match, up to ``human_action_timeout`` wall
-  seconds, then 0 and a warning); in realtime it uses the newest one. When the human is not
-  involved the observed human action is 0;
-* the record of step k (``/hrc/agent/step``) goes out when state k+1 arrives (its reward is
-  computed from the state reached);
-* on the final state (truncated/terminated): ``/hrc/agent/step`` of the last action,
-  ``/hrc/episode``; the PPO update when one is due at the episode's end (phase
-  ``updating`` announced first, the sim holds meanwhile); a checkpoint; ``/hrc/session`` with
-  any change; then the reset for the next episode. After training (last step converged or
-  max_training_episodes) the evaluation phase runs the frozen deterministic policy; then phase
-  ``done`` and the node exits with code 0. In realtime the next reset waits until
-  ``episode_break`` wall seconds after the final state (the person rests; the update runs
-  within the break). PPO updates also fall inside an episode, at the step where the horizon is
-  reached: in lockstep episodes synchronously at that step (as the in-process engine and the
-  offline loop: bit-identical), in realtime episodes in a learner thread while the old weights
-  keep acting; the new ones take over at the first step boundary after it finished
-  (``hrc_agent_node.learner``).
+The step protocol is docs/architecture.md's ("The step protocol"); what the agent observes
+of the human and when it updates is in src/hrc_agent_node/README.md. In short: publish
+``/hrc/session`` (transient local), call ``/hrc/sim/reset`` (its response carries what the sim
+owns: control period, ``max_force``, ``max_torque``), answer every non-final ``/hrc/state``
+on ``/hrc/robot/cmd_wrench`` with the state's stamp, publish step k's record
+(``/hrc/agent/step``) when state k+1 arrives; on the final state ``/hrc/episode``, the update
+when one is due (phase ``updating`` first), a checkpoint, ``/hrc/session``, then the next
+reset (in realtime ``episode_break`` wall seconds later). After training the frozen policy is
+evaluated; then phase ``done`` and exit 0. The learner's health goes to ``/diagnostics``
+(``agent: learner``, :mod:`hrc_agent_node.agent_health`).
 
 Practice (``practice_episodes`` N > 0, the session runner's ``--practice N``): instead of a
 session, N episodes of the person alone (``agent_practice``); the agent is the one publisher
@@ -49,6 +29,7 @@ from geometry_msgs.msg import WrenchStamped
 from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.agent_messages import (agent_step_fields, episode_summary_fields,
                                           session_status_fields)
+from hrc_agent_node.agent_health import LearnerHealth, update_line
 from hrc_agent_node.agent_practice import PracticeEpisodes
 from hrc_agent_node.agent_startup import SESSION_MATCH_GRACE_S, StartupWait
 from hrc_agent_node.agent_services import (ANNOUNCE_ACK_TIMEOUT_S, EXIT_LINGER_S,
@@ -61,6 +42,7 @@ from hrc_agent_node.strategies import CasesError
 from hrc_agent_node.task_tree import TaskTreeError
 from hrc_common import qos, topics
 from hrc_common.contract import os_error_text, Phase, SimLimits
+from hrc_common.diagnostics import DiagnosticsReporter
 from hrc_common.dof import set_wrench_value
 from hrc_common.episode_numbers import episode_number
 from hrc_common.nodes import run_node
@@ -149,6 +131,9 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)
         self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
+        self.learner_health = LearnerHealth()
+        DiagnosticsReporter(self, lambda: [self.learner_health.status(self.core,
+                                                                      self.break_seconds())])
 
     def _init_state(self):
         """Set the node's bookkeeping of the episode loop to its start."""
@@ -387,12 +372,9 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
                                              f'{msg.step}')
 
     def log_update(self, stats: dict, when: str):
-        """Log one PPO update's statistics."""
-        self.get_logger().info(
-            f'PPO update {stats["update"]} ({when}): {stats["samples"]} samples in '
-            f'{stats["seconds"]:.2f} s, policy loss {stats["policy_loss"]:.4f}, value loss '
-            f'{stats["value_loss"]:.4f}, approx kl {stats["approx_kl"]:.5f}, action std '
-            f'{stats["action_std"]:.3f}')
+        """Log one update's statistics; /diagnostics says the newest."""
+        self.learner_health.on_update(stats)
+        self.get_logger().info(update_line(stats, when, self.core.params.algorithm))
 
     def publish_step(self, record):
         """Publish one AgentStep (the state acted on, the action and the reward it earned)."""

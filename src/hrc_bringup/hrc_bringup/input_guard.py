@@ -16,7 +16,8 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from hrc_common import qos, topics
 from hrc_common.contract import ACTIVE_PHASES, Phase
-from hrc_common.session_control import ABORT_SERVICE, OPERATOR_SERVICES
+from hrc_common.session_control import (ABORT_SERVICE, AGENT_RESTARTING_MESSAGE,
+                                         OPERATOR_SERVICES)
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
@@ -62,6 +63,7 @@ class InputGuard:
         self._practice_told = False
         self._retire_at = 0.0
         self._status_pub = None
+        self.restarting_since = None    # monotonic s of a resume whose agent has not spoken yet
         self._string = String
         self._trigger = Trigger
         self._session_status = SessionStatus
@@ -106,6 +108,10 @@ class InputGuard:
                        + joy_missing_message(publishers))
 
     def _on_status(self, status):
+        if self._status_pub is not None:
+            if self.restarting_since is None or status.message == AGENT_RESTARTING_MESSAGE:
+                return  # our own stand-in status
+            self._agent_speaks_again()
         if self._status_pub is None:   # the agent's, not our own stand-in status
             self.last_status = status
             if status.human_involved and not self.involved:
@@ -229,10 +235,37 @@ class InputGuard:
         return response
 
     def resumed(self) -> None:
-        """Stop standing in for the agent (it is starting again)."""
+        """Stop standing in for the agent: nothing is lost any more (the agent runs on)."""
+        self._drop_status_publisher()
+        self._clear_loss()
+
+    def restarting(self) -> None:
+        """Say the agent is starting again after the operator's resume, until it speaks.
+
+        Its start takes seconds (the interpreter, torch, the checkpoint); meanwhile the stand-in
+        status says "resuming" (phase paused, :data:`AGENT_RESTARTING_MESSAGE`), not the pause
+        the operator has just ended. The agent's first own status ends it.
+        """
+        self._clear_loss()
+        if self._status_pub is None or self.last_status is None:
+            return self._drop_status_publisher()
+        self.restarting_since = time.monotonic()
+        status = self.last_status
+        status.phase, status.message = int(Phase.PAUSED), AGENT_RESTARTING_MESSAGE
+        self._status_pub.publish(status)
+
+    def _agent_speaks_again(self) -> None:
+        print(f'[session] the agent runs again ({time.monotonic() - self.restarting_since:.1f} s '
+              f'after the resume)', flush=True)
+        self._drop_status_publisher()
+
+    def _drop_status_publisher(self) -> None:
         if self._status_pub is not None:
             self.node.destroy_publisher(self._status_pub)
             self._status_pub = None
+        self.restarting_since = None
+
+    def _clear_loss(self) -> None:
         # The services go a moment later: the answer to the resume call must reach the caller
         # first (the new agent takes seconds to serve them itself).
         self._retire_at = time.monotonic() + SERVICE_RETIRE_S

@@ -191,9 +191,9 @@ class SessionRun:
             self.restarts += 1
             restart_agent(self.supervisor, self.parameters, self.settings, self.run_dir,
                           self.restarts)
-            guard.resumed()
-            print('[session] resumed by the operator: the agent continues from the '
-                  'last finished episode', flush=True)
+            guard.restarting()
+            print('[session] resumed by the operator: the agent is starting again and '
+                  'continues from the last finished episode', flush=True)
             return 'continue'
         return None
 

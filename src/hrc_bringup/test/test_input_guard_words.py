@@ -11,6 +11,7 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from hrc_bringup import input_guard
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.paths import params_dir
+from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_msgs.msg import HumanAction, SessionStatus
@@ -27,6 +28,9 @@ class FakeNode:
         self.publishers.append(topic)
         return SimpleNamespace(publish=lambda message: self.published.setdefault(
             topic, []).append(message))
+
+    def destroy_publisher(self, publisher):
+        self.destroyed = getattr(self, 'destroyed', 0) + 1
 
     def create_client(self, *_):
         return SimpleNamespace(service_is_ready=lambda: False)
@@ -104,6 +108,30 @@ def test_the_joystick_back_is_said_at_once_and_lost_again_too():
     assert node.published['/hrc/session/input_lost'][-1].data == guard.lost
     assert node.published['/hrc/session'][-1].message.endswith('resume after it is back')
     assert node.publishers.count('/hrc/session') == 1     # one stand-in publisher, reused
+
+
+def test_after_the_resume_the_agent_is_said_to_be_starting_until_it_speaks(capsys):
+    """The agent's restart takes seconds: "resuming" is said meanwhile, not the ended pause."""
+    node = FakeNode()
+    guard = input_guard.InputGuard(node, 'device', '/dev/input/js0')
+    guard._on_status(SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
+                                   strategy='responsibility_guided', episode=4))
+    guard._on_input_status(input_status(False, '/dev/input/js0 vanished'))
+    guard.on_agent_exit()
+    guard._on_input_status(input_status(True, '/dev/input/js0 opens'))
+    guard.restarting()                              # the runner has started the agent again
+    resuming = node.published['/hrc/session'][-1]
+    assert resuming.phase == Phase.PAUSED and resuming.message == AGENT_RESTARTING_MESSAGE
+    assert resuming.episode == 4 and node.published['/hrc/session/input_lost'][-1].data == ''
+    assert guard.lost == '' and not guard.agent_down
+    guard._on_status(resuming)                      # our own status, heard back: still ours
+    assert getattr(node, 'destroyed', 0) == 0 and guard.restarting_since is not None
+    # the new agent's first status: the stand-in publisher goes, the runner says so
+    guard._on_status(SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
+                                   strategy='responsibility_guided', episode=4))
+    assert node.destroyed == 1 and guard.restarting_since is None
+    assert guard.last_status.phase == Phase.TRAINING and guard.involved
+    assert 'the agent runs again' in capsys.readouterr().out
 
 
 @pytest.mark.parametrize('kind', ['joy', 'auto'])

@@ -12,10 +12,14 @@ thresholds below (pure functions, tested on their own):
   ``JITTER_ERROR_SHARE``), and in both modes the commands missing and stale in the running
   episode (WARN from one, ERROR from ``MISSING_ERROR_SHARE`` of its steps);
 * recorder, ``recorder: writing``: files closed, bytes, messages waiting, free disk space
-  (WARN below ``DISK_WARN_BYTES``, ERROR below ``DISK_ERROR_BYTES`` or when recording stopped).
+  (WARN below ``DISK_WARN_BYTES``, ERROR below ``DISK_ERROR_BYTES`` or when recording stopped);
+* agent, ``agent: learner``: whether it is updating and the last update's duration and losses
+  (WARN when an update took longer than the break between episodes: the person waits for the
+  robot; ERROR when a loss is not a finite number: the learner diverged).
 """
 
 import collections
+import math
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
@@ -59,6 +63,26 @@ def disk_level(free_bytes: int, failed: str) -> tuple:
     if free_bytes < DISK_WARN_BYTES:
         return WARN, f'{free_bytes >> 20} MiB free on the bags disk'
     return OK, 'writing'
+
+
+def learner_level(last_update, break_s: float) -> tuple:
+    """Return (level, message) of the agent's learner from its last update's statistics.
+
+    ``last_update`` holds ``seconds``, ``policy_loss`` and ``value_loss`` (None: no update
+    yet); ``break_s`` is the break between episodes (s).
+    """
+    if last_update is None:
+        return OK, 'no update yet (collecting samples)'
+    losses = {name: last_update.get(name, 0.0) for name in ('policy_loss', 'value_loss')}
+    diverged = [name for name, value in losses.items() if not math.isfinite(value)]
+    if diverged:
+        return ERROR, (f'the last update\'s {" and ".join(diverged)} is not a finite number: '
+                       f'the learner diverged')
+    seconds = last_update.get('seconds', 0.0)
+    if break_s > 0 and seconds > break_s:
+        return WARN, (f'the last update took {seconds:.1f} s, longer than the {break_s:.1f} s '
+                      f'break between episodes (the person waits for the robot)')
+    return OK, f'last update took {seconds:.2f} s'
 
 
 class PeriodJitter:

@@ -7,8 +7,8 @@ report's notices and the bag file names (``<session>_episode0001.mcap``; folders
 hrc 1.0 hold ``<session>_ep0000.mcap``, by index, and are still read) -- shows the episode
 *number*, counted from 1: the session's first
 episode is "episode 1", whatever its kind (practice, training, judging or evaluation episodes
-all count, so a number names one recorded episode). The console's table labels the index as
-"episode index".
+all count, so a number names one recorded episode). The console labels its number "from 1, as
+on the page"; the report's figures count episodes from 1 too.
 """
 
 

@@ -14,6 +14,7 @@ import math
 import re
 import typing
 
+from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
 from hrc_live.display_core import AgentPlan, Overlay, ResultView, SessionView, Snapshot
 
 
@@ -38,6 +39,8 @@ EFFECT_WORDS = {
                             'smoothly to keep it still.'}
 BANNER_HOLD_S = 1.0     # s a banner stays up at least, unless its tone changes
 ALONE_BANNER = 'The robot is practising alone: please wait'
+# After the operator's resume while the robot starts again (seconds; see AGENT_RESTARTING_MESSAGE)
+RESTARTING_BANNER = 'Resuming: the robot is getting ready. Please wait a few seconds.'
 REPLAY_BANNER = 'Replay of a recorded session: nothing you do now is used'
 INVALID_STATE_NOTICE = ('The simulation sent an invalid state (not a finite number): the '
                         'picture is frozen. Operator: see the sim log.')
@@ -178,6 +181,8 @@ def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
     if phase == 'paused' and 'joystick disconnected' in session.message.lower():
         # the runner's pause for a lost input: the joystick is back, the operator resumes
         return 'The joystick is connected again: please wait for the operator', 'wait'
+    if phase == 'paused' and session.message == AGENT_RESTARTING_MESSAGE:
+        return RESTARTING_BANNER, 'wait'
     if phase == 'paused':
         return 'Paused by the operator: please wait', 'wait'
     if not session.human_involved:

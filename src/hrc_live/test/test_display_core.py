@@ -11,7 +11,9 @@ from hrc_live.display_core import (AgentPlan, DisplayModel, HumanView, ResultVie
                                    StateView)
 from hrc_live.display_documents import (configuration_points, console_document, scene_bounds,
                                         state_document, status_document)
-from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay
+from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
+from hrc_live.display_words import (INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay,
+                                    RESTARTING_BANNER)
 from hrc_sim_node.physics import PhysicsParams
 import pytest
 
@@ -231,6 +233,12 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     model.set_input_lost('')
     assert overlay(model.snapshot(now=6.0)).banner == (
         'The joystick is connected again: please wait for the operator')
+    # The operator resumes: the runner says the robot is starting again until it speaks.
+    model.on_session(session(phase='paused', message=AGENT_RESTARTING_MESSAGE), now=7.0)
+    words = overlay(model.snapshot(now=9.0))
+    assert (words.banner, words.tone) == (RESTARTING_BANNER, 'wait')
+    assert console_document(model.snapshot(now=9.0))['session']['message'] == (
+        AGENT_RESTARTING_MESSAGE)
     # Resumed: the agent starts again after a break, counted down, although the newest state
     # is still the interrupted episode's step 12.
     model.on_session(session(phase='training'), now=20.0)
