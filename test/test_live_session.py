@@ -459,6 +459,9 @@ def test_case2_with_a_fifo_joystick_that_is_unplugged_mid_episode(tmp_path, ros_
         assert watcher.wait(lambda: 'waiting for the person' in output(), 60), output()
         assert 'no program writes to it' in output() and 'Fix: plug the joystick in' in output()
         assert not watcher.statuses, 'no node may start before the input is there'
+        # operator status says what the runner waits for while no agent speaks
+        code, said = operator(ros_domain_id, 'status')
+        assert code == 0 and "the session runner: waiting for the person's input" in said, said
         # The page is served from the start, its address printed.
         address = re.search(r"the person's page: (http://127\.0\.0\.1:\d+/)", output())
         assert address and output().index("person's page") < output().index('waiting for'), \

@@ -63,7 +63,9 @@ class InputGuard:
         self._practice_told = False
         self._retire_at = 0.0
         self._status_pub = None
+        self._waiting_pub = None        # /hrc/session/runner_waiting: one writer, made once
         self.restarting_since = None    # monotonic s of a resume whose agent has not spoken yet
+        self._own_message = ''          # the stand-in status's last message
         self._string = String
         self._trigger = Trigger
         self._session_status = SessionStatus
@@ -107,10 +109,15 @@ class InputGuard:
         return False, (device_missing_message(self.device, why, joystick_devices()) + ' Or: '
                        + joy_missing_message(publishers))
 
+    def say_waiting(self, reason: str) -> None:
+        """Say on /hrc/session/runner_waiting why the runner waits ('' = it does not)."""
+        if self._waiting_pub is None:
+            self._waiting_pub = self.node.create_publisher(self._string, topics.RUNNER_WAITING,
+                                                           qos.SESSION_QOS)
+        self._waiting_pub.publish(self._string(data=reason))
+
     def _on_status(self, status):
-        if self._status_pub is not None:
-            if self.restarting_since is None or status.message == AGENT_RESTARTING_MESSAGE:
-                return  # our own stand-in status
+        if self.restarting_since is not None and status.message != self._own_message:
             self._agent_speaks_again()
         if self._status_pub is None:   # the agent's, not our own stand-in status
             self.last_status = status
@@ -208,6 +215,7 @@ class InputGuard:
             status.message = (f'{self.lost}; the joystick is connected again: paused, resume '
                               f'when ready' if self.back else
                               f'{self.lost}: paused; resume after it is back')
+            self._own_message = status.message
 
             self._status_pub.publish(status)
 
@@ -242,28 +250,26 @@ class InputGuard:
     def restarting(self) -> None:
         """Say the agent is starting again after the operator's resume, until it speaks.
 
-        Its start takes seconds (the interpreter, torch, the checkpoint); meanwhile the stand-in
-        status says "resuming" (phase paused, :data:`AGENT_RESTARTING_MESSAGE`), not the pause
-        the operator has just ended. The agent's first own status ends it.
+        Its start takes seconds (the interpreter, torch, the checkpoint). The stand-in status
+        writer goes first (one writer of /hrc/session); meanwhile the runner says
+        :data:`AGENT_RESTARTING_MESSAGE` on /hrc/session/runner_waiting (the page: "Resuming",
+        the console), not the pause the operator has just ended. The agent's first status
+        ends it.
         """
-        self._clear_loss()
-        if self._status_pub is None or self.last_status is None:
-            return self._drop_status_publisher()
+        self.resumed()
         self.restarting_since = time.monotonic()
-        status = self.last_status
-        status.phase, status.message = int(Phase.PAUSED), AGENT_RESTARTING_MESSAGE
-        self._status_pub.publish(status)
+        self.say_waiting(AGENT_RESTARTING_MESSAGE)
 
     def _agent_speaks_again(self) -> None:
         print(f'[session] the agent runs again ({time.monotonic() - self.restarting_since:.1f} s '
               f'after the resume)', flush=True)
-        self._drop_status_publisher()
+        self.restarting_since = None
+        self.say_waiting('')
 
     def _drop_status_publisher(self) -> None:
         if self._status_pub is not None:
             self.node.destroy_publisher(self._status_pub)
             self._status_pub = None
-        self.restarting_since = None
 
     def _clear_loss(self) -> None:
         # The services go a moment later: the answer to the resume call must reach the caller
@@ -305,23 +311,21 @@ def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: lis
     person's page only asks them to wait); cleared when the wait ends.
     """
     deadline = time.monotonic() + timeout
-    waiting = guard.node.create_publisher(String, topics.RUNNER_WAITING, qos.SESSION_QOS)
     said = ''
     while True:
         present, why = guard.present()
         if present:
             if said:
                 print(f'[session] the input is there now: {why}', flush=True)
-                waiting.publish(String(data=''))
+                guard.say_waiting('')
             return True
         if why != said:
             print(f"[session] waiting for the person's input (up to {timeout:.0f} s): {why}",
                   flush=True)
-            waiting.publish(String(data=f"waiting for the person's input (up to "
-                                   f'{timeout:.0f} s): {why}'))
+            guard.say_waiting(f"waiting for the person's input (up to {timeout:.0f} s): {why}")
             said = why
         if time.monotonic() > deadline or stop_reason:
             print(f'[session] not started: {why}', file=sys.stderr, flush=True)
-            waiting.publish(String(data=f'not started: {why}'))
+            guard.say_waiting(f'not started: {why}')
             return False
         executor.spin_once(timeout_sec=0.2)

@@ -23,6 +23,7 @@ class FakeNode:
 
     def __init__(self, joy_publishers: int = 0):
         self.published, self.publishers, self.joy_publishers = {}, [], joy_publishers
+        self.destroyed = 0
 
     def create_publisher(self, _type, topic, _qos):
         self.publishers.append(topic)
@@ -30,7 +31,7 @@ class FakeNode:
             topic, []).append(message))
 
     def destroy_publisher(self, publisher):
-        self.destroyed = getattr(self, 'destroyed', 0) + 1
+        self.destroyed += 1
 
     def create_client(self, *_):
         return SimpleNamespace(service_is_ready=lambda: False)
@@ -119,19 +120,26 @@ def test_after_the_resume_the_agent_is_said_to_be_starting_until_it_speaks(capsy
     guard._on_input_status(input_status(False, '/dev/input/js0 vanished'))
     guard.on_agent_exit()
     guard._on_input_status(input_status(True, '/dev/input/js0 opens'))
+    stand_in = node.published['/hrc/session'][-1]
     guard.restarting()                              # the runner has started the agent again
-    resuming = node.published['/hrc/session'][-1]
-    assert resuming.phase == Phase.PAUSED and resuming.message == AGENT_RESTARTING_MESSAGE
-    assert resuming.episode == 4 and node.published['/hrc/session/input_lost'][-1].data == ''
+    # one writer of /hrc/session: the stand-in's goes before the agent starts; the runner's
+    # word is on runner_waiting
+    assert node.destroyed == 1 and guard._status_pub is None
+    assert [said.data for said in node.published['/hrc/session/runner_waiting']] == [
+        AGENT_RESTARTING_MESSAGE]
+    assert node.published['/hrc/session/input_lost'][-1].data == ''
     assert guard.lost == '' and not guard.agent_down
-    guard._on_status(resuming)                      # our own status, heard back: still ours
-    assert getattr(node, 'destroyed', 0) == 0 and guard.restarting_since is not None
-    # the new agent's first status: the stand-in publisher goes, the runner says so
+    guard._on_status(stand_in)                      # the stand-in's last status, late: not it
+    assert guard.restarting_since is not None
+    # the new agent's first status ends the wait
     guard._on_status(SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
-                                   strategy='responsibility_guided', episode=4))
-    assert node.destroyed == 1 and guard.restarting_since is None
-    assert guard.last_status.phase == Phase.TRAINING and guard.involved
+                                   strategy='responsibility_guided', episode=4,
+                                   message='session starting'))
+    assert guard.restarting_since is None
+    assert node.published['/hrc/session/runner_waiting'][-1].data == ''
+    assert guard.last_status.message == 'session starting' and guard.involved
     assert 'the agent runs again' in capsys.readouterr().out
+    assert node.publishers.count('/hrc/session/runner_waiting') == 1
 
 
 @pytest.mark.parametrize('kind', ['joy', 'auto'])

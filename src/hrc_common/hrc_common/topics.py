@@ -25,8 +25,9 @@ RESET_SERVICE = '/hrc/sim/reset'
 HUMAN_INPUT = '/hrc/human/input'
 # The session runner's "joystick disconnected" words for the pages (std_msgs/String).
 INPUT_LOST = '/hrc/session/input_lost'
-# Why the session runner waits before it starts the nodes ('' = it does not), and what to do
-# (std_msgs/String, transient local): the console says it, the person's page says "please wait".
+# Why the session runner waits ('' = it does not): for the person's input before it starts the
+# nodes (and what to do), or for the agent it starts again after a resume (std_msgs/String,
+# transient local): the console and ``hrc operator status`` say it, the page "please wait".
 RUNNER_WAITING = '/hrc/session/runner_waiting'
 # What a replay node replays ('' = nothing: live), std_msgs/String, transient local: the pages
 # mark a replay as one.

@@ -178,11 +178,11 @@ def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
         return 'Stopped by the operator. Please let go of the joystick.', 'stop'
     if phase == 'done':
         return 'The session is finished. Thank you!', 'info'
+    if snapshot.runner_waiting == AGENT_RESTARTING_MESSAGE:
+        return RESTARTING_BANNER, 'wait'
     if phase == 'paused' and 'joystick disconnected' in session.message.lower():
         # the runner's pause for a lost input: the joystick is back, the operator resumes
         return 'The joystick is connected again: please wait for the operator', 'wait'
-    if phase == 'paused' and session.message == AGENT_RESTARTING_MESSAGE:
-        return RESTARTING_BANNER, 'wait'
     if phase == 'paused':
         return 'Paused by the operator: please wait', 'wait'
     if not session.human_involved:

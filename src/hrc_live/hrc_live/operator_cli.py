@@ -21,6 +21,8 @@ from hrc_common import topics
 from hrc_common.session_control import OPERATOR_SERVICES
 
 EXIT_REFUSED = 1
+# s ``status`` waits for the agent's status once the runner has said what it waits for
+RUNNER_WORD_GRACE_S = 1.0
 EXIT_NO_AGENT = 4
 
 
@@ -73,17 +75,28 @@ def call_service(node, executor, name: str, timeout: float):
     return future.result() if future.done() else None
 
 
-def wait_for_status(node, executor, timeout: float):
-    """Return the newest SessionStatus (transient local), or None."""
+def wait_for_status(node, executor, timeout: float) -> tuple:
+    """Return the newest SessionStatus (transient local) or None, and what the runner waits for.
+
+    While the session runner waits (for the person's input, for the agent it starts again
+    after a resume) /hrc/session may have no writer; the runner's word on
+    /hrc/session/runner_waiting then answers after RUNNER_WORD_GRACE_S.
+    """
     from hrc_common import qos  # lazy: rclpy, --help stays light
     from hrc_msgs.msg import SessionStatus  # lazy: rclpy (via the message), as above
+    from std_msgs.msg import String  # lazy: as above
 
-    received = []
+    received, waiting = [], []
     node.create_subscription(SessionStatus, topics.SESSION, received.append, qos.SESSION_QOS)
-    deadline = time.monotonic() + timeout
-    while not received and time.monotonic() < deadline:
+    node.create_subscription(String, topics.RUNNER_WAITING,
+                             lambda message: waiting.append(message.data), qos.SESSION_QOS)
+    start = time.monotonic()
+    while not received and time.monotonic() < start + timeout:
+        if waiting and waiting[-1] and time.monotonic() > start + RUNNER_WORD_GRACE_S:
+            break
         executor.spin_once(timeout_sec=0.1)
-    return received[-1] if received else None
+    executor.spin_once(timeout_sec=0.1)     # the other topic's newest, if it is on its way
+    return (received[-1] if received else None), (waiting[-1] if waiting else '')
 
 
 def main(argv=None) -> int:
@@ -100,12 +113,15 @@ def main(argv=None) -> int:
     executor.add_node(node)
     try:
         if options.command == 'status':
-            status = wait_for_status(node, executor, options.timeout)
-            if status is None:
+            status, waiting = wait_for_status(node, executor, options.timeout)
+            if status is None and not waiting:
                 print(f'no session status on /hrc/session within {options.timeout} s: is a '
                       f'session running (same ROS_DOMAIN_ID)?', file=sys.stderr)
                 return EXIT_NO_AGENT
-            print(describe_status(status))
+            if status is not None:
+                print(describe_status(status))
+            if waiting:
+                print(f'the session runner: {waiting}')
             return 0
         service = OPERATOR_SERVICES[options.command]
         response = call_service(node, executor, service, options.timeout)

@@ -234,14 +234,16 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     assert overlay(model.snapshot(now=6.0)).banner == (
         'The joystick is connected again: please wait for the operator')
     # The operator resumes: the runner says the robot is starting again until it speaks.
-    model.on_session(session(phase='paused', message=AGENT_RESTARTING_MESSAGE), now=7.0)
+    model.set_runner_waiting(AGENT_RESTARTING_MESSAGE)
     words = overlay(model.snapshot(now=9.0))
     assert (words.banner, words.tone) == (RESTARTING_BANNER, 'wait')
-    assert console_document(model.snapshot(now=9.0))['session']['message'] == (
-        AGENT_RESTARTING_MESSAGE)
+    document = console_document(model.snapshot(now=9.0))
+    assert (document['runner_waiting'], document['runner_waiting_tone']) == (
+        AGENT_RESTARTING_MESSAGE, 'wait')             # not red: nothing to do
     # Resumed: the agent starts again after a break, counted down, although the newest state
     # is still the interrupted episode's step 12.
     model.on_session(session(phase='training'), now=20.0)
+    assert model.snapshot(now=20.0).runner_waiting == ''    # the agent speaks again
     words = overlay(model.snapshot(now=21.2))
     assert (words.banner, words.countdown, words.notice) == (
         'Get ready: the next round starts in 3 s', 3, '')
