@@ -15,6 +15,7 @@ import time
 
 
 from hrc_common.executables import executable_path
+from hrc_testing.system_topics import check_the_system_is_recorded
 
 STEPS = 40  # control steps per episode in these tests (episode_duration 8 s)
 SHORT = ['--set', 'sim.episode_duration=8.0', '--set', 'agent.horizon=80']
@@ -59,6 +60,8 @@ def test_short_session_completes_answered_recorded_and_reported(tmp_path, ros_do
     assert [s.evaluation for s in summaries] == [False, False, True]
     assert summaries[-1].steps == STEPS
     assert bag['/hrc/session'][-1].phase == bag['/hrc/session'][-1].PHASE_DONE
+    # The system as ROS viewers expect it: joint states with every state, the URDF per file.
+    check_the_system_is_recorded(tmp_path / 'bags' / 'test', bag)
 
     table = (tmp_path / 'runs' / 'test' / 'report' / 'table2.md').read_text()
     row = '| 3 | human first | translation | 1 |'    # case 3's Table II row, one seed

@@ -52,6 +52,7 @@ import typing
 
 from hrc_common.contract import DOF_NAME, NS_PER_S, PERSONAL_FILE_MODE, PUBLIC_FILE_MODE
 from hrc_common.episode_numbers import episode_number
+from hrc_common.topics import ROBOT_DESCRIPTION
 
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.qos_yaml import dump_yaml
@@ -114,6 +115,28 @@ class RawMessage:
     log_time: int
     publish_time: int
     sequence: int = 0
+
+
+# Latched topics whose newest message every episode file repeats at its start, so that one
+# file alone shows the system in a viewer (Foxglove, RViz): the sim's URDF.
+REPEATED_IN_EVERY_FILE = (ROBOT_DESCRIPTION,)
+
+
+class LatchedMessages:
+    """The newest message of each :data:`REPEATED_IN_EVERY_FILE` topic, for the next file."""
+
+    def __init__(self):
+        self.newest = {}
+
+    def seen(self, message: RawMessage) -> None:
+        """Take a message as it is recorded."""
+        if message.topic in REPEATED_IN_EVERY_FILE:
+            self.newest[message.topic] = message
+
+    def missing_from(self, written: list) -> list:
+        """Return the newest latched messages a new file lacks after ``written`` (its first)."""
+        return [message for message in self.newest.values()
+                if not any(message is other for other in written)]
 
 
 @dataclass(frozen=True)

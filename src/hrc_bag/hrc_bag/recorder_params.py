@@ -5,10 +5,10 @@ from dataclasses import dataclass
 from hrc_common.contract import id_problem
 from hrc_common.params import param
 from hrc_common.topics import (AGENT_STEP, EPISODE, HUMAN_ACTION, HUMAN_CMD_WRENCH,
-                               ROBOT_CMD_WRENCH, SESSION, STATE)
+                               JOINT_STATES, ROBOT_CMD_WRENCH, ROBOT_DESCRIPTION, SESSION, STATE)
 
 DEFAULT_TOPICS = [STATE, ROBOT_CMD_WRENCH, HUMAN_CMD_WRENCH, HUMAN_ACTION, SESSION, EPISODE,
-                  AGENT_STEP]
+                  AGENT_STEP, JOINT_STATES, ROBOT_DESCRIPTION]
 
 
 @dataclass

@@ -73,7 +73,7 @@ from hrc_bag.bag_reader import recording_order
 from hrc_bag.boundaries import SessionSeen, StateSeen, SummarySeen
 from hrc_bag.episode_file import EpisodeFile
 from hrc_bag.format import (describe_error, episode_file_stem, file_mode,
-                            index_named_file_stem, RawMessage,
+                            index_named_file_stem, LatchedMessages, RawMessage,
                             RecordingError, session_custom_data, SESSION_RECORD, session_record,
                             TopicDescription, unused_path)
 from hrc_bag.qos_yaml import load_yaml
@@ -147,6 +147,7 @@ class EpisodeRecorder:
         self._stamp_episodes = collections.OrderedDict()   # state stamp (ns) -> episode
         self._last_flush = clock()
         self._pending = collections.deque()
+        self.latched = LatchedMessages()    # the newest URDF, repeated in each new file
         self._dropped = 0
         self._descriptions = {}             # topic -> last good TopicDescription
         self.last_status = None
@@ -278,8 +279,12 @@ class EpisodeRecorder:
                                      if attempt > 1 else '')
                    + (f' ({len(self._pending)} messages from before it)'
                       if self._pending else ''))
+        flushed = []
         while self._pending:
-            self._write(self.current, self._pending.popleft())
+            flushed.append(self._pending.popleft())
+            self._write(self.current, flushed[-1])
+        for message in self.latched.missing_from(flushed):  # the URDF in every file
+            self._write(self.current, message)
         return self.current
 
     def _close(self, episode: OpenEpisode, reason: str) -> None:
@@ -409,6 +414,7 @@ class EpisodeRecorder:
         """Route one message (in log-time order) following the boundary rule."""
         now = self._clock()
         grace = self.params.close_grace
+        self.latched.seen(message)
         if isinstance(event, SessionSeen):
             self.last_status = dict(event.status)
             if event.status.get('phase') in FINISHED_PHASES:

@@ -46,7 +46,8 @@ from hrc_common import topics as hrc_topics
 
 from hrc_bag import serializer
 from hrc_bag.episode_file import DEFAULT_CHUNK_SIZE, EpisodeFile
-from hrc_bag.format import (episode_file_stem, file_mode, FileInfo, offered_profile,
+from hrc_bag.format import (episode_file_stem, file_mode, FileInfo, LatchedMessages,
+                            offered_profile,
                             plain_values, RawMessage, RecordingError, session_custom_data,
                             SESSION_RECORD, session_record, TopicDescription, type_hash,
                             unused_path)
@@ -96,6 +97,7 @@ class SessionWriter:
         self._file = None
         self._episode = None
         self._pending = []
+        self._latched = LatchedMessages()
         self.closed_files = []
 
     def _custom_data(self) -> dict:
@@ -127,6 +129,7 @@ class SessionWriter:
         raw = RawMessage(topic, type_name, serializer.encode(type_name, message),
                          int(log_time), int(log_time if publish_time is None else publish_time),
                          sequence)
+        self._latched.seen(raw)
         if self._file is None:
             self._pending.append(raw)
         else:
@@ -142,7 +145,7 @@ class SessionWriter:
                                  {SESSION_RECORD: record}, mode=self._mode)
         self._episode = episode
         pending, self._pending = self._pending, []
-        for raw in pending:
+        for raw in pending + self._latched.missing_from(pending):
             self._file.write(raw, self._description(raw.topic, raw.type_name))
 
     def begin_episode(self, episode: int) -> None:

@@ -10,6 +10,7 @@ person's time and the errors from the same attempt (the one that finished) and s
 
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 import pytest
+from std_msgs.msg import String
 import yaml
 
 from hrc_bag import bag_reader, recording
@@ -186,3 +187,26 @@ def test_a_session_begun_with_index_names_resumes_as_the_next_attempt(tmp_path, 
     assert bag_reader.scan_file(rerun).metadata[EPISODE_RECORD]['attempt_files'] == (
         's_ep0000.mcap,s_episode0001_attempt2.mcap')
     assert load_session(folder).files_by_episode[0] == [rerun]
+
+
+def test_the_robot_description_opens_every_episode_file_once(tmp_path):
+    """The URDF, published once (latched) before the first episode, starts each file once.
+
+    A viewer opens one file; without the repetition only the first file showed the system.
+    """
+    clock = Clock()
+    recorder = recorder_in(tmp_path, clock)
+    feed = Session(recorder)
+    feed.send('/robot_description', String(data='<robot name="slider_pendulum_ball"/>'))
+    for episode in range(3):
+        feed.episode(episode, RERUN_STEPS, final=True, summary=True)
+        clock.now += 0.1
+        recorder.tick()
+    recorder.close()
+    files = bag_reader.session_files(tmp_path / 's')
+    assert [path.name for path in files][:3] == [
+        's_episode0001.mcap', 's_episode0002.mcap', 's_episode0003.mcap']
+    for path in files[:3]:
+        found = [message for message in bag_reader.scan_file(path).messages
+                 if message.topic == '/robot_description']
+        assert len(found) == 1, path.name

@@ -346,6 +346,8 @@ SESSION_STATUS_TYPE = 'hrc_msgs/msg/SessionStatus'
 EPISODE_SUMMARY_TYPE = 'hrc_msgs/msg/EpisodeSummary'
 AGENT_STEP_TYPE = 'hrc_msgs/msg/AgentStep'
 WRENCH_STAMPED_TYPE = 'geometry_msgs/msg/WrenchStamped'
+JOINT_STATE_TYPE = 'sensor_msgs/msg/JointState'
+STRING_TYPE = 'std_msgs/msg/String'
 
 # --------------------------------------------------------------------------- time
 

@@ -34,6 +34,9 @@ SESSION = TopicQoS(depth=1, transient_local=True)
 # Late joiners (the recorder, a report tool) get the recent episode summaries.
 EPISODE = TopicQoS(depth=100, transient_local=True)
 AGENT_STEP = TopicQoS(depth=10)
+# robot_state_publisher's convention: the description latched for late joiners.
+ROBOT_DESCRIPTION = TopicQoS(depth=1, transient_local=True)
+JOINT_STATES = TopicQoS(depth=10)
 
 # The QoS each topic of the session graph (hrc_common.topics.TYPES) is published with.
 OF_TOPIC = {
@@ -44,4 +47,6 @@ OF_TOPIC = {
     topics.SESSION: SESSION,
     topics.EPISODE: EPISODE,
     topics.AGENT_STEP: AGENT_STEP,
+    topics.ROBOT_DESCRIPTION: ROBOT_DESCRIPTION,
+    topics.JOINT_STATES: JOINT_STATES,
 }

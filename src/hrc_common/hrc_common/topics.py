@@ -4,7 +4,8 @@
 """
 
 from hrc_common.contract import (AGENT_STEP_TYPE, EPISODE_SUMMARY_TYPE, HUMAN_ACTION_TYPE,
-                                 SESSION_STATUS_TYPE, TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
+                                 JOINT_STATE_TYPE, SESSION_STATUS_TYPE, STRING_TYPE,
+                                 TASK_STATE_TYPE, WRENCH_STAMPED_TYPE)
 
 STATE = '/hrc/state'
 # States within a control period at the human's rate (TaskState, slice > 0), for the human node
@@ -16,6 +17,11 @@ HUMAN_ACTION = '/hrc/human/action'
 SESSION = '/hrc/session'
 EPISODE = '/hrc/episode'
 AGENT_STEP = '/hrc/agent/step'
+# The system as ROS tools expect it (RViz, Foxglove, robot_state_publisher): the sim's URDF
+# (std_msgs/String, transient local) and its three joints at the state's rate, stamped as the
+# state (sensor_msgs/JointState: slide m, hinge rad, roll m; hrc_sim_node.body_geometry).
+ROBOT_DESCRIPTION = '/robot_description'
+JOINT_STATES = '/joint_states'
 CLOCK = '/clock'
 JOY = '/joy'
 CAMERA_IMAGE = '/hrc/sim/image'
@@ -42,4 +48,6 @@ TYPES = {
     SESSION: SESSION_STATUS_TYPE,
     EPISODE: EPISODE_SUMMARY_TYPE,
     AGENT_STEP: AGENT_STEP_TYPE,
+    ROBOT_DESCRIPTION: STRING_TYPE,
+    JOINT_STATES: JOINT_STATE_TYPE,
 }

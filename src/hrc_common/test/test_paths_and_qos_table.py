@@ -39,7 +39,7 @@ def test_the_table_is_the_documented_one():
     # docs/architecture.md, "Topics": | `/hrc/state` | ... | reliable, keep_last 10 |
     documented = {}
     for line in (REPOSITORY / 'docs' / 'architecture.md').read_text().splitlines():
-        match = re.match(r'\| `(/hrc/[\w/]+)` \|.*\| ([^|]+) \|$', line)
+        match = re.match(r'\| `(/[\w/]+)` \|.*\| ([^|]+) \|$', line)
         if match:
             documented[match.group(1)] = match.group(2).strip()
     for topic, spec in qos_table.OF_TOPIC.items():

@@ -40,7 +40,7 @@ from hrc_agent_node.checkpoint import load_into, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_bag.format import contract_description
 from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
-from hrc_common import qos_table
+from hrc_common import qos_table, topics
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import from_dict
 from hrc_common.paths import params_dir as default_params_dir
@@ -50,6 +50,7 @@ from hrc_common.session_plan import compose, new_session_id, SessionSettings, wr
 from hrc_engine import messages
 from hrc_engine.human import SimulatedHumanSide
 from hrc_engine.loop import EpisodeLoop, run_agent_session
+from hrc_sim_node.body_geometry import model_urdf
 from hrc_sim_node.commands import ACTORS
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, StepProtocol
@@ -195,6 +196,7 @@ class InProcessSession:
                                     session_config=bounded_yaml.load(text, str(config_path)),
                                     session_config_text=text,
                                     descriptions=topic_descriptions())
+        self._write(topics.ROBOT_DESCRIPTION, {'data': model_urdf(self.physics.params)})
 
     def _write(self, topic: str, message: dict) -> None:
         if self.writer is not None:
@@ -251,6 +253,7 @@ class InProcessSession:
         self._write('/hrc/state', messages.task_state(
             advanced.state, self.protocol.episode, advanced.stamp, advanced.missing,
             human_applied=advanced.human_applied))
+        self._write(topics.JOINT_STATES, messages.joint_state(advanced.state, advanced.stamp))
         if advanced.state.step:
             self.steps += 1        # a control step ran
         if advanced.episode_over:

@@ -10,6 +10,7 @@ from hrc_agent_node.agent_messages import (agent_step_fields, episode_summary_fi
                                           session_status_fields)
 from hrc_common.contract import DOF_INDEX, InputSource
 # Wrench values live with the sim's command rules; wrench_on is used here and re-exported.
+from hrc_sim_node.body_geometry import JOINT_NAMES, joint_values
 from hrc_sim_node.commands import HUMAN, ROBOT, Wrench, wrench_on  # noqa: F401
 from hrc_sim_node.protocol import stamp_fields
 
@@ -45,6 +46,14 @@ def task_state(state, episode: int, stamp: int, missing: dict, slice_index: int 
             'slice': int(slice_index),
             'human_applied': [float(value) for value in human_applied],
             'terminated': bool(state.terminated), 'truncated': bool(state.truncated)}
+
+
+def joint_state(state, stamp: int) -> dict:
+    """Return the JointState the sim publishes with a period's state."""
+    positions, velocities = joint_values(state)
+    return {'header': header(stamp), 'name': list(JOINT_NAMES),
+            'position': [float(value) for value in positions],
+            'velocity': [float(value) for value in velocities], 'effort': []}
 
 
 def human_action(stamp: int, episode: int, step: int, answer) -> dict:

@@ -14,6 +14,7 @@ from hrc_common.session_plan import SessionSettings
 from hrc_common.executables import executable_path
 from hrc_engine.engine import compose_parameters, EngineConfig, OFFERED_QOS, run_session
 from hrc_engine.inprocess_session import main, parse_args
+from hrc_testing.system_topics import check_the_system_is_recorded
 import pytest
 
 SHORT = {'sim.episode_duration': 2.0, 'agent.horizon': 20, 'agent.minibatch_size': 10}
@@ -82,6 +83,7 @@ def test_the_bags_carry_the_graphs_qos_and_the_report_reads_them(tmp_path, read_
         assert topics[topic]['type_description_hash'].startswith('RIHS01_')
     bag = read_rosbag(tmp_path / 'bags' / 'tiny')
     assert len(bag['/hrc/state']) == 3 * 11 and len(bag['/hrc/agent/step']) == 30
+    check_the_system_is_recorded(tmp_path / 'bags' / 'tiny', bag)     # as the graph's bags
     report = subprocess.run([str(executable_path('hrc_bringup', 'hrc')),
                              'bag', 'report', result.bag_dir,
                              '--out', str(tmp_path / 'report')],
@@ -96,7 +98,9 @@ def test_offered_qos_table_matches_the_contract():
     contract = {topics.STATE: qos.STATE_QOS, topics.ROBOT_CMD_WRENCH: qos.COMMAND_QOS,
                 topics.HUMAN_CMD_WRENCH: qos.COMMAND_QOS,
                 topics.HUMAN_ACTION: qos.HUMAN_ACTION_QOS, topics.SESSION: qos.SESSION_QOS,
-                topics.EPISODE: qos.EPISODE_QOS, topics.AGENT_STEP: qos.AGENT_STEP_QOS}
+                topics.EPISODE: qos.EPISODE_QOS, topics.AGENT_STEP: qos.AGENT_STEP_QOS,
+                topics.ROBOT_DESCRIPTION: qos.OF_TOPIC[topics.ROBOT_DESCRIPTION],
+                topics.JOINT_STATES: qos.OF_TOPIC[topics.JOINT_STATES]}
     assert set(contract) == set(OFFERED_QOS)
     for topic, profile in contract.items():
         deadline = profile.deadline.nanoseconds

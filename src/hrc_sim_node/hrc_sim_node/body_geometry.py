@@ -1,8 +1,10 @@
 """The bodies of the slider-pendulum-ball system: their URDF model and their poses.
 
 Pure geometry (no PyBullet): :func:`model_urdf` gives the chain rod -> slider -> pendulum ->
-ball that :class:`hrc_sim_node.physics.SliderPendulumBall` loads, :func:`body_poses` the centre
-pose of each body for a state (the sim's markers, the display's scene). The frame and the
+ball that :class:`hrc_sim_node.physics.SliderPendulumBall` loads (and the sim publishes on
+/robot_description), :func:`joint_values` its joints for a state (/joint_states),
+:func:`body_poses` the centre pose of each body for a state (the sim's markers, the display's
+scene). The frame and the
 quantities are described in :mod:`hrc_sim_node.physics`.
 """
 
@@ -87,6 +89,17 @@ def model_urdf(params: PhysicsParams) -> str:
   </joint>
 </robot>
 """
+
+
+# The model's movable joints, in /joint_states order: the slider along the rod (m), the beam's
+# hinge (rad), the ball along the beam from its middle (m).
+JOINT_NAMES = ('slide', 'hinge', 'roll')
+
+
+def joint_values(state: PhysicsState) -> tuple:
+    """Return (positions, velocities) of :data:`JOINT_NAMES` for ``state``."""
+    return ((state.slider_position, state.pendulum_angle, state.ball_position),
+            (state.slider_velocity, state.pendulum_angular_velocity, state.ball_velocity))
 
 
 def _rotation_about_x(angle: float) -> tuple:

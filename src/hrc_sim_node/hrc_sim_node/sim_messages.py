@@ -9,10 +9,11 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from hrc_common.contract import BODY_COLOURS
 from hrc_msgs.msg import TaskState
-from hrc_sim_node.body_geometry import body_poses
+from hrc_sim_node.body_geometry import body_poses, JOINT_NAMES, joint_values
 from hrc_sim_node.commands import HUMAN, ROBOT
 from hrc_sim_node.physics_params import PhysicsParams
 from hrc_sim_node.protocol import stamp_fields
+from sensor_msgs.msg import JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -48,6 +49,16 @@ def state_message(state, episode: int, stamp: Time, missing: dict, slice_index: 
         human_command_missing=bool(missing.get(HUMAN, False)),
         slice=int(slice_index), human_applied=[float(value) for value in human_applied],
         terminated=state.terminated, truncated=state.truncated)
+    message.header.stamp = stamp
+    message.header.frame_id = 'world'
+    return message
+
+
+def joint_state_message(state, stamp: Time) -> JointState:
+    """Return the /joint_states message of a period's state (stamped as the state)."""
+    positions, velocities = joint_values(state)
+    message = JointState(name=list(JOINT_NAMES), position=[float(value) for value in positions],
+                         velocity=[float(value) for value in velocities])
     message.header.stamp = stamp
     message.header.frame_id = 'world'
     return message

@@ -1,7 +1,8 @@
 """The sim node: runs the slider-pendulum-ball physics and talks the hrc step protocol.
 
-Publishes ``/hrc/state`` (TaskState), ``/clock`` (lockstep), ``/hrc/sim/markers`` and, when
-``camera_rate`` > 0, ``/hrc/sim/image``; consumes ``/hrc/robot/cmd_wrench``,
+Publishes ``/hrc/state`` (TaskState), ``/joint_states`` with each period's state,
+``/robot_description`` (its URDF, latched), ``/clock`` (lockstep), ``/hrc/sim/markers`` and,
+when ``camera_rate`` > 0, ``/hrc/sim/image``; consumes ``/hrc/robot/cmd_wrench``,
 ``/hrc/human/cmd_wrench`` and ``/hrc/session``; serves ``/hrc/sim/reset``.
 
 Step protocol (docs/architecture.md): a command answers a state by carrying the state's stamp.
@@ -38,18 +39,21 @@ from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_msgs.msg import SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
+from hrc_sim_node.body_geometry import model_urdf
 from hrc_sim_node.commands import HUMAN, ROBOT, unit_of
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, stamp_fields, stamp_ns, StepProtocol
 from hrc_sim_node.sim_log import summary_line, WarningThrottle
-from hrc_sim_node.sim_messages import command_stamp, marker_array, stamp_of, state_message
+from hrc_sim_node.sim_messages import (command_stamp, joint_state_message, marker_array,
+                                       stamp_of, state_message)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from hrc_sim_node.stepper import SimStepper
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import Image, JointState
+from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 __all__ = ['SimNode', 'SimParams', 'LOCKSTEP', 'REALTIME', 'main']
@@ -110,6 +114,12 @@ class SimNode(Node):
         # reset may switch the mode.
         self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS,
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
+        self._joint_pub = self.create_publisher(JointState, topics.JOINT_STATES,
+                                                qos.OF_TOPIC[topics.JOINT_STATES],
+                                                event_callbacks=NO_PUBLISHER_EVENTS)
+        self.create_publisher(String, topics.ROBOT_DESCRIPTION,
+                              qos.OF_TOPIC[topics.ROBOT_DESCRIPTION]).publish(
+            String(data=model_urdf(self.physics.params)))
         self._marker_pub = self.create_publisher(MarkerArray, topics.MARKERS, qos.VISUAL_QOS,
                                                  event_callbacks=NO_PUBLISHER_EVENTS)
         self._image_pub = (self.create_publisher(Image, topics.CAMERA_IMAGE, qos.VISUAL_QOS,
@@ -296,6 +306,7 @@ class SimNode(Node):
         if advanced.period_end:
             self._state = state
             self._state_pub.publish(message)
+            self._joint_pub.publish(joint_state_message(state, stamp))   # after: actors first
             self.health.on_state(state.step, advanced.missing, time.monotonic())
         else:
             self._slice_pub.publish(message)
