@@ -60,13 +60,18 @@ from hrc_bringup.local_pool import LocalPool, WAKE_PERIOD_S
 class RayExecutor:
     """Ray: an existing cluster (``address``) or a local instance started here (None)."""
 
-    def __init__(self, address, cpus_per_session: float):
+    def __init__(self, address, cpus_per_session: float, function=run_task, lost=lost_outcome):
+        """Connect; ``function(task)`` runs a task, ``lost(task, how, seconds)`` reports a death.
+
+        ``lost`` gives the outcome of a task whose worker died, as :class:`LocalPool`'s does.
+        """
         import ray  # lazy: optional heavy dependency, only the --ray executor needs it
         self.ray = ray
         ray.init(address=address, include_dashboard=False, log_to_driver=False,
                  logging_level='ERROR', configure_logging=True)
-        self.remote = ray.remote(num_cpus=cpus_per_session, max_retries=0)(run_task)
+        self.remote = ray.remote(num_cpus=cpus_per_session, max_retries=0)(function)
         self.cpus_per_session = cpus_per_session
+        self.lost = lost
 
     def describe(self) -> str:
         """Return what runs the tasks."""
@@ -91,8 +96,8 @@ class RayExecutor:
                     outcome = self.ray.get(reference)
                 except self.ray.exceptions.RayError as error:
                     reason = str(error).strip().splitlines()[0] if str(error).strip() else ''
-                    outcome = lost_outcome(task_of[reference], f'its Ray worker died '
-                                           f'({type(error).__name__}: {reason})', 0.0)
+                    outcome = self.lost(task_of[reference], f'its Ray worker died '
+                                        f'({type(error).__name__}: {reason})', 0.0)
                 on_done(outcome)
 
     def close(self, abort: bool = False):

@@ -209,6 +209,35 @@ def _echo_or_die(task: str) -> str:
     return task
 
 
+@pytest.mark.slow
+def test_a_killed_ray_worker_loses_its_session_only_and_the_sweep_ends(ray_cluster,
+                                                                      monkeypatch):
+    """On a real local Ray cluster: the task whose worker is SIGKILLed is reported lost.
+
+    Before, the driver died with a WorkerCrashedError traceback and lost the other sessions.
+    """
+    def echo_or_die(task):      # nested: Ray ships it to the workers by value
+        import os  # lazy: runs on a Ray worker
+        import signal  # lazy: as above
+        if task == 'die':
+            os.kill(os.getpid(), signal.SIGKILL)
+        return task
+
+    for name in ('RAY_USAGE_STATS_ENABLED', 'RAY_AUTH_MODE'):
+        monkeypatch.setenv(name, RAY_ENV[name])
+    executor = experiment.RayExecutor(ray_cluster.wait_ready(), 1.0, function=echo_or_die,
+                                      lost=lambda task, how, seconds: f'{task}: {how}')
+    outcomes = []
+    try:
+        executor.run(['a', 'die', 'b', 'c'], outcomes.append)
+    finally:
+        executor.close()
+    assert sorted(outcome for outcome in outcomes if not outcome.startswith('die')) == [
+        'a', 'b', 'c'], outcomes
+    lost = [outcome for outcome in outcomes if outcome.startswith('die')]
+    assert len(lost) == 1 and 'its Ray worker died (' in lost[0], outcomes
+
+
 def test_a_killed_worker_loses_its_session_only_and_the_sweep_ends():
     """A SIGKILLed worker hung multiprocessing.Pool for ever; now its task alone is lost."""
     outcomes = []
