@@ -127,20 +127,27 @@ def test_an_unplugged_episode_and_its_rerun_are_each_filed_as_themselves(tmp_pat
                for notice in session.notices), session.notices
 
 
-def test_a_later_recorder_of_a_resumed_session_continues_the_attempt_count(tmp_path):
-    """An operator abort and ``--resume-from``: a new recorder re-runs the aborted episode."""
-    clock = Clock()
-    first = recorder_in(tmp_path, clock)
-    feed = Session(first)
-    feed.episode(0, DROPPED_STEPS, final=False, summary=False)
-    first.close()
-    second = recorder_in(tmp_path, clock)
-    feed = Session(second)
+def drop_episode_0(recorder):
+    """Record episode 0 cut short (no final state, no summary), then stop the recorder."""
+    Session(recorder).episode(0, DROPPED_STEPS, final=False, summary=False)
+    recorder.close()
+
+
+def rerun_episode_0(recorder, clock):
+    """Record episode 0 again to its end with a later recorder (a resumed session)."""
+    feed = Session(recorder)
     feed.log_time += 10_000_000_000
     feed.episode(0, RERUN_STEPS, final=True, summary=True)
     clock.now += 0.1
-    second.tick()
-    second.close()
+    recorder.tick()
+    recorder.close()
+
+
+def test_a_later_recorder_of_a_resumed_session_continues_the_attempt_count(tmp_path):
+    """An operator abort and ``--resume-from``: a new recorder re-runs the aborted episode."""
+    clock = Clock()
+    drop_episode_0(recorder_in(tmp_path, clock))
+    rerun_episode_0(recorder_in(tmp_path, clock), clock)
     folder = tmp_path / 's'
     rerun = folder / 's_episode0001_attempt2.mcap'
     assert states(rerun) == RERUN_STEPS
@@ -170,18 +177,10 @@ def test_a_session_begun_with_index_names_resumes_as_the_next_attempt(tmp_path, 
     clock = Clock()
     with monkeypatch.context() as patch:
         patch.setattr(recording, 'episode_file_stem', index_named_file_stem)
-        first = recorder_in(tmp_path, clock)
-        Session(first).episode(0, DROPPED_STEPS, final=False, summary=False)
-        first.close()
+        drop_episode_0(recorder_in(tmp_path, clock))
     folder = tmp_path / 's'
     assert sorted(path.name for path in folder.glob('*.mcap')) == ['s_ep0000.mcap']
-    second = recorder_in(tmp_path, clock)
-    feed = Session(second)
-    feed.log_time += 10_000_000_000
-    feed.episode(0, RERUN_STEPS, final=True, summary=True)
-    clock.now += 0.1
-    second.tick()
-    second.close()
+    rerun_episode_0(recorder_in(tmp_path, clock), clock)
     rerun = folder / 's_episode0001_attempt2.mcap'
     assert bag_reader.session_files(folder) == [folder / 's_ep0000.mcap', rerun]
     assert bag_reader.scan_file(rerun).metadata[EPISODE_RECORD]['attempt_files'] == (

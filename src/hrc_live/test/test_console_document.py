@@ -3,19 +3,14 @@
 Pure and deterministic (explicit monotonic times).
 """
 
-from hrc_live.display_core import AgentPlan, DisplayModel, HumanView, SessionView, StateView
+from hrc_live.display_core import AgentPlan, DisplayModel, HumanView, StateView
 from hrc_live.display_documents import console_document
+from hrc_testing.display_views import case2_view
 
 PLAN = AgentPlan(max_training_episodes=100, evaluation_episodes=2, episode_break=3.0)
 
 
-def status(**changes):
-    values = dict(session_id='case2-seed0', case_id=2, strategy='responsibility_guided',
-                  training_step=1, training_step_count=2, human_dof='translation',
-                  human_involved=True, human_subtasks=('slider', 'ball'), episode=9,
-                  total_episodes=9, human_involved_episodes=0, phase='training')
-    values.update(changes)
-    return SessionView(**values)
+status = case2_view
 
 
 def test_the_episode_box_holds_the_current_attempt_only():

@@ -6,22 +6,16 @@ Pure and deterministic (the model is fed with explicit monotonic times).
 from dataclasses import replace
 import re
 
-from hrc_live.display_core import AgentPlan, DisplayModel, ResultView, SessionView, StateView
+from hrc_live.display_core import AgentPlan, DisplayModel, ResultView, StateView
 from hrc_live.display_words import (ALONE_BANNER, BANNER_HOLD_S, overlay, REPLAY_BANNER,
                                     SteadyBanner)
+from hrc_testing.display_views import case2_view
 
 PLAN = AgentPlan(max_training_episodes=100, evaluation_episodes=2, episode_break=3.0)
 PERIOD = 0.2    # s between two pushes of the words (the display's words_rate 5 Hz)
 
 
-def case2(**changes):
-    """Case 2's person: on the slider, asked for the slider and the ball."""
-    values = dict(session_id='case2-seed0', case_id=2, strategy='responsibility_guided',
-                  training_step=1, training_step_count=2, human_dof='translation',
-                  human_involved=True, human_subtasks=('slider', 'ball'), episode=9,
-                  total_episodes=9, human_involved_episodes=0, phase='training')
-    values.update(changes)
-    return SessionView(**values)
+case2 = case2_view
 
 
 def test_the_person_on_the_slider_is_told_how_their_moves_reach_the_ball():
