@@ -48,7 +48,8 @@ from hrc_common.episode_numbers import episode_number
 from hrc_common.nodes import run_node
 from hrc_common.params import declare_parameters, ParameterError
 from hrc_common.session_control import (ABORT_SERVICE, FINAL_CHECKPOINT,
-                                        LATEST_CHECKPOINT, PAUSE_SERVICE, RESUME_SERVICE)
+                                        LATEST_CHECKPOINT, PAUSE_SERVICE, RESUME_SERVICE,
+                                        STOP_FOR_INPUT_SERVICE)
 from hrc_msgs.msg import AgentStep, EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_msgs.srv import ResetEpisode
 from rclpy.duration import Duration
@@ -131,6 +132,7 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         self.create_service(Trigger, PAUSE_SERVICE, self.on_pause)
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)
         self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
+        self.create_service(Trigger, STOP_FOR_INPUT_SERVICE, self.on_stop_for_input)
         self.learner_health = LearnerHealth()
         DiagnosticsReporter(self, lambda: [self.learner_health.status(self.core,
                                                                       self.break_seconds())])

@@ -9,6 +9,8 @@ Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``
   announced, nothing more is answered, the checkpoint of the last episode end (latest.pt) is
   kept as it is, and the node exits with code ``EXIT_OPERATOR_ABORT`` (3). (A service call waits
   for a PPO update in progress, which takes about a second.)
+* ``/hrc/agent/stop_for_input``: the same, called by the session runner for a lost joystick;
+  the aborted status names the reason (``STOPPED_FOR_INPUT``).
 
 A mixin of :class:`hrc_agent_node.agent_node.AgentNode` (its core, publishers and exit).
 """
@@ -18,7 +20,7 @@ import time
 
 from geometry_msgs.msg import WrenchStamped
 from hrc_common.episode_numbers import episode_number
-from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
+from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT, STOPPED_FOR_INPUT
 
 # Wall seconds between the last message and the exit, so reliable subscribers receive it.
 EXIT_LINGER_S = 0.5
@@ -83,13 +85,21 @@ class OperatorServices:
 
     def on_abort(self, request, response):
         """Stop now: zero wrench, phase aborted, keep the last checkpoint, exit code 3."""
+        return self._stop_now(response, 'by the operator')
+
+    def on_stop_for_input(self, request, response):
+        """Stop now as ``on_abort`` does, for the session runner's lost joystick."""
+        return self._stop_now(response, STOPPED_FOR_INPUT)
+
+    def _stop_now(self, response, who: str):
+        """Abort the session now (``who``: by whom and why, in the aborted status)."""
         if self.exit_at is not None:
             response.success = False
             response.message = f'the session is already ending (phase {self.core.phase})'
             return response
         if self.practice is not None:   # the robot never acted: nothing to zero or to keep
             where = f'in the practice ({self.practice.done} of {self.practice.episodes} done)'
-            self.abort(f'by the operator {where}', EXIT_OPERATOR_ABORT)
+            self.abort(f'{who} {where}', EXIT_OPERATOR_ABORT)
             response.success, response.message = True, f'aborted {where}'
             return response
         where = f'before episode {episode_number(self.core.episode)}'
@@ -102,7 +112,7 @@ class OperatorServices:
             resume = f'resume from {checkpoint} ({self.core.total_episodes} training episodes)'
         else:
             resume = 'no checkpoint yet: a new session starts from scratch'
-        self.abort(f'by the operator {where}; {resume}', EXIT_OPERATOR_ABORT)
+        self.abort(f'{who} {where}; {resume}', EXIT_OPERATOR_ABORT)
         response.success, response.message = True, f'aborted {where}; {resume}'
         return response
 

@@ -16,8 +16,8 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from hrc_common import qos, topics
 from hrc_common.contract import ACTIVE_PHASES, Phase
-from hrc_common.session_control import (ABORT_SERVICE, AGENT_RESTARTING_MESSAGE,
-                                         OPERATOR_SERVICES)
+from hrc_common.session_control import (AGENT_RESTARTING_MESSAGE, OPERATOR_SERVICES,
+                                         STOP_FOR_INPUT_SERVICE)
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
@@ -72,7 +72,7 @@ class InputGuard:
         self._topics, self._qos = topics, qos
         self.lost_pub = node.create_publisher(String, INPUT_LOST_TOPIC, qos.SESSION_QOS)
         self.lost_pub.publish(String(data=''))
-        self.abort_client = node.create_client(Trigger, ABORT_SERVICE)
+        self.abort_client = node.create_client(Trigger, STOP_FOR_INPUT_SERVICE)
         node.create_subscription(HumanAction, topics.HUMAN_ACTION, self._on_action,
                                  qos.HUMAN_ACTION_QOS)
         node.create_subscription(TaskState, topics.STATE, self._on_state, qos.STATE_QOS)

@@ -14,6 +14,11 @@ PAUSE_SERVICE = '/hrc/agent/pause'
 RESUME_SERVICE = '/hrc/agent/resume'
 ABORT_SERVICE = '/hrc/agent/abort'
 OPERATOR_SERVICES = {'pause': PAUSE_SERVICE, 'resume': RESUME_SERVICE, 'abort': ABORT_SERVICE}
+# The session runner's abort for a lost joystick: as ``abort``, but the aborted status says why
+# (STOPPED_FOR_INPUT in its message), so every reader tells a lost joystick from an operator's
+# abort from that one message, never from which of two topics arrived first.
+STOP_FOR_INPUT_SERVICE = '/hrc/agent/stop_for_input'
+STOPPED_FOR_INPUT = 'for the lost input (joystick disconnected), by the session runner'
 
 # Exit code of the agent (and of the session runner) after an operator abort: a clean,
 # requested stop that can be resumed, distinct from success (0), a failure (1) and bad

@@ -14,7 +14,7 @@ import math
 import re
 import typing
 
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
+from hrc_common.session_control import AGENT_RESTARTING_MESSAGE, STOPPED_FOR_INPUT
 from hrc_live.display_core import AgentPlan, Overlay, ResultView, SessionView, Snapshot
 
 
@@ -170,7 +170,8 @@ def panel_lines(snapshot: Snapshot, label: str, in_episode: bool) -> list:
 def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
     """Return (banner, tone) of ``snapshot``: what to do now, one text per situation."""
     session, phase = snapshot.session, snapshot.session.phase
-    if snapshot.input_lost:     # first: the runner stops the agent (phase aborted) for it
+    if snapshot.input_lost or (phase == 'aborted' and STOPPED_FOR_INPUT in session.message):
+        # the runner stops the agent for a lost joystick: the aborted status says so itself
         return INPUT_LOST_BANNER, 'stop'
     if snapshot.replay:
         return REPLAY_BANNER, 'info'

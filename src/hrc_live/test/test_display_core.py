@@ -11,7 +11,7 @@ from hrc_live.display_core import (AgentPlan, DisplayModel, HumanView, ResultVie
                                    StateView)
 from hrc_live.display_documents import (configuration_points, console_document, scene_bounds,
                                         state_document, status_document)
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
+from hrc_common.session_control import AGENT_RESTARTING_MESSAGE, STOPPED_FOR_INPUT
 from hrc_live.display_words import (INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay,
                                     RESTARTING_BANNER)
 from hrc_sim_node.physics import PhysicsParams
@@ -250,6 +250,26 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     assert not any(line.startswith('Time left') for line in words.lines)
     model.on_state(StateView(6, 0, 0.0, 0.0, 0.0, False), now=24.0)   # the re-run starts
     assert overlay(model.snapshot(now=24.1)).banner.startswith('Your turn')
+
+
+def test_a_lost_joystick_is_told_whichever_of_the_runners_two_words_comes_first():
+    """The agent's aborted status for a lost joystick says so itself.
+
+    The runner says the loss on /hrc/session/input_lost and has the agent abort: two topics
+    from two processes. Before, an aborted status that came first read "Stopped by the
+    operator" until the other topic's message arrived.
+    """
+    model = model_in_episode()
+    model.on_session(session(phase='aborted', message=f'aborted: {STOPPED_FOR_INPUT} in '
+                             'episode 7 at step 12 (dropped, not learned from)'), now=4.0)
+    assert model.snapshot(now=4.0).input_lost == ''          # the runner's word is not here yet
+    words = overlay(model.snapshot(now=4.1))
+    assert (words.banner, words.tone) == (INPUT_LOST_BANNER, 'stop')
+    # an operator's abort is still one
+    model = model_in_episode()
+    model.on_session(session(phase='aborted', message='aborted: by the operator in episode 7'),
+                     now=4.0)
+    assert overlay(model.snapshot(now=4.1)).banner.startswith('Stopped by the operator')
 
 
 def test_every_resume_counts_down_the_next_episode():
