@@ -16,8 +16,8 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from hrc_common import qos, topics
 from hrc_common.contract import ACTIVE_PHASES, Phase
-from hrc_common.session_control import (AGENT_RESTARTING_MESSAGE, OPERATOR_SERVICES,
-                                         STOP_FOR_INPUT_SERVICE)
+from hrc_common.session_control import (AGENT_RESTARTING_MESSAGE, LOST_INPUT_WORDS,
+                                         OPERATOR_SERVICES, STOP_FOR_INPUT_SERVICE)
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
@@ -183,8 +183,8 @@ class InputGuard:
                 print(f'[session] practice: {reason}; the human node holds zero, the practice '
                       f'goes on', flush=True)
             return
-        if not reason.startswith('joystick disconnected'):
-            reason = f'joystick disconnected: {reason}'
+        if not reason.startswith(LOST_INPUT_WORDS):
+            reason = f'{LOST_INPUT_WORDS}: {reason}'
         self.lost = reason
         print(f'[session] {reason}: pausing the session now (the agent stops mid-episode, '
               f'the sim holds, zero commands); resume with "hrc operator '

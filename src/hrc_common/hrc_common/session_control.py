@@ -18,7 +18,15 @@ OPERATOR_SERVICES = {'pause': PAUSE_SERVICE, 'resume': RESUME_SERVICE, 'abort': 
 # (STOPPED_FOR_INPUT in its message), so every reader tells a lost joystick from an operator's
 # abort from that one message, never from which of two topics arrived first.
 STOP_FOR_INPUT_SERVICE = '/hrc/agent/stop_for_input'
-STOPPED_FOR_INPUT = 'for the lost input (joystick disconnected), by the session runner'
+# What every status about a lost joystick says (the agent's aborted one, the runner's paused
+# stand-in): readers tell it from an operator's abort or pause by these words alone.
+LOST_INPUT_WORDS = 'joystick disconnected'
+STOPPED_FOR_INPUT = f'for the lost input ({LOST_INPUT_WORDS}), by the session runner'
+
+
+def about_lost_input(message: str) -> bool:
+    """Return True when a session status's message is about a lost joystick."""
+    return LOST_INPUT_WORDS in message.lower()
 
 # Exit code of the agent (and of the session runner) after an operator abort: a clean,
 # requested stop that can be resumed, distinct from success (0), a failure (1) and bad

@@ -14,7 +14,7 @@ import math
 import re
 import typing
 
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE, STOPPED_FOR_INPUT
+from hrc_common.session_control import about_lost_input, AGENT_RESTARTING_MESSAGE
 from hrc_live.display_core import AgentPlan, Overlay, ResultView, SessionView, Snapshot
 
 
@@ -170,7 +170,7 @@ def panel_lines(snapshot: Snapshot, label: str, in_episode: bool) -> list:
 def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
     """Return (banner, tone) of ``snapshot``: what to do now, one text per situation."""
     session, phase = snapshot.session, snapshot.session.phase
-    if snapshot.input_lost or (phase == 'aborted' and STOPPED_FOR_INPUT in session.message):
+    if snapshot.input_lost or (phase == 'aborted' and about_lost_input(session.message)):
         # the runner stops the agent for a lost joystick: the aborted status says so itself
         return INPUT_LOST_BANNER, 'stop'
     if snapshot.replay:
@@ -181,7 +181,7 @@ def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
         return 'The session is finished. Thank you!', 'info'
     if snapshot.runner_waiting == AGENT_RESTARTING_MESSAGE:
         return RESTARTING_BANNER, 'wait'
-    if phase == 'paused' and 'joystick disconnected' in session.message.lower():
+    if phase == 'paused' and about_lost_input(session.message):
         # the runner's pause for a lost input: the joystick is back, the operator resumes
         return 'The joystick is connected again: please wait for the operator', 'wait'
     if phase == 'paused':
