@@ -18,9 +18,14 @@ Verdicts (alpha = 0.05 on Holm-adjusted p-values):
 
 Pairing: the same seed and simulated person run in every case, so when every session of the two
 compared cases has its twin (same seed and ``human.person``) the comparison is paired: the
-Wilcoxon signed-rank test for complete measures, the log-rank test stratified by pair for
-censored counts. Otherwise (sessions that do not pair) the unpaired test (Mann-Whitney U,
-log-rank) is used, and the test's name says which.
+Wilcoxon signed-rank test for complete measures, the exact signed-rank test by sign flips on
+the pairs for censored counts (:func:`hrc_study.statistics.paired_sooner`). Otherwise
+(sessions that do not pair) the unpaired test (Mann-Whitney U, log-rank) is used, and the
+test's name says which.
+
+Measures: ``keys`` chooses what a finding compares ({'error': ..., 'human': ...,
+'episodes': ...}, default :data:`MEASURED`); :mod:`hrc_study.robustness` runs the findings
+again on the unit-free error and on the counts above each case's floor.
 
 Censoring: a session that stops at the episode limit without converging has an unknown number
 of episodes to convergence and an unknown number of human-involved episodes to convergence:
@@ -32,13 +37,12 @@ Claims (the paper's section V; cases within a role assignment compared, never ac
 (a) task first gives the best team performance: total error of case 1 < cases 3, 5 and of
     case 2 < cases 4, 6 (Wilcoxon signed-rank; effect: matched rank-biserial r);
 (b) task first needs the least human involvement: human-involved episodes until convergence
-    (censored when the session did not converge), same comparisons (stratified log-rank:
-    "fewer" = converged after fewer human-involved episodes; effect: restricted-mean
-    difference);
+    (censored when the session did not converge), same comparisons (exact by pair: "fewer" =
+    converged after fewer human-involved episodes; effect: restricted-mean difference);
 (c) human first converges fastest: episodes to convergence (censored at the limit) of
-    case 3 < cases 1, 5 and case 4 < cases 2, 6 (stratified log-rank);
+    case 3 < cases 1, 5 and case 4 < cases 2, 6 (exact by pair);
 (d) case 5 fails or is worst, contrasted with every other case (1, 2, 3, 4, 6): it converges
-    later than each of them (stratified log-rank, intersection-union over the five), or its
+    later than each of them (exact by pair, intersection-union over the five), or its
     total error is above each of theirs (Wilcoxon signed-rank, intersection-union over the
     five); the disjunction's p-value is twice the smaller (Bonferroni over the two). It does
     not hold only when both branches are refuted (some case converges significantly later than
@@ -48,7 +52,7 @@ Claims (the paper's section V; cases within a role assignment compared, never ac
     control), as a separate finding (e').
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 
 import numpy
@@ -57,10 +61,16 @@ from hrc_common.cases import paper_case_ids
 
 from hrc_bag.report.records import measures
 from hrc_study.statistics import (holm, logrank_faster, mann_whitney_less,
-                                  stratified_logrank_faster, TestResult, wilcoxon_less)
+                                  paired_differences, paired_sooner, pairs_needed, TestResult,
+                                  wilcoxon_less)
 
 ALPHA = 0.05
 MIN_SESSIONS = 2
+# What the findings compare: the team's error, the person's episodes, every episode.
+MEASURED = {'error': 'total_error', 'human': 'human_involved_episodes',
+            'episodes': 'total_episodes'}
+SOONER_TEST_WORDS = ('exact signed-rank by seed and person (log-rank when the sessions do not '
+                     'pair), one-sided, intersection-union over 4')
 
 
 @dataclass
@@ -91,6 +101,7 @@ class Finding:
     missing: list = field(default_factory=list)
     any_component: bool = False     # the claim needs one component (a disjunction), not all
     reversal: str = ''              # what goes the other way (when it does)
+    branches: list = field(default_factory=list)    # a compound claim: each branch's verdict
 
 
 class CaseData:
@@ -152,16 +163,17 @@ def compare_lower(data: CaseData, profile: str, x_case: int, y_case: int,
     if pairs is None:
         return mann_whitney_less(data.values(profile, x_case, key),
                                  data.values(profile, y_case, key))
-    return wilcoxon_less(data.aligned(profile, x_case, key, pairs),
-                         data.aligned(profile, y_case, key, pairs))
+    x, y = data.aligned(profile, x_case, key, pairs), data.aligned(profile, y_case, key, pairs)
+    dz, needed = pairs_needed(numpy.asarray(x, float) - numpy.asarray(y, float))
+    return replace(wilcoxon_less(x, y), dz=dz, pairs_needed=needed)
 
 
 def compare_sooner(data: CaseData, profile: str, x_case: int, y_case: int,
                    time_key: str) -> TestResult:
     """Test "case x converges after less of ``time_key`` than case y" (censored counts).
 
-    The count is observed when the session converged and right-censored otherwise; stratified
-    by pair when the sessions pair, else the plain log-rank test.
+    The count is observed when the session converged and right-censored otherwise; exact by
+    pair when the sessions pair, else the plain log-rank test.
     """
     pairs = data.paired(profile, x_case, y_case)
     if pairs is None:
@@ -169,11 +181,10 @@ def compare_sooner(data: CaseData, profile: str, x_case: int, y_case: int,
                               data.values(profile, x_case, 'converged'),
                               data.values(profile, y_case, time_key),
                               data.values(profile, y_case, 'converged'))
-    return stratified_logrank_faster(
-        data.aligned(profile, x_case, time_key, pairs),
-        data.aligned(profile, x_case, 'converged', pairs),
-        data.aligned(profile, y_case, time_key, pairs),
-        data.aligned(profile, y_case, 'converged', pairs), pairs, pairs)
+    columns = [data.aligned(profile, case, key, pairs) for case in (x_case, y_case)
+               for key in (time_key, 'converged')]
+    dz, needed = pairs_needed(paired_differences(*columns))
+    return replace(paired_sooner(*columns), dz=dz, pairs_needed=needed)
 
 
 def _intersection(finding: Finding) -> None:
@@ -225,55 +236,53 @@ def paired_test_words(comparisons: int) -> str:
             f'pair), one-sided, intersection-union over {comparisons}')
 
 
-def finding_a(data: CaseData, profile: str) -> Finding:
+def finding_a(data: CaseData, profile: str, keys: dict = MEASURED) -> Finding:
     """Test (a): task first gives the best team performance."""
     finding = Finding('a', CLAIMS['a'],
                       'total error (final evaluation): case 1 < 3, 5 and case 2 < 4, 6',
                       paired_test_words(4))
-    return _pairs_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)], 'total_error', finding)
+    return _pairs_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)], keys['error'], finding)
 
 
-def finding_b(data: CaseData, profile: str) -> Finding:
+def finding_b(data: CaseData, profile: str, keys: dict = MEASURED) -> Finding:
     """Test (b): task first needs the least human involvement (censored counts)."""
     finding = Finding('b', CLAIMS['b'],
                       'human-involved episodes until convergence (training and judging '
                       'episodes; censored when the session did not converge): case 1 < 3, 5 '
-                      'and case 2 < 4, 6',
-                      'log-rank stratified by seed and person (plain log-rank when the '
-                      'sessions do not pair), one-sided, intersection-union over 4')
-    return _sooner_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)],
-                        'human_involved_episodes', finding)
+                      'and case 2 < 4, 6', SOONER_TEST_WORDS)
+    return _sooner_test(data, profile, [(1, 3), (1, 5), (2, 4), (2, 6)], keys['human'],
+                        finding)
 
 
-def finding_c(data: CaseData, profile: str) -> Finding:
+def finding_c(data: CaseData, profile: str, keys: dict = MEASURED) -> Finding:
     """Test (c): human first converges fastest."""
     finding = Finding('c', CLAIMS['c'],
                       'episodes to convergence, censored at the limit: case 3 < 1, 5 and '
-                      'case 4 < 2, 6', 'log-rank stratified by seed and person (plain '
-                      'log-rank when the sessions do not pair), one-sided, intersection-union '
-                      'over 4')
-    return _sooner_test(data, profile, [(3, 1), (3, 5), (4, 2), (4, 6)], 'total_episodes',
+                      'case 4 < 2, 6', SOONER_TEST_WORDS)
+    return _sooner_test(data, profile, [(3, 1), (3, 5), (4, 2), (4, 6)], keys['episodes'],
                         finding)
 
 
 OTHER_CASES = (1, 2, 3, 4, 6)
 
 
-def finding_d(data: CaseData, profile: str) -> Finding:
+def finding_d(data: CaseData, profile: str, keys: dict = MEASURED) -> Finding:
     """Test (d): case 5 fails or is worst, contrasted with every other case."""
     finding = Finding('d', CLAIMS['d'], 'case 5 converges later than each of cases 1-4 and 6; '
                       'or its total error is above each of theirs',
-                      'fails: stratified log-rank, intersection-union over 5; worst: Wilcoxon '
-                      'signed-rank, intersection-union over 5; Bonferroni over the two')
+                      'fails: exact signed-rank by pair, intersection-union over 5; worst: '
+                      'Wilcoxon signed-rank, intersection-union over 5; Bonferroni over the '
+                      'two')
     fails = Finding('d-fails', '', '', '')
-    _sooner_test(data, profile, [(other, 5) for other in OTHER_CASES], 'total_episodes', fails)
+    _sooner_test(data, profile, [(other, 5) for other in OTHER_CASES], keys['episodes'], fails)
     worst = Finding('d-worst', '', '', '')
-    _pairs_test(data, profile, [(other, 5) for other in OTHER_CASES], 'total_error', worst)
+    _pairs_test(data, profile, [(other, 5) for other in OTHER_CASES], keys['error'], worst)
     converged = data.values(profile, 5, 'converged')
     finding.any_component = True
     finding.components = [
         Component('case 5 fails (converges later than every other case)',
-                  TestResult('stratified log-rank', fails.p_value, fails.p_reverse, math.nan,
+                  TestResult('exact signed-rank by pair', fails.p_value, fails.p_reverse,
+                             math.nan,
                              '', f'{int(sum(converged))}/{len(converged)} of case 5 '
                              f'converged; {fails.effect}')),
         Component('case 5 worst (total error above every other case)',
@@ -284,18 +293,33 @@ def finding_d(data: CaseData, profile: str) -> Finding:
     finding.p_reverse = max(fails.p_reverse, worst.p_reverse)
     finding.reversal = f'not failing: {fails.reversal}; not worst: {worst.reversal}'
     finding.effect = (f'fails: {finding.components[0].result.detail}; worst: {worst.effect}')
+    finding.branches = [branch_verdict('case 5 fails', fails),
+                        branch_verdict('case 5 worst', worst)]
     return finding
 
 
-def finding_e(data: CaseData, profile: str, key: str = 'e') -> Finding:
+def branch_verdict(name: str, branch: Finding, alpha: float = ALPHA) -> str:
+    """Say what one branch of a compound finding shows on its own (before the Holm family).
+
+    Supported: its intersection-union p < alpha; refuted: one of its comparisons significant
+    the other way (Holm within the branch); else undecided.
+    """
+    if branch.p_value < alpha:
+        return f'{name}: supported (p = {branch.p_value:.3g})'
+    if branch.p_reverse < alpha:
+        return f'{name}: refuted, {branch.reversal} (Holm p = {branch.p_reverse:.3g})'
+    return f'{name}: undecided (p = {branch.p_value:.3g})'
+
+
+def finding_e(data: CaseData, profile: str, key: str = 'e', keys: dict = MEASURED) -> Finding:
     """Test (e): the robot on rotation beats its swapped twin (under ``profile``)."""
     finding = Finding(key, CLAIMS['e'] + ('' if key == 'e' else f' (simulated human: {profile})'),
                       'total error: case 2 < 1, 4 < 3, 6 < 5', paired_test_words(3))
-    _pairs_test(data, profile, [(2, 1), (4, 3), (6, 5)], 'total_error', finding)
+    _pairs_test(data, profile, [(2, 1), (4, 3), (6, 5)], keys['error'], finding)
     rotation = [value for case in (2, 4, 6) for value in data.values(profile, case,
-                                                                      'total_error')]
+                                                                      keys['error'])]
     translation = [value for case in (1, 3, 5) for value in data.values(profile, case,
-                                                                         'total_error')]
+                                                                         keys['error'])]
     if rotation and translation and numpy.nanmean(translation) > 0:
         reduction = 1 - numpy.nanmean(rotation) / numpy.nanmean(translation)
         finding.effect += f'; mean total error {100 * reduction:.0f}% lower (paper: 64%)'
@@ -309,8 +333,13 @@ CLAIMS = {'a': 'Learn task first gives the best team performance',
           'e': 'The robot on rotation beats its swapped twin'}
 
 
-def evaluate_findings(sessions, primary_profile: str = '', alpha: float = ALPHA) -> list:
-    """Return the findings (a)-(e), and (e') per other profile, with Holm-adjusted verdicts."""
+def evaluate_findings(sessions, primary_profile: str = '', alpha: float = ALPHA,
+                      keys: dict = MEASURED) -> list:
+    """Return the findings (a)-(e), and (e') per other profile, with Holm-adjusted verdicts.
+
+    ``keys``: the measures compared (:data:`MEASURED` by default, any subset replaced).
+    """
+    keys = dict(MEASURED, **keys)
     data = CaseData(sessions)
     profiles = data.profiles()
     if not profiles:
@@ -324,7 +353,7 @@ def evaluate_findings(sessions, primary_profile: str = '', alpha: float = ALPHA)
         if missing:
             findings.append(Finding(key, CLAIMS[key], '', '', missing=missing))
         else:
-            findings.append(builder(data, primary))
+            findings.append(builder(data, primary, keys=keys))
     for index, profile in enumerate(other for other in profiles if other != primary):
         key = "e'" + "'" * index
         missing = _missing(data, profile, paper_case_ids())
@@ -332,7 +361,7 @@ def evaluate_findings(sessions, primary_profile: str = '', alpha: float = ALPHA)
             findings.append(Finding(key, f'{CLAIMS["e"]} (simulated human: {profile})', '', '',
                                     missing=missing))
         else:
-            findings.append(finding_e(data, profile, key))
+            findings.append(finding_e(data, profile, key, keys=keys))
     _adjust_and_judge(findings, alpha)
     return findings
 
@@ -385,7 +414,18 @@ def _inconclusive_reason(finding: Finding, alpha: float) -> str:
         direction = ('points the claimed way' if deciding.result.p_value
                      < deciding.result.p_reverse else 'points the other way')
     return (f'{deciding.label} {direction} but is not significant (raw p = '
-            f'{deciding.result.p_value:.3g}; {deciding.result.detail})')
+            f'{deciding.result.p_value:.3g}; {deciding.result.detail})' + power_words(deciding))
+
+
+def power_words(component: Component) -> str:
+    """Say how many pairs the deciding comparison would need (what "inconclusive" means)."""
+    needed, dz = component.result.pairs_needed, component.result.dz
+    if math.isnan(needed):
+        return ''
+    if math.isinf(needed):
+        return '; power: no difference on average (dz = 0), no number of pairs would decide it'
+    return (f'; power: dz = {dz:+.2f}, about {needed:.0f} pairs would give 80% power at '
+            f'alpha {ALPHA} one-sided')
 
 
 def significance_note() -> str:
@@ -394,7 +434,8 @@ def significance_note() -> str:
             'comparisons are significant (intersection-union), does not hold when one is '
             "significant the other way after Holm's correction over the finding's comparisons "
             '(and then over the findings), else inconclusive. Comparisons are paired by seed '
-            'and simulated person when the sessions pair (Wilcoxon signed-rank; log-rank '
-            'stratified by pair for censored counts); counts of sessions that did not converge '
-            'are right-censored.')
+            'and simulated person when the sessions pair (Wilcoxon signed-rank; for censored '
+            'counts the exact signed-rank test by sign flips on the pairs whose order is known, '
+            'with the exact sign test beside it); counts of sessions that did not converge are '
+            'right-censored.')
 

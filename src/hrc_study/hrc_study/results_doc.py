@@ -19,6 +19,8 @@ from hrc_bag.report.tables import (PERSON_TIME_NOTE, person_time_markdown, TABLE
 from hrc_study.chooser import choice_markdown, choose, PRESETS
 from hrc_study.convergence import figure_convergence
 from hrc_study.findings import evaluate_findings, significance_note
+from hrc_study.paper_view import (paper_counting_markdown, paper_counting_note,
+                                  robustness_markdown)
 from hrc_study.results_tables import (convergence_markdown, findings_markdown, met_cell,
                                       paper_markdown, persons_sentence, run_record_lines,
                                       targets)
@@ -61,6 +63,7 @@ def write_results(sessions, out_dir, command: str, experiment: dict = None,
     files['convergence.png'] = assets / 'convergence.png'
     choices, chooser_problem = choices_of(sessions, primary, priorities, seed, resamples)
     study = {'rows': rows, 'findings': findings, 'choices': choices,
+             'robustness': robustness_markdown(sessions, primary, findings),
              'chooser_problem': chooser_problem, 'experiment': experiment,
              'table2': table2_markdown(report['groups'], intervals=report['intervals'])}
     (out_dir / 'results.md').write_text(document(sessions, study, command, note))
@@ -103,6 +106,8 @@ def _tables(study: dict) -> list:
              "## Beside the paper's Table II", '', paper_markdown(rows),
              'The paper\'s numbers are one person per case; its error is "cumulative" and not '
              'defined further, so only the order of the errors compares, not their size.', '',
+             '## Counted as the paper counts', '', paper_counting_markdown(rows),
+             paper_counting_note(), '',
              "## The person's time (what a lab budgets)", '', person_time_markdown(rows),
              PERSON_TIME_NOTE, '', "## The study's targets", '',
              '| target | measured | met |', '|---|---|---|']
@@ -113,7 +118,14 @@ def _tables(study: dict) -> list:
 
 def _chooser_and_figures(study: dict) -> list:
     parts = ['', "## The paper's findings", '', findings_markdown(study['findings']), '',
-             significance_note(), '', '## Strategy chooser', '',
+             significance_note(), '', '## The findings under other measures', '',
+             study['robustness'],
+             'The same tests on the unit-free total error (slider / 0.01 m + pendulum / 0.1 rad '
+             '+ ball / 0.05 m: each subtask over its tolerance, params/task_tree.yaml) instead '
+             "of the sum of metres and radians, and on the episode counts less each case's "
+             "floor (the strict rule's fewest episodes, in the convergence table). A finding "
+             'whose verdict changes with a view hinges on that choice.', '',
+             '## Strategy chooser', '',
              "Ranks the strategies by the three factors and a user's weights "
              '(`hrc results ... --priorities performance=3,human=1,time=1`); each factor is '
              'scored relative to the worst strategy (1 - value / worst) and the score is the '

@@ -120,7 +120,8 @@ def test_results_document_carries_the_computed_numbers(tmp_path):
     assert f'| 4 | 4/4 | {km.describe()} |' in text
     human = kaplan_meier([v['human_involved_episodes'] for v in case4],
                          [v['converged'] for v in case4])
-    assert f'| {human.describe()} | 14 |' in text       # (b)'s measure, censored, by KM
+    # (b)'s measure, censored, by KM; the strict rule's floor (2 steps of T 1 + W 3)
+    assert f'| {human.describe()} | 8 / 8 | 14 |' in text
     assert "| (e') |" in text and 'paper_symmetric' in text and 'A note.' in text
     assert '60 of 61 planned sessions finished in 7.0 min wall' in text
     assert '1 not started (--stop-after)' in text and '**your priorities**' in text
@@ -183,9 +184,10 @@ def test_finding_b_treats_capped_human_counts_as_censored():
     findings = {finding.key: finding for finding in evaluate_findings(_sessions(spec))}
     b = findings['b']
     assert [component.result.test.split(' (')[0] for component in b.components] == [
-        'log-rank stratified by seed and person'] * 4
+        'exact signed-rank by pair'] * 4
     assert b.p_value == 1.0 and b.verdict == 'inconclusive'
-    assert 'no difference either way' in b.reason and 'no comparable event' in b.reason
+    assert 'no difference either way' in b.reason
+    assert 'tied or undecided in 10 of 10 pairs' in b.reason
 
 
 def test_finding_d_contrasts_case_5_with_cases_1_and_3():

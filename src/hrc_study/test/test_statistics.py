@@ -116,51 +116,79 @@ def test_wilcoxon_uses_the_pairing_that_mann_whitney_ignores():
     assert mann_whitney_less(x, y).p_value > 0.3
 
 
-def test_stratified_logrank_by_hand_and_equal_to_scipy_for_one_stratum():
-    from scipy import stats
+def test_the_exact_sign_test_by_hand():
+    from hrc_study.statistics import sign_test
 
-    from hrc_study.statistics import stratified_logrank, stratified_logrank_faster
-
-    # stratum A: x converges at 1, y at 2; stratum B: x at 3, y censored at 5.
-    # A, t = 1: 2 at risk (1 of x), 1 event of x: O - E = 1 - 1/2, V = 1/4; t = 2: y alone.
-    # B, t = 3: likewise O - E = 1/2, V = 1/4. Total 1 and 1/2: Z = sqrt 2, p = 0.0786.
-    result = stratified_logrank_faster([1, 3], [1, 1], [2, 5], [1, 0], ['A', 'B'], ['A', 'B'])
-    assert result.p_value == pytest.approx(stats.norm.sf(math.sqrt(2)))
-    assert result.p_value == pytest.approx(0.0786, abs=1e-4)
-    # one stratum: the plain log-rank statistic (scipy)
-    x_times, x_events = [3, 5, 7, 9, 12, 15], [1, 1, 0, 1, 1, 0]
-    y_times, y_events = [6, 8, 10, 14, 20, 20], [1, 0, 1, 1, 0, 0]
-    difference, variance = stratified_logrank(x_times + y_times, x_events + y_events,
-                                              [True] * 6 + [False] * 6, [0] * 12)
-    plain = stats.logrank(stats.CensoredData(
-        uncensored=[t for t, e in zip(y_times, y_events) if e],
-        right=[t for t, e in zip(y_times, y_events) if not e]), stats.CensoredData(
-        uncensored=[t for t, e in zip(x_times, x_events) if e],
-        right=[t for t, e in zip(x_times, x_events) if not e]))
-    assert difference / math.sqrt(variance) == pytest.approx(abs(plain.statistic))
+    # 8 of 10 pairs one way: P(X >= 8) for X ~ Bin(10, 1/2) = (45 + 10 + 1) / 1024 = 0.0547,
+    # two-sided 0.109; the log-rank test stratified by pair said 0.029 (a normal approximation)
+    claimed, other = sign_test(8, 2)
+    assert claimed == pytest.approx(56 / 1024)
+    assert min(1.0, 2 * claimed) == pytest.approx(0.109, abs=5e-4)
+    assert other == pytest.approx(1013 / 1024)          # P(X <= 8)
+    assert sign_test(0, 0) == (1.0, 1.0)
 
 
-def test_stratified_logrank_sees_a_paired_effect_the_plain_one_misses():
-    from hrc_study.statistics import stratified_logrank_faster
+def test_the_exact_signed_rank_permutation_by_hand():
+    from hrc_study.statistics import signed_rank_permutation
+
+    # d = -3, -1, +2: ranks 3, 1, 2, signed sum -3 - 1 + 2 = -2. The 8 sign flips give
+    # -6, -4, -2, 0, 0, 2, 4, 6: P(sum <= -2) = 3/8, P(sum >= -2) = 6/8
+    less, greater = signed_rank_permutation([-3.0, -1.0, 2.0, 0.0])     # the zero is dropped
+    assert less == pytest.approx(3 / 8) and greater == pytest.approx(6 / 8)
+    # tied sizes stay exact: -1, -1, -1, +1: signed sum -2 (ranks 2.5 each: -5)
+    less, _ = signed_rank_permutation([-1.0, -1.0, -1.0, 1.0])
+    assert less == pytest.approx(5 / 16)                # 3 or 4 minus signs of 16 flips
+
+
+def test_paired_censored_differences_keep_only_known_orders():
+    from hrc_study.statistics import paired_differences
+
+    # both converged: 10 - 14; x converged at 5 before y was censored at 9: at least 4 sooner;
+    # y censored at 3 before x converged at 8: unknown (0); both censored: unknown (0)
+    differences = paired_differences([10, 5, 8, 20], [1, 1, 1, 0], [14, 9, 3, 30], [1, 0, 0, 0])
+    assert list(differences) == [-4.0, -4.0, 0.0, 0.0]
+
+
+def test_the_paired_test_sees_a_paired_effect_the_plain_one_misses():
+    from hrc_study.statistics import paired_sooner
 
     # ten seeds of very different speed; within each seed x converges 5 episodes before y
     base = numpy.arange(10) * 20.0 + 20
     x, y = base, base + 5
-    strata = list(range(10))
-    paired = stratified_logrank_faster(x, [1] * 10, y, [1] * 10, strata, strata)
-    assert paired.p_value < 0.01 < paired.p_reverse
+    paired = paired_sooner(x, [1] * 10, y, [1] * 10)
+    assert paired.p_value == pytest.approx(1 / 1024) and paired.p_reverse == 1.0
+    assert 'sooner in 10, later in 0' in paired.detail
     assert logrank_faster(x, [1] * 10, y, [1] * 10).p_value > 0.2
+    # 8 pairs sooner by 1, 2 later by 30: the sign test says 0.055, the ranks see the size
+    x = numpy.array([10.0] * 8 + [40.0] * 2)
+    y = numpy.array([11.0] * 8 + [10.0] * 2)
+    sized = paired_sooner(x, [1] * 10, y, [1] * 10)
+    assert 'exact sign test p = 0.0547' in sized.detail
+    assert sized.p_value > 0.1           # the two large losses outweigh eight small wins
 
 
-def test_censored_counts_mann_whitney_and_the_survival_test_disagree():
+def test_pairs_needed_for_a_small_effect():
+    from hrc_study.statistics import pairs_needed
+
+    # differences of mean 1 and sd 5: dz = 0.2; ((1.645 + 0.842) / 0.2)^2 * pi / 3 = 161.9
+    differences = numpy.array([1.0 - 5.0, 1.0 + 5.0] * 5) * 1.0
+    dz, pairs = pairs_needed(differences)
+    sd = float(numpy.std(differences, ddof=1))
+    assert dz == pytest.approx(1.0 / sd)
+    expected = ((1.6448536 + 0.8416212) / (1.0 / sd)) ** 2 * math.pi / 3
+    assert pairs == math.ceil(expected)
+    assert pairs_needed([1.0, 1.0]) == (pytest.approx(math.nan, nan_ok=True),
+                                        pytest.approx(math.nan, nan_ok=True))
+
+
+def test_censored_counts_mann_whitney_and_the_paired_test_disagree():
     # human-involved episodes of sessions that never converged: case 1's are capped at 260
     # because its robot-alone step used 40 of the 300 episodes, case 3's at 300. Mann-Whitney
-    # calls 260 < 300 significant; nothing converged, so the survival test knows nothing.
-    from hrc_study.statistics import stratified_logrank_faster
+    # calls 260 < 300 significant; nothing converged, so the paired test knows nothing.
+    from hrc_study.statistics import paired_sooner
 
     case1, case3 = [260.0] * 10, [300.0] * 10
     assert mann_whitney_less(case1, case3).p_value < 1e-4
-    strata = list(range(10))
-    survival = stratified_logrank_faster(case1, [0] * 10, case3, [0] * 10, strata, strata)
+    survival = paired_sooner(case1, [0] * 10, case3, [0] * 10)
     assert survival.p_value == 1.0 and survival.p_reverse == 1.0
     assert logrank_faster(case1, [0] * 10, case3, [0] * 10).p_value == 1.0

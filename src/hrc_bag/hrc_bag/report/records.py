@@ -32,9 +32,12 @@ from hrc_common import bounded_yaml
 from hrc_common.cases import case_table, cases_file_path
 from hrc_common.contract import EpisodeKind
 
+from hrc_bag.report.counting import (case_floors, episodes_before, paper_counts,
+                                     tolerance_error)
 from hrc_bag.report.loading import load_sessions
 from hrc_bag.report.session_config import (episode_limit_of, episode_seconds_of, learning_of,
-                                           limits_of, person_of, profile_of, UNRECORDED)
+                                           limits_of, nested, person_of, profile_of,
+                                           UNRECORDED)
 
 STRATEGY_ORDER = ['responsibility_guided', 'level_guided', 'learn_together']
 STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human first',
@@ -82,6 +85,7 @@ class EpisodeRecord:
     robot_effort: float
     final_evaluation: bool = None   # None: unknown, inferred (see final_block)
     kind: str = ''                  # training | judging | evaluation | practice; '' unknown
+    steps: int = 0                  # control steps in the episode (0: unknown)
 
 
 KINDS = ('training', 'judging', 'evaluation', 'practice')
@@ -167,12 +171,15 @@ def final_block_start(session: SessionRecord) -> int:
 def measures(session: SessionRecord) -> dict:
     """Return the per-session values of Table II and the three factors (NaN: no data).
 
-    Keys: human_involved_episodes, total_episodes (both include the judging episodes run during
-    training, not practice), percentage, converged (bool), the four errors and two
-    efforts (means over the final evaluation block), evaluation_episodes, practice_episodes,
-    person_minutes (the human-involved episodes at the session's episode duration),
-    the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
-    PHYSICAL_EFFORT_KEYS).
+    Keys: human_involved_episodes (the person's episodes), total_episodes (every episode of
+    training: the judging episodes run during training and the pre-training's episodes before
+    the bags, not practice), pretraining_episodes, percentage, converged (bool), the four errors
+    and two efforts (means over the final evaluation block), tolerance_error (the unit-free
+    total, :func:`hrc_bag.report.counting.tolerance_error`), evaluation_episodes,
+    practice_episodes, person_minutes (the human-involved episodes at the session's episode
+    duration), the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
+    PHYSICAL_EFFORT_KEYS), the floors of the strict rule and the counts above them, and the
+    paper's counting (:func:`hrc_bag.report.counting.paper_counts`).
     """
     start = final_block_start(session)
     before, final = session.episodes[:start], session.episodes[start:]
@@ -182,10 +189,13 @@ def measures(session: SessionRecord) -> dict:
     last_step = session.steps - 1
     converged = any(episode.converged and episode.training_step == last_step
                     for episode in training)
+    pretraining = episodes_before(session)
     values = {
         'human_involved_episodes': float(involved),
-        'total_episodes': float(len(training)),
-        'percentage': 100.0 * involved / len(training) if training else math.nan,
+        'total_episodes': float(len(training) + pretraining),
+        'pretraining_episodes': float(pretraining),
+        'percentage': 100.0 * involved / (len(training) + pretraining) if training
+        else math.nan,
         'converged': converged,
         'evaluation_episodes': float(len(final)),
         'practice_episodes': float(len(session.episodes) - len(training) - len(final)),
@@ -196,11 +206,18 @@ def measures(session: SessionRecord) -> dict:
     for key in ERROR_KEYS + EFFORT_KEYS:
         samples = [getattr(episode, key) for episode in final]
         values[key] = sum(samples) / len(samples) if samples else math.nan
+    values['tolerance_error'] = tolerance_error(values)
     limits = command_limits(session)
     values['robot_effort_physical'] = values['robot_effort'] * limits.get(
         session.robot_dof, math.nan) ** 2
     values['human_effort_physical'] = values['human_effort'] * limits.get(
         other_dof_of(session.robot_dof), math.nan) ** 2
+    person_floor, floor = case_floors(session)
+    values.update(person_floor=float(person_floor), episode_floor=float(floor),
+                  human_involved_above_floor=values['human_involved_episodes'] - person_floor,
+                  episodes_above_floor=values['total_episodes'] - floor)
+    values.update(paper_counts(session, [episode.kind if kinds_known(session) else ''
+                                         for episode in session.episodes]))
     return values
 
 
@@ -218,7 +235,8 @@ def record_from_bag_session(session) -> SessionRecord:
         slider_error=float(summary.slider_error), pendulum_error=float(summary.pendulum_error),
         ball_error=float(summary.ball_error), total_error=float(summary.total_error),
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
-        final_evaluation=_final_flag(summary), kind=_kind_label(summary))
+        final_evaluation=_final_flag(summary), kind=_kind_label(summary),
+        steps=int(getattr(summary, 'steps', 0) or 0))
         for summary in session.summaries]
     strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
     try:
@@ -238,7 +256,9 @@ def record_from_bag_session(session) -> SessionRecord:
                          extra={'bag_session': session, 'person': person_of(session.config),
                                 'subject_id': str(session.config.get('subject_id') or ''),
                                 'limits': limits_of(session.config),
-                                'episode_seconds': episode_seconds_of(session.config)},
+                                'episode_seconds': episode_seconds_of(session.config),
+                                'agent': nested(session.config, 'parameters', 'agent',
+                                                default={}) or {}},
                          learning=learning, learning_settings=settings)
 
 

@@ -139,7 +139,10 @@ def table2_csv(groups: dict, intervals: dict) -> str:
 SESSION_KEYS = (['human_involved_episodes', 'total_episodes', 'converged',
                  'evaluation_episodes']
                 + [key for key, _, _ in COLUMNS[3:] if key not in PHYSICAL_EFFORT_KEYS]
-                + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes'])
+                + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes']
+                + ['tolerance_error', 'pretraining_episodes', 'episode_floor', 'person_floor',
+                   'paper_episodes', 'paper_person_episodes', 'window_stopped',
+                   'window_episodes', 'window_person_episodes'])
 
 
 def sessions_csv(sessions) -> str:
