@@ -151,3 +151,19 @@ def test_the_paper_counting_table_sets_the_three_counts_beside_the_paper():
     assert line.endswith('| 6 / 31 |')            # the paper's case 2
     strict = sum(rows[2][i]['total_episodes'] for i in range(4)) / 4
     assert f'/ {strict:.1f}' in line.split('|')[2]
+
+
+def test_a_partners_first_session_pools_by_its_own_budget():
+    # its recorded limit is the pre-training's 40 episodes plus the session's 300
+    from dataclasses import replace
+
+    from hrc_bag.report.configurations import pooling_problems
+
+    plain = make_session(2, 0, 0.3, 30, True)
+    pretrained = make_session(8, 0, 0.3, 4, True, human_from=0)
+    pretrained.episodes = [replace(item, episode=item.episode + 40)
+                           for item in pretrained.episodes]
+    pretrained.episode_limit = 340
+    assert pooling_problems([plain, pretrained]) == []
+    pretrained.episode_limit = 300
+    assert 'their episode limits' in pooling_problems([plain, pretrained])[0]

@@ -10,6 +10,7 @@ the same settings (a configuration file edited between the runs is another confi
 
 import json
 
+from hrc_bag.report.counting import episodes_before
 from hrc_bag.report.metrics import human_time
 from hrc_bag.report.records import record_kind
 from hrc_bag.report.session_config import UNRECORDED
@@ -88,7 +89,10 @@ def pooling_problems(sessions, strict: bool = True) -> list:
         if source:
             by_input.setdefault(source, []).append(session.session_id)
         if session.episode_limit:
-            by_limit.setdefault(f'at most {session.episode_limit} training episodes',
+            # the session's own budget: a partners-first session's limit also holds the
+            # episodes of its pre-training, run before the person joined
+            budget = session.episode_limit - episodes_before(session)
+            by_limit.setdefault(f'at most {budget} training episodes',
                                 []).append(session.session_id)
         subject = session.extra.get('subject_id') or ''
         person = (session.case_id, session.profile, session.seed,
