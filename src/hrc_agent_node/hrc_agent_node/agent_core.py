@@ -83,6 +83,7 @@ from hrc_agent_node.strategies import session_case, StrategyProgress
 from hrc_agent_node.task_tree import TaskTree
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.params import checked
+from hrc_common.smoothness import reversals_per_second
 
 
 class PopulationStepRefused(ValueError):
@@ -365,13 +366,16 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
                     self.observation(final_state, final_human_action))
                 self._hand_over_segment(log, final_value, terminated)
             converged, event = self._count_and_judge(plan, errors)
+        human = log.human_slices or log.human_actions    # at the human's rate when known
+        seconds = steps * self.limits.control_period
         result = EpisodeResult(
             plan.episode, plan.training_step, plan.human_involved, plan.evaluation, steps,
             terminated, bool(final_state.truncated), float(sum(log.rewards)), errors,
             float(np.var(log.robot_actions)) if log.robot_actions else 0.0,
-            float(np.var(log.human_slices)) if log.human_slices
-            else float(np.var(log.human_actions)) if log.human_actions else 0.0,
-            converged, event, last, judging=plan.judging)
+            float(np.var(human)) if human else 0.0, converged, event, last,
+            judging=plan.judging,
+            robot_reversals=reversals_per_second(log.robot_actions, seconds),
+            human_reversals=reversals_per_second(human, seconds))
         if plan.evaluation:
             self.evaluation_results.append(result)
             if len(self.evaluation_results) >= self.params.evaluation_episodes:

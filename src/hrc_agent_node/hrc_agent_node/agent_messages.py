@@ -37,7 +37,9 @@ def episode_summary_fields(core, result) -> dict:
             'pendulum_error': float(result.errors.get('pendulum', 0.0)),
             'ball_error': float(result.errors.get('ball', 0.0)),
             'total_error': result.total_error, 'robot_effort': result.robot_effort,
-            'human_effort': result.human_effort, 'converged': result.converged}
+            'human_effort': result.human_effort, 'converged': result.converged,
+            'robot_reversals': float(result.robot_reversals),
+            'human_reversals': float(result.human_reversals)}
 
 
 def session_status_fields(core, text: str) -> dict:

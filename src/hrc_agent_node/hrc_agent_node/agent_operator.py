@@ -73,6 +73,8 @@ class OperatorControls:
             total_error=float(np.mean([r.total_error for r in results])),
             robot_effort=float(np.mean([r.robot_effort for r in results])),
             human_effort=float(np.mean([r.human_effort for r in results])),
+            robot_reversals=float(np.mean([r.robot_reversals for r in results])),
+            human_reversals=float(np.mean([r.human_reversals for r in results])),
             episode_return=float(np.mean([r.episode_return for r in results])),
             episodes=len(results), training_episodes=self.total_episodes,
             judging_episodes=self.judging_episodes,

@@ -13,7 +13,10 @@ from hrc_common.contract import Phase
 
 RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
                  'terminated', 'truncated', 'episode_return', 'errors', 'robot_effort',
-                 'human_effort', 'converged', 'event', 'judging')
+                 'human_effort', 'converged', 'event', 'judging', 'robot_reversals',
+                 'human_reversals')
+# Fields that checkpoints written before them do not hold, and the value they read as.
+RESULT_DEFAULTS = {'robot_reversals': float('nan'), 'human_reversals': float('nan')}
 
 
 @dataclass(frozen=True)
@@ -93,6 +96,8 @@ class EpisodeResult:
     last_record: StepRecord = None
     phase_after: Phase = None    # the session's phase after this episode
     judging: bool = False    # a judging episode (deterministic, counted in the totals)
+    robot_reversals: float = 0.0   # reversals of the robot's command per second
+    human_reversals: float = 0.0   # of the human's (hrc_common.smoothness)
 
     def to_plain(self) -> dict:
         """Return the metrics as plain data (checkpoints; no step record)."""
@@ -102,8 +107,9 @@ class EpisodeResult:
     @classmethod
     def from_plain(cls, data: dict) -> 'EpisodeResult':
         """Rebuild a result saved by :meth:`to_plain`."""
-        return cls(**{name: (dict(data[name]) if name == 'errors' else data[name])
-                      for name in RESULT_FIELDS})
+        return cls(**{name: (dict(data[name]) if name == 'errors'
+                             else data.get(name, RESULT_DEFAULTS.get(name)))
+                      for name in RESULT_FIELDS if name in data or name in RESULT_DEFAULTS})
 
     @property
     def total_error(self) -> float:

@@ -99,12 +99,15 @@ def test_markdown_csv_and_figures_are_written(bags, written):
                            for seed in SEEDS])
     assert float(table[1]['ball_error_mean']) == pytest.approx(expected)
     # How each case's sessions ended: a training that stopped at its cap is not a success.
-    assert lines[0].rstrip().endswith('| converged / at the cap / unfinished |')
+    assert lines[0].rstrip().endswith(
+        '| converged / at the cap / unfinished | robots that chatter |')
     for line, row in zip(lines[1:1 + len(CASES)], table):
         case = int(row['case_id'])
         converged = sum(any(summary.converged and not summary.evaluation
                             for summary in published[(case, seed)]) for seed in SEEDS)
-        assert line.rstrip().endswith(f'| {converged} / {len(SEEDS) - converged} / 0 |'), line
+        # no robot of these summaries reversed (their reversals are 0 per second)
+        assert line.rstrip().endswith(f'| {converged} / {len(SEEDS) - converged} / 0 | '
+                                      f'0 / {len(SEEDS)} |'), line
         assert (int(row['sessions_converged']), int(row['sessions_at_cap']),
                 int(row['sessions_unfinished'])) == (converged, len(SEEDS) - converged, 0)
     assert float(table[1]['ball_error_low']) <= expected <= float(table[1]['ball_error_high'])

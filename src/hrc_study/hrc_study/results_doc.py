@@ -13,8 +13,8 @@ import pathlib
 from hrc_bag.report import describe, learning_configurations, write_report
 from hrc_bag.report.intervals import RESAMPLES
 from hrc_bag.report.metrics import case_measures, primary_profile
-from hrc_bag.report.tables import (PERSON_TIME_NOTE, person_time_markdown, TABLE2_NOTE,
-                                   table2_markdown)
+from hrc_bag.report.tables import (CHATTER_NOTE, PERSON_TIME_NOTE, person_time_markdown,
+                                   TABLE2_NOTE, table2_markdown)
 
 from hrc_study.chooser import choice_markdown, choose, PRESETS
 from hrc_study.convergence import figure_convergence
@@ -96,7 +96,8 @@ def _introduction(sessions, command: str, experiment: dict, note: str) -> list:
 def _tables(study: dict) -> list:
     rows = study['rows']
     parts = ['## Table II: mean [95% confidence interval] over seeds', '', study['table2'],
-             TABLE2_NOTE + ' The next table and the findings treat them as censored.', '',
+             TABLE2_NOTE + ' The next table and the findings treat them as censored. '
+             + CHATTER_NOTE, '',
              '## Episodes to convergence (censored at the limit)', '',
              convergence_markdown(rows),
              'Kaplan-Meier median with the Brookmeyer-Crowley 95% interval (log-log); "not '

@@ -62,7 +62,8 @@ def table2_document(sessions, intervals_by_profile: dict) -> str:
         parts += [f'## Table II, profile `{profile}`: mean [95% interval] over seeds', '',
                   f'Learning configuration: {configurations}.', '',
                   tables.table2_markdown(groups, intervals=intervals_by_profile[profile]),
-                  tables.TABLE2_NOTE + ' ' + tables.OUTCOME_NOTE, '',
+                  ' '.join([tables.TABLE2_NOTE, tables.OUTCOME_NOTE, tables.CHATTER_NOTE]),
+                  '',
                   f"## The person's time, profile `{profile}`", '',
                   tables.person_time_markdown(case_measures(sessions, profile)),
                   tables.PERSON_TIME_NOTE, '']

@@ -31,6 +31,7 @@ import math
 from hrc_common import bounded_yaml
 from hrc_common.cases import case_table, cases_file_path
 from hrc_common.contract import EpisodeKind
+from hrc_common.smoothness import chatters
 
 from hrc_bag.report.counting import (case_floors, episodes_before, paper_counts,
                                      tolerance_error)
@@ -44,6 +45,7 @@ STRATEGY_SHORT = {'responsibility_guided': 'task first', 'level_guided': 'human 
                   'learn_together': 'together'}
 ERROR_KEYS = ('slider_error', 'pendulum_error', 'ball_error', 'total_error')
 EFFORT_KEYS = ('human_effort', 'robot_effort')
+REVERSAL_KEYS = ('human_reversals', 'robot_reversals')   # per second, hrc_common.smoothness
 # Effort in physical units: the variance of the command in N^2 (translation, the slider's
 # force) or (N*m)^2 (rotation, the pendulum's torque) = variance of the normalized command
 # times the limit squared (the sim's max_force / max_torque: a normalized 1 is the limit).
@@ -86,6 +88,8 @@ class EpisodeRecord:
     final_evaluation: bool = None   # None: unknown, inferred (see final_block)
     kind: str = ''                  # training | judging | evaluation | practice; '' unknown
     steps: int = 0                  # control steps in the episode (0: unknown)
+    robot_reversals: float = math.nan   # per second (hrc_common.smoothness; NaN: not recorded)
+    human_reversals: float = math.nan
 
 
 KINDS = ('training', 'judging', 'evaluation', 'practice')
@@ -178,8 +182,10 @@ def measures(session: SessionRecord) -> dict:
     total, :func:`hrc_bag.report.counting.tolerance_error`), evaluation_episodes,
     practice_episodes, person_minutes (the human-involved episodes at the session's episode
     duration), the efforts in physical units (``*_effort_physical``: N^2 or (N*m)^2, see
-    PHYSICAL_EFFORT_KEYS), the floors of the strict rule and the counts above them, and the
-    paper's counting (:func:`hrc_bag.report.counting.paper_counts`).
+    PHYSICAL_EFFORT_KEYS), each actor's reversals per second and whether the robot chatters
+    (``robot_chatters``: above the human rate, :mod:`hrc_common.smoothness`), the floors of the
+    strict rule and the counts above them, and the paper's counting
+    (:func:`hrc_bag.report.counting.paper_counts`).
     """
     start = final_block_start(session)
     before, final = session.episodes[:start], session.episodes[start:]
@@ -203,9 +209,10 @@ def measures(session: SessionRecord) -> dict:
         # episode duration, breaks and the final evaluation excluded (NaN: duration unknown).
         'person_minutes': involved * session.extra.get('episode_seconds', math.nan) / 60.0,
     }
-    for key in ERROR_KEYS + EFFORT_KEYS:
+    for key in ERROR_KEYS + EFFORT_KEYS + REVERSAL_KEYS:
         samples = [getattr(episode, key) for episode in final]
         values[key] = sum(samples) / len(samples) if samples else math.nan
+    values['robot_chatters'] = chatters(values['robot_reversals'])
     values['tolerance_error'] = tolerance_error(values)
     limits = command_limits(session)
     values['robot_effort_physical'] = values['robot_effort'] * limits.get(
@@ -236,7 +243,9 @@ def record_from_bag_session(session) -> SessionRecord:
         ball_error=float(summary.ball_error), total_error=float(summary.total_error),
         human_effort=float(summary.human_effort), robot_effort=float(summary.robot_effort),
         final_evaluation=_final_flag(summary), kind=_kind_label(summary),
-        steps=int(getattr(summary, 'steps', 0) or 0))
+        steps=int(getattr(summary, 'steps', 0) or 0),
+        robot_reversals=float(getattr(summary, 'robot_reversals', math.nan)),
+        human_reversals=float(getattr(summary, 'human_reversals', math.nan)))
         for summary in session.summaries]
     strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
     try:

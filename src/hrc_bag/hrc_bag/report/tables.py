@@ -14,7 +14,8 @@ from hrc_bag.report.intervals import cell, column_interval, INTERVAL_NOTE, RESAM
 from hrc_bag.report.metrics import FACTOR_AXES, human_time
 from hrc_bag.report.paper import PAPER_TABLE2, paper_person_minutes, TARGET_PERSON_TIME_RATIO
 from hrc_bag.report.records import (EFFORT_UNITS, measures, other_dof_of, PHYSICAL_EFFORT_KEYS,
-                                    STRATEGY_SHORT)
+                                    REVERSAL_KEYS, STRATEGY_SHORT)
+from hrc_common.smoothness import HUMAN_REVERSALS_PER_S
 
 # (measure, Table II column title, decimals)
 COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
@@ -27,7 +28,16 @@ COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
            ('human_effort', 'human effort (normalized)', 4),
            ('robot_effort', 'robot effort (normalized)', 4),
            ('human_effort_physical', 'human effort (N^2 or (N*m)^2)', 4),
-           ('robot_effort_physical', 'robot effort (N^2 or (N*m)^2)', 4)]
+           ('robot_effort_physical', 'robot effort (N^2 or (N*m)^2)', 4),
+           ('human_reversals', 'human reversals (1/s)', 2),
+           ('robot_reversals', 'robot reversals (1/s)', 2)]
+CHATTER_TITLE = 'robots that chatter'
+CHATTER_NOTE = (
+    "Reversals: sign changes per second of an actor's normalized command outside a 5% dead "
+    'band, over the final evaluation episodes. A robot chatters when it reverses more often '
+    f'than {HUMAN_REVERSALS_PER_S:g} times per second, the rate at which people correct an '
+    'unstable load (about 2 corrections per second, Loram et al. 2011; hrc_common/'
+    'smoothness.py); the 0.2 s control period allows 5.')
 TABLE2_NOTE = (
     'Episodes count every episode until training ended, the evaluation episodes that judged '
     'convergence included; human-involved episodes count those in which the human acted (the '
@@ -78,6 +88,15 @@ def outcome_cell(members) -> str:
     return ' / '.join(str(outcomes.count(name)) for name in ('converged', 'cap', 'unfinished'))
 
 
+def chatter_cell(members) -> str:
+    """Return "k / n" sessions whose robot chatters (n: those with recorded reversals)."""
+    values = [measures(member) for member in members]
+    known = [value for value in values if math.isfinite(value['robot_reversals'])]
+    if not known:
+        return 'not recorded'
+    return f"{sum(value['robot_chatters'] for value in known)} / {len(known)}"
+
+
 def table2_intervals(groups: dict, seed: int = 0, resamples: int = RESAMPLES) -> dict:
     """Return {case_id: {measure: Interval}} of ``groups`` ({case_id: [SessionRecord]})."""
     result = {}
@@ -93,7 +112,7 @@ def table2_markdown(groups: dict, seed: int = 0, resamples: int = RESAMPLES,
     """Return Table II: mean and 95% interval over seeds per cell (see column_interval)."""
     intervals = intervals or table2_intervals(groups, seed, resamples)
     header = (['case', 'strategy', 'robot', 'seeds'] + [title for _, title, _ in COLUMNS]
-              + [OUTCOME_TITLE])
+              + [OUTCOME_TITLE, CHATTER_TITLE])
     lines = ['| ' + ' | '.join(header) + ' |', '|' + '---|' * len(header)]
     for case_id, members in groups.items():
         strategy, robot = _roles(members)
@@ -104,7 +123,7 @@ def table2_markdown(groups: dict, seed: int = 0, resamples: int = RESAMPLES,
             if key in PHYSICAL_EFFORT_KEYS and text != 'n/a':
                 text += _units_of(key, robot)
             cells.append(text)
-        cells.append(outcome_cell(members))
+        cells += [outcome_cell(members), chatter_cell(members)]
         lines.append('| ' + ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'
 
@@ -138,11 +157,13 @@ def table2_csv(groups: dict, intervals: dict) -> str:
 # the measures of sessions.csv, in its column order (later columns appended: earlier ones stay)
 SESSION_KEYS = (['human_involved_episodes', 'total_episodes', 'converged',
                  'evaluation_episodes']
-                + [key for key, _, _ in COLUMNS[3:] if key not in PHYSICAL_EFFORT_KEYS]
+                + [key for key, _, _ in COLUMNS[3:]
+                   if key not in PHYSICAL_EFFORT_KEYS + REVERSAL_KEYS]
                 + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes']
                 + ['tolerance_error', 'pretraining_episodes', 'episode_floor', 'person_floor',
                    'paper_episodes', 'paper_person_episodes', 'window_stopped',
-                   'window_episodes', 'window_person_episodes'])
+                   'window_episodes', 'window_person_episodes']
+                + list(REVERSAL_KEYS) + ['robot_chatters'])
 
 
 def sessions_csv(sessions) -> str:
