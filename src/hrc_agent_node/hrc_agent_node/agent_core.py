@@ -432,6 +432,20 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         self._settle_learner()
         self._start_step(previous)
 
+    def start_after(self) -> None:
+        """Start a new session with the policy just loaded from a finished one (start_from).
+
+        A returning person: the counters from zero, the strategy at its last step (the one
+        with the person), whose first episode judges the policy it starts with.
+        """
+        self.episode = self.total_episodes = self.human_involved_episodes = 0
+        self.population_episodes = self.judging_episodes = 0
+        previous = self.progress.step
+        while not self.progress.is_last_step:
+            self.progress.skip()
+        self._start_step(previous)
+        self.judging_due = True
+
     def _start_step(self, previous_step) -> None:
         """Begin the step after ``previous_step``: forget samples and scales of another reward."""
         if tuple(previous_step.robot_subtasks) != tuple(self.progress.step.robot_subtasks):

@@ -34,8 +34,8 @@ from hrc_agent_node.agent_practice import PracticeEpisodes
 from hrc_agent_node.agent_startup import SESSION_MATCH_GRACE_S, StartupWait
 from hrc_agent_node.agent_services import (ANNOUNCE_ACK_TIMEOUT_S, EXIT_LINGER_S,
                                           OperatorServices)
-from hrc_agent_node.checkpoint import (CheckpointError, load_into, remove_stale_temporaries,
-                                       save_checkpoint)
+from hrc_agent_node.checkpoint import (CheckpointError, load_session_start,
+                                       remove_stale_temporaries, save_checkpoint)
 from hrc_agent_node.config import AgentParams
 from hrc_agent_node.practice import PracticeRun
 from hrc_agent_node.strategies import CasesError
@@ -88,17 +88,12 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
             self.practice = PracticeRun(self.params.practice_episodes, self.core.session_id,
                                         self.core.case_id, self.core.robot_dof,
                                         self.core.human_dof, self.core.tree.error)
-        if self.params.resume_from:
-            try:
-                load_into(self.core, self.params.resume_from,
-                          resume=not self.params.evaluation_only)
-            except CheckpointError as error:
-                raise ParameterError(f'resume_from rejected: {error}') from None
-            self.get_logger().info(
-                f'loaded {self.params.resume_from} '
-                f'({"policy for evaluation" if self.params.evaluation_only else "session"}): '
-                f'{self.core.total_episodes} training episodes done, next episode '
-                f'{self.core.episode}')
+        try:
+            started = load_session_start(self.core)
+        except CheckpointError as error:
+            raise ParameterError(str(error)) from None
+        if started:
+            self.get_logger().info(started)
         problem = self.core.population_step_problem() if self.practice is None else ''
         if problem:   # partners first without its pre-training: refused, not a traceback
             raise ParameterError(problem)

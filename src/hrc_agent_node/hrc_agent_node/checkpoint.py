@@ -220,3 +220,30 @@ def load_into(core, path, resume: bool = True) -> dict:
         raise CheckpointError(f'checkpoint {path} does not load: {type(error).__name__}: '
                               f'{error}') from None
     return checkpoint['config']
+
+
+def load_session_start(core) -> str:
+    """Load what ``core``'s parameters start the session from; return it in words ('' if none).
+
+    ``resume_from``: the session continues (or, with ``evaluation_only``, its policy is
+    evaluated); ``start_from``: a new session with a finished session's policy (a returning
+    person, :meth:`AgentCore.start_after`). Raises CheckpointError naming the parameter.
+    """
+    params = core.params
+    if params.start_from:
+        try:
+            load_into(core, params.start_from, resume=False)
+        except CheckpointError as error:
+            raise CheckpointError(f'start_from rejected: {error}') from None
+        core.start_after()
+        return (f'started from the policy of {params.start_from} (a returning person): the '
+                f'last training step, its first episode judges that policy')
+    if not params.resume_from:
+        return ''
+    try:
+        load_into(core, params.resume_from, resume=not params.evaluation_only)
+    except CheckpointError as error:
+        raise CheckpointError(f'resume_from rejected: {error}') from None
+    return (f'loaded {params.resume_from} '
+            f'({"policy for evaluation" if params.evaluation_only else "session"}): '
+            f'{core.total_episodes} training episodes done, next episode {core.episode}')

@@ -62,6 +62,10 @@ class AgentParams:
                                                     '(<dir>/<session_id>/latest.pt, final.pt); '
                                                     'empty = no checkpoints')
     resume_from: str = param('', 'Checkpoint to resume (counters continue); empty = fresh start')
+    start_from: str = param('', "Checkpoint of a finished session whose policy this one starts "
+                                'from (a returning person): counters from zero, the '
+                                "strategy's last step, its first episode judges the policy; "
+                                'empty = a new policy')
     human_action_source: str = param(
         'applied', "What the robot observes as the human action a_h: applied = the human's "
         'command the sim applied in the last control period (read from the state: the two act '
@@ -207,6 +211,9 @@ class AgentParams:
         if self.algorithm == 'sac' and self.sac_learning_starts > self.sac_replay_size:
             reasons.append(f'sac_learning_starts: {self.sac_learning_starts} exceeds '
                            f'sac_replay_size {self.sac_replay_size} (SAC would never learn)')
+        if self.start_from and (self.resume_from or self.evaluation_only):
+            reasons.append('start_from: a new session from a finished one; resume_from and '
+                           'evaluation_only continue or evaluate a checkpoint: give one')
         if self.evaluation_only and not self.resume_from:
             reasons.append('evaluation_only: needs resume_from (the policy to evaluate)')
         if self.evaluation_only and self.evaluation_episodes == 0:

@@ -50,7 +50,7 @@ from hrc_common.session_plan import compose, SessionSettings, write_session_file
 from hrc_bringup.compose_nodes import session_composition
 from hrc_bringup.session_args import parse_args, person_input
 from hrc_bringup.session_run import SessionRun
-from hrc_bringup.study_hooks import warn_out_of_order
+from hrc_bringup.study_hooks import start_returning_person, warn_out_of_order
 
 
 def pretrain_if_needed(parameters: dict, run_dir):
@@ -90,7 +90,7 @@ def prepare_parameters(settings: SessionSettings, options, params_dir: pathlib.P
         # agent waits for it (wait_for_subscribers) as long as the runner waits for its input.
         agent = parameters['agent']
         agent['reset_timeout'] = max(float(agent['reset_timeout']), float(options.input_wait))
-    if not settings.resume_from:
+    if not (settings.resume_from or settings.start_from):
         # Partners first (cases 7, 8): the robot alone and with the simulated population in
         # this process first (no person: minutes), then the graph from that checkpoint.
         start = pretrain_if_needed(parameters, run_dir)
@@ -141,6 +141,7 @@ def run_session(settings: SessionSettings, options) -> int:
         print(f'[session] {notice}', flush=True)
     run_dir = pathlib.Path(settings.runs_dir) / settings.session_id
     warn_out_of_order(settings, options)
+    start_returning_person(settings, options)
     live_input = person_input(settings, options)
     try:
         parameters = prepare_parameters(settings, options, params_dir, run_dir, live_input)

@@ -50,6 +50,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--no-record', dest='record', action='store_false',
                         help='do not start the recorder')
     parser.add_argument('--resume-from', default='', help='agent checkpoint to resume')
+    parser.add_argument('--start-from', default='', metavar='CHECKPOINT',
+                        help="a finished session's final.pt: a new session starts from its "
+                        "policy at the strategy's last step (with --study-dir found by itself "
+                        'for a subject back for a case they finished)')
+    parser.add_argument('--fresh-start', action='store_true',
+                        help='with --study-dir: a new robot even for a subject back for a case '
+                        'they finished')
     parser.add_argument('--subject-id', default='', help='pseudonymous subject id (bag metadata)')
     parser.add_argument('--notes', default='', help='free-text notes (bag metadata)')
     parser.add_argument('--set', dest='overrides', action='append', default=[],
@@ -140,7 +147,8 @@ def parse_args(argv=None):
         learning=options.learning, training_episodes=options.training_episodes,
         evaluation_episodes=options.evaluation_episodes, session_id=options.session_id,
         bags_dir=options.bags_dir, runs_dir=options.runs_dir, record=options.record,
-        resume_from=options.resume_from, subject_id=options.subject_id, notes=options.notes,
+        resume_from=options.resume_from, start_from=options.start_from,
+        subject_id=options.subject_id, notes=options.notes,
         overrides=overrides)
     if not settings.session_id:
         settings.session_id = new_session_id(settings)

@@ -7,7 +7,7 @@ import time
 from hrc_common import bounded_yaml
 from hrc_common.session_plan import SessionSettings
 from hrc_live.study import (IndexEntry, load_index, load_registry, order_warning, position_of,
-                            record_session, StudyError)
+                            record_session, returning_start, StudyError)
 import yaml
 
 
@@ -50,6 +50,33 @@ def warn_out_of_order(settings: SessionSettings, options) -> None:
         print(f'[session] WARNING: {warning}', file=sys.stderr, flush=True)
 
 
+def start_returning_person(settings: SessionSettings, options) -> None:
+    """Start a subject back for a case they finished from the policy learned with them.
+
+    With --study-dir and --subject-id, unless the session resumes, starts from a given
+    checkpoint or --fresh-start asks for a new robot: the latest finished session of this
+    subject and case in the study index (``hrc_live.study.returning_start``) sets
+    ``settings.start_from``; session.yaml and the index entry record it.
+    """
+    if not (options.study_dir and settings.subject_id) or settings.resume_from \
+            or settings.start_from or options.fresh_start:
+        return
+    try:
+        found = returning_start(load_index(options.study_dir), settings.subject_id,
+                                settings.case)
+    except StudyError as error:
+        print(f'[session] WARNING: the study index cannot be read ({error}): a new robot',
+              file=sys.stderr, flush=True)
+        return
+    if found is None:
+        return
+    session_id, checkpoint = found
+    settings.start_from = str(checkpoint)
+    print(f'[session] {settings.subject_id} returns to case {settings.case}: the robot starts '
+          f'from what it learned with them in session {session_id} ({checkpoint}); '
+          '--fresh-start for a new robot', flush=True)
+
+
 def condition_words(settings: SessionSettings, options) -> str:
     """Return the condition and its place in the subject's order, for the console."""
     words = f'case {settings.case}'
@@ -86,7 +113,7 @@ def index_session(settings: SessionSettings, options, kind: str, started: str,
         bags=str((pathlib.Path(settings.bags_dir) / session_id).resolve()),
         run_dir=str(run_dir.resolve()),
         tlx_file=str(tlx.resolve()) if kind == 'condition' and tlx_stored(
-            tlx, session_id) else '')
+            tlx, session_id) else '', start_from=settings.start_from)
     path = record_session(options.study_dir, entry)
     print(f'[session] {kind} {session_id} (exit {int(code)}) recorded in the study index '
           f'{path}', flush=True)

@@ -117,6 +117,8 @@ class SessionSettings:
     record: bool = param(True, 'Record the session (the recorder node; the engine writes the '
                                'same bags)')
     resume_from: str = param('', "A checkpoint to continue from ('' = a new agent)")
+    start_from: str = param('', "A finished session's checkpoint whose policy a new session "
+                                "starts from (a returning person; '' = a new policy)")
     subject_id: str = param('', "The person's study id (kept in session.yaml, owner-only; never "
                                 'in a file name)')
     notes: str = param('', 'Free text kept in session.yaml (owner-only)')
@@ -139,6 +141,11 @@ class SessionSettings:
             reasons.append(f'seed must be an integer >= 0, got {self.seed!r}')
         elif self.seed < 0:
             reasons.append(f'seed must be >= 0, got {self.seed}')
+        if self.resume_from and self.start_from:
+            reasons.append('--resume-from continues a session, --start-from starts a new one '
+                           "from a finished session's policy: give one")
+        if self.start_from and not pathlib.Path(str(self.start_from)).is_file():
+            reasons.append(f'--start-from {self.start_from}: no such checkpoint file')
         for key in self.overrides if isinstance(self.overrides, dict) else ():
             if key.split('.', 1)[0] not in NODES:
                 reasons.append(f'--set {key}: the node must be one of {sorted(NODES)}')
@@ -246,6 +253,7 @@ SETTING_OPTIONS = {'seed': '--seed', 'mode': '--mode', 'case': '--case', 'input'
                    'profile': '--profile', 'robot_dof': '--case', 'dof': '--case',
                    'session_id': '--session-id', 'max_training_episodes': '--episodes',
                    'evaluation_episodes': '--eval-episodes', 'resume_from': '--resume-from',
+                   'start_from': '--start-from',
                    'checkpoint_dir': '--runs-dir', 'output_dir': '--bags-dir',
                    'practice_episodes': '--practice'}
 
@@ -277,6 +285,8 @@ def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
         agent['evaluation_episodes'] = settings.evaluation_episodes
     if settings.resume_from:
         agent['resume_from'] = settings.resume_from
+    if settings.start_from:
+        agent['start_from'] = settings.start_from
     human['input'] = settings.human_input
     if settings.human_profile:
         human['profile'] = settings.human_profile

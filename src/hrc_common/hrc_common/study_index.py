@@ -58,6 +58,9 @@ class IndexEntry:
     # Every run of this session in order, {started, ended, exit_code}; started is the first's,
     # ended and exit_code the last's ([] in an entry written before attempts existed: one run).
     attempts: list = field(default_factory=list)
+    # The checkpoint of the subject's earlier session this one started from (a returning
+    # person; '' = a new policy). Entries written before it existed read as ''.
+    start_from: str = ''
 
 
 def attempt_of(record: dict) -> dict:

@@ -36,7 +36,7 @@ import typing
 from hrc_common import bounded_yaml
 
 from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
-from hrc_agent_node.checkpoint import load_into, save_checkpoint
+from hrc_agent_node.checkpoint import load_session_start, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_bag.format import contract_description
 from hrc_bag.session_writer import SessionWriter, TOPIC_TYPES
@@ -159,9 +159,7 @@ class InProcessSession:
         # parameters): the physics' control period and limits.
         self.limits = SimLimits.of(self.sim_params)
         self.core = AgentCore(self.agent_params, limits=self.limits)
-        if self.agent_params.resume_from:
-            load_into(self.core, self.agent_params.resume_from,
-                      resume=not self.agent_params.evaluation_only)
+        load_session_start(self.core)
         case = self.core.case
         if (case.has_population_steps and not self.core.population_partner
                 and self.core.phase == Phase.TRAINING

@@ -43,6 +43,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--params-dir', default='', help='parameter files (default: ./params '
                         'in a checkout, else the installed ones)')
     parser.add_argument('--resume-from', default='', help='continue from this checkpoint')
+    parser.add_argument('--start-from', default='', metavar='CHECKPOINT',
+                        help="a new session from a finished session's policy (a returning "
+                        "person): the strategy's last step, its first episode judges it")
     parser.add_argument('--set', action='append', default=[], metavar='NODE.NAME=VALUE',
                         help='override a node parameter (YAML value), as with session')
     parser.add_argument('--json', action='store_true', help='print the result as JSON')

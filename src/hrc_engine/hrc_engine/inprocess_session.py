@@ -45,7 +45,8 @@ def parse_args(argv=None) -> tuple:
         learning=options.learning, training_episodes=options.episodes,
         evaluation_episodes=options.eval_episodes,
         session_id=options.session_id, bags_dir=options.bags_dir, runs_dir=options.runs_dir,
-        record=not options.no_record, resume_from=options.resume_from, overrides=overrides)
+        record=not options.no_record, resume_from=options.resume_from,
+        start_from=options.start_from, overrides=overrides)
     # the engine loads the cores, torch among them (seconds): --help and usage errors answer
     # without it
     from hrc_engine.engine import EngineConfig  # lazy: torch (seconds), see above

@@ -31,6 +31,7 @@ import typing
 
 from hrc_common import bounded_yaml
 from hrc_common.contract import atomic_write, id_problem, PERSONAL_FILE_MODE
+from hrc_common.session_control import FINAL_CHECKPOINT
 from hrc_common.study_index import (add_attempt, attempt_of, INDEX_FILE, IndexEntry,
                                     merge_attempts, PAPER_CASES, SESSION_KINDS, study_lock)
 import yaml
@@ -275,6 +276,23 @@ def by_subject(entries: list) -> dict:
     for entry in sorted(entries, key=lambda item: item.started):
         table.setdefault(entry.subject_id, []).append(entry)
     return table
+
+
+def returning_start(entries: list, subject_id: str, case: int):
+    """Return (session id, checkpoint) a returning subject's session of ``case`` starts from.
+
+    The subject's latest condition of that case that ran to its end (exit 0) and left its
+    final checkpoint (``<runs dir>/checkpoints/<session id>/final.pt``, the session runner's
+    layout): the robot starts from what it learned with this person. None: no such session.
+    """
+    finished = [entry for entry in entries if entry.subject_id == subject_id
+                and entry.case == case and entry.kind == 'condition' and entry.exit_code == 0]
+    for entry in sorted(finished, key=lambda item: item.ended, reverse=True):
+        checkpoint = (pathlib.Path(entry.run_dir).parent / 'checkpoints' / entry.session_id
+                      / FINAL_CHECKPOINT)
+        if checkpoint.is_file():
+            return entry.session_id, checkpoint
+    return None
 
 
 def order_warning(subjects: list, entries: list, subject_id: str, case: int) -> str:

@@ -1,0 +1,42 @@
+"""A returning person: a new session starts from the policy a finished session learned with them.
+
+Two in-process sessions of case 2 (task first: the robot alone, then the person) with the real
+PyBullet sim and the simulated person, 8 s episodes: the first runs to its end and leaves
+final.pt; the second starts from it (agent.start_from): its counters start at zero, it skips
+the robot-alone step, and its first episode is a judging episode of the inherited policy with
+the person. Without the start (a fresh policy) the first episode is the robot alone, training.
+"""
+
+from hrc_common.session_plan import SessionSettings
+from hrc_engine.engine import EngineConfig, InProcessSession
+
+OVERRIDES = {'sim.episode_duration': 8.0}
+
+
+class _Summaries(InProcessSession):
+    def __init__(self, config):
+        super().__init__(config)
+        self.summaries = []
+
+    def _write(self, topic, message):
+        if topic == '/hrc/episode':
+            self.summaries.append(message)
+
+
+def run(tmp_path, session_id, **settings):
+    session = _Summaries(EngineConfig(SessionSettings(
+        case=2, seed=0, session_id=session_id, record=False, runs_dir=str(tmp_path / 'runs'),
+        evaluation_episodes=1, overrides=OVERRIDES, **settings)))
+    session.run()
+    return session.summaries
+
+
+def test_the_second_session_judges_the_inherited_policy_with_the_person_first(tmp_path):
+    first = run(tmp_path, 'first', training_episodes=6)
+    assert first[0]['training_step'] == 0 and not first[0]['human_involved']
+    final = tmp_path / 'runs' / 'checkpoints' / 'first' / 'final.pt'
+    assert final.is_file()
+    second = run(tmp_path, 'second', training_episodes=6, start_from=str(final))
+    opening = second[0]
+    assert opening['episode'] == 0 and opening['training_step'] == 1      # the last step
+    assert opening['human_involved'] and opening['kind'] == 2            # KIND_JUDGING
