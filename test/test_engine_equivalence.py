@@ -158,6 +158,8 @@ SESSIONS = {
                         'human.script_file={script}', '--set', 'human.enable_button=0'],
                        {'HRC_EXECUTOR': 'rclpy'}),
     'composed': (['--case', '5', *SHORT], {'HRC_COMPOSE': 'sim,human,recorder'}),
+    # the partner-aware observation (the partner model fitted at every step)
+    'partner_aware': ([*ARGS, '--learning', 'partner_aware'], {}),
 }
 CONCURRENT_SESSIONS = 5     # at most this many at once (each graph is 4-5 processes)
 
@@ -265,6 +267,21 @@ def test_a_scripted_stick_gives_the_same_session_in_the_graph_and_the_engine(ses
     mixed = [state for state in graph_messages['/hrc/state'][0][1:]
              if len(set(state['human_applied'])) > 1]
     assert len(mixed) >= 5, graph_messages['/hrc/state'][0][1]
+
+
+def test_the_partner_aware_policy_is_the_same_in_the_graph_and_the_engine(sessions):
+    """The partner model's features enter the observation in the agent node as in the engine.
+
+    SAC with the partner_aware configuration (7 more inputs, the model refitted every step):
+    the sessions are bit for bit the same, and the policy they trained has the larger input.
+    """
+    graph_bag, engine_bag, folder = outcome_of(sessions, 'partner_aware')
+    assert_same(graph_bag, engine_bag, (0, 1, 2))
+    for run_dir in (folder / 'graph', folder / 'engine'):
+        final = read_checkpoint(run_dir / 'runs' / 'checkpoints' / 'same' / 'final.pt')
+        assert final['config']['params']['partner_inference'] is True, run_dir
+        first_layer = next(iter(final['core']['sac']['actor'].values()))
+        assert first_layer.shape[1] == 7 + 7, run_dir       # state, rates, a_h + the model
 
 
 def test_sim_human_and_recorder_in_one_process_give_the_same_session(sessions):

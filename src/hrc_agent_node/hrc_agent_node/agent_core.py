@@ -77,6 +77,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_agent_node.episode_records import Decision, EpisodePlan, EpisodeResult, StepRecord
 from hrc_agent_node.learner import make_learner
 from hrc_agent_node.observation import derive_seed
+from hrc_agent_node.partner_model import FEATURE_SIZE, PartnerModel
 from hrc_agent_node.ppo import PPO, RewardScaler, RolloutBuffer
 from hrc_agent_node.sac import SAC
 from hrc_agent_node.strategies import session_case, StrategyProgress
@@ -124,7 +125,9 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         self.tree, self.case = session_case(p, tree, cases)
         self.progress = StrategyProgress(self.case, self.tree, p.convergence_window,
                                          p.satisfied_window)
-        self.observation_size = 7 if p.observe_rates else 4
+        self.observation_size = (7 if p.observe_rates else 4) + (
+            FEATURE_SIZE if p.partner_inference else 0)
+        self.partner_model = PartnerModel() if p.partner_inference else None
         # algorithm: the policy learner acts and learns; PPO learns from self.buffer (rollouts)
         # through self.learner (synchronous or background updates), SAC from its own replay
         # buffer inside act() (sac.py). self.ppo names the PPO learner (None under SAC).
@@ -286,6 +289,8 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         self._log = _EpisodeLog(plan, error_sums={subtask_id: 0.0
                                                   for subtask_id in self.tree.subtasks})
         self.reward_scaler.start_episode()
+        if self.partner_model is not None:
+            self.partner_model.reset()      # the partner may be another person now
         return plan
 
     def act(self, state, human_action=None) -> Decision:

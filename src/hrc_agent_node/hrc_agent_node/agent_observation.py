@@ -13,8 +13,16 @@ from hrc_agent_node.observation import applied_command, observation_of
 
 class HumanObservation:
     def observation(self, state, human_action: float) -> np.ndarray:
-        """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates)."""
-        return observation_of(self.params, state, human_action)
+        """Return the normalized observation {B_y, P_z, S_x, a_h} (+ the three rates).
+
+        With ``partner_inference``, then the partner model's features after this state's
+        action of the partner (``partner_model.PartnerModel``: updated once per step).
+        """
+        values = observation_of(self.params, state, human_action)
+        if self.partner_model is None:
+            return values
+        features = self.partner_model.update(int(state.step), values[:3], human_action)
+        return np.concatenate([values, features])
 
     @property
     def needs_human_action(self) -> bool:

@@ -185,6 +185,10 @@ class AgentParams:
     # --- observation {B_y, P_z, S_x, a_h} (+ rates), each divided by its scale
     observe_rates: bool = param(True, "Add dB_y/dt, dP_z/dt, dS_x/dt to the paper's "
                                       'observation (the state is not Markov without them)')
+    partner_inference: bool = param(False, 'Add what the robot infers about its partner from '
+                                           'the last seconds of the episode: their predicted '
+                                           'next action, gains, persistence, bias and noise '
+                                           '(partner_model.py; 7 more inputs)')
     ball_position_scale: float = param(0.25, 'm: B_y / this enters the observation',
                                        low=1e-6, high=1e6)
     pendulum_angle_scale: float = param(0.5, 'rad: P_z / this enters the observation',

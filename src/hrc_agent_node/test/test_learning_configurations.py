@@ -18,8 +18,8 @@ TABLE_I = dict(algorithm='ppo', preset='paper', gamma=0.995, gae_lambda=0.95, ho
                entropy_coef=0.02)
 
 
-def test_the_three_configurations_exist_and_are_agent_parameters():
-    assert learning_names(params_dir()) == ['paper', 'ppo', 'sac']
+def test_the_configurations_exist_and_are_agent_parameters():
+    assert learning_names(params_dir()) == ['paper', 'partner_aware', 'ppo', 'sac']
     for name in learning_names(params_dir()):
         values = load_learning(params_dir(), name)
         params = from_dict(AgentParams, values)        # raises with every reason if not
@@ -44,3 +44,8 @@ def test_the_default_learns_with_sac_and_the_ppo_one_with_the_studys_rules():
 def test_a_retired_parameter_is_refused_with_where_its_behaviour_lives(name):
     with pytest.raises(ParameterError, match=rf"parameter '{name}' was retired: .*git 8c1b998"):
         from_dict(AgentParams, {name: 'anything'})
+
+
+def test_the_partner_aware_configuration_is_sac_with_the_partner_model():
+    sac, aware = load_learning(params_dir(), 'sac'), load_learning(params_dir(), 'partner_aware')
+    assert aware == dict(sac, partner_inference=True)

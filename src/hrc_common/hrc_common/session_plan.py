@@ -42,7 +42,8 @@ DEFAULT_LEARNING = 'sac'
 
 LEARNING_HELP = ('learning configuration: params/learning/<name>.yaml (default '
                  f"{DEFAULT_LEARNING}, the study's best for the person's time; ppo: the "
-                 "paper's algorithm with the study's rules; paper: Table I literally)")
+                 "paper's algorithm with the study's rules; paper: Table I literally; "
+                 'partner_aware: sac observing a model of its partner)')
 
 
 def add_learning_option(parser) -> None:
@@ -104,7 +105,7 @@ class SessionSettings:
     human_profile: str = param('', "Simulated-human profile of params/sim_human.yaml ('' = "
                                    "human.yaml's)")
     learning: str = param(DEFAULT_LEARNING, 'Learning configuration: params/learning/<name>'
-                                            '.yaml (sac, the default; ppo; paper)')
+                                            '.yaml (sac, the default; ppo; paper; partner_aware)')
     training_episodes: int = param(0, "Max training episodes (0 = the learning "
                                       "configuration's or agent.yaml's "
                                       'max_training_episodes)', low=0)

@@ -130,7 +130,7 @@ def test_an_unknown_learning_configuration_is_refused_with_the_names_there_are(t
     with pytest.raises(ValueError) as refused:
         compose(SessionSettings(case=2, learning='fast'), PARAMS)
     assert "learning configuration 'fast' not found" in str(refused.value)
-    assert 'there are: paper, ppo, sac' in str(refused.value)
+    assert 'there are: paper, partner_aware, ppo, sac' in str(refused.value)
     # a file that is not one agent section is refused with what it holds
     (tmp_path / 'learning').mkdir()
     (tmp_path / 'learning' / 'odd.yaml').write_text('sim:\n  ros__parameters: {seed: 1}\n')

@@ -111,8 +111,8 @@ def test_cli_register_assign_plan(tmp_path, capsys):
     commands = [line for line in capsys.readouterr().out.splitlines() if line.startswith('hrc')]
     assert commands[0].endswith('--learning ppo')
     assert main(['--study-dir', study, 'plan', 'P01', '--learning', 'fast']) == 2
-    assert "--learning 'fast': not a learning configuration (there are: paper, ppo, sac)" in \
-        capsys.readouterr().err
+    assert ("--learning 'fast': not a learning configuration (there are: paper, partner_aware, "
+            'ppo, sac)') in capsys.readouterr().err
     assert main(['--study-dir', study, 'register', 'Jane Doe', '--consent', 'yes']) == 2
     assert 'is not valid' in capsys.readouterr().err
 
