@@ -105,6 +105,7 @@ class _EpisodeLog:
     robot_actions: list = field(default_factory=list)
     human_actions: list = field(default_factory=list)
     human_slices: list = field(default_factory=list)   # normalized, at the human's rate
+    commands_missing: int = 0       # periods whose robot's or (involved) human's command was late
     error_sums: dict = field(default_factory=dict)
     states_reached: int = 0
     pending: StepRecord = None
@@ -370,7 +371,7 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
                 final_value = 0.0 if terminated else self.ppo.value_of(
                     self.observation(final_state, final_human_action))
                 self._hand_over_segment(log, final_value, terminated)
-            converged, event = self._count_and_judge(plan, errors)
+            converged, event = self._count_and_judge(plan, errors, log.commands_missing == 0)
         human = log.human_slices or log.human_actions    # at the human's rate when known
         seconds = steps * self.limits.control_period
         result = EpisodeResult(
@@ -380,10 +381,11 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
             float(np.var(human)) if human else 0.0, converged, event, last,
             judging=plan.judging,
             robot_reversals=reversals_per_second(log.robot_actions, seconds),
-            human_reversals=reversals_per_second(human, seconds))
+            human_reversals=reversals_per_second(human, seconds),
+            commands_missing=log.commands_missing)
         if plan.evaluation:
             self.evaluation_results.append(result)
-            if len(self.evaluation_results) >= self.params.evaluation_episodes:
+            if self.evaluation_finished():
                 self.phase = Phase.DONE
                 result.event = 'evaluation_finished'
         self._log = None
@@ -391,8 +393,12 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         result.phase_after = self.phase
         return result
 
-    def _count_and_judge(self, plan: EpisodePlan, errors: dict) -> tuple:
-        """Count a training or judging episode, judge the step; return (converged, event)."""
+    def _count_and_judge(self, plan: EpisodePlan, errors: dict, complete: bool) -> tuple:
+        """Count a training or judging episode, judge the step; return (converged, event).
+
+        A judging episode with a command missing (``complete`` False: the sim applied zero for
+        a late one) judges nothing: the next episode judges the same policy again.
+        """
         self.total_episodes += 1
         self.human_involved_episodes += int(plan.with_person)
         self.population_episodes += int(plan.human_involved and not plan.with_person)
@@ -405,8 +411,11 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
             interval = self.params.judging_interval
             if interval > 0 and self.episodes_since_judging >= interval:
                 self.judging_due = True
-        converged, event = self.progress.record(errors) if plan.judging else (False, '')
-        if plan.judging and event == '' and self.progress.last_episode_met():
+        judged = plan.judging and complete
+        converged, event = self.progress.record(errors) if judged else (False, '')
+        if plan.judging and not complete:
+            self.judging_due = True
+        elif plan.judging and event == '' and self.progress.last_episode_met():
             # Judge the same frozen policy again on the next episode, until the window is full
             # (no training, no update in between) or an episode fails.
             self.judging_due = True
@@ -436,20 +445,6 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         self.progress.skip()
         self._settle_learner()
         self._start_step(previous)
-
-    def start_after(self) -> None:
-        """Start a new session with the policy just loaded from a finished one (start_from).
-
-        A returning person: the counters from zero, the strategy at its last step (the one
-        with the person), whose first episode judges the policy it starts with.
-        """
-        self.episode = self.total_episodes = self.human_involved_episodes = 0
-        self.population_episodes = self.judging_episodes = 0
-        previous = self.progress.step
-        while not self.progress.is_last_step:
-            self.progress.skip()
-        self._start_step(previous)
-        self.judging_due = True
 
     def _start_step(self, previous_step) -> None:
         """Begin the step after ``previous_step``: forget samples and scales of another reward."""
@@ -490,5 +485,8 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         for subtask_id in self.tree.subtasks:
             log.error_sums[subtask_id] += self.tree.error(subtask_id, reached)
         log.states_reached += 1
+        # the sim applied zero for a late command (TaskState; the engine's states never miss)
+        log.commands_missing += int(bool(getattr(reached, 'robot_command_missing', False)) or (
+            log.plan.human_involved and bool(getattr(reached, 'human_command_missing', False))))
         log.pending = None
         return record

@@ -39,7 +39,8 @@ def episode_summary_fields(core, result) -> dict:
             'total_error': result.total_error, 'robot_effort': result.robot_effort,
             'human_effort': result.human_effort, 'converged': result.converged,
             'robot_reversals': float(result.robot_reversals),
-            'human_reversals': float(result.human_reversals)}
+            'human_reversals': float(result.human_reversals),
+            'commands_missing': int(result.commands_missing)}
 
 
 def session_status_fields(core, text: str) -> dict:

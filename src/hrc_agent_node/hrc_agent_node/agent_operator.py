@@ -63,8 +63,13 @@ class OperatorControls:
         self.phase = Phase.ABORTED
 
     def evaluation_summary(self) -> dict:
-        """Return the Table II metrics averaged over the evaluation episodes."""
-        results = self.evaluation_results
+        """Return the Table II metrics averaged over the evaluation episodes.
+
+        Over the complete ones (every command arrived) when there are any; ``incomplete``
+        counts the others.
+        """
+        results = [r for r in self.evaluation_results if not r.commands_missing] \
+            or self.evaluation_results
         if not results:
             return {}
         summary = {f'{subtask_id}_error': float(np.mean([r.errors[subtask_id] for r in results]))
@@ -77,6 +82,7 @@ class OperatorControls:
             human_reversals=float(np.mean([r.human_reversals for r in results])),
             episode_return=float(np.mean([r.episode_return for r in results])),
             episodes=len(results), training_episodes=self.total_episodes,
+            incomplete=sum(1 for r in self.evaluation_results if r.commands_missing),
             judging_episodes=self.judging_episodes,
             human_involved_episodes=self.human_involved_episodes,
             human_involved_percentage=(100.0 * self.human_involved_episodes

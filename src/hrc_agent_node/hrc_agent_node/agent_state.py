@@ -55,8 +55,32 @@ class CheckpointState:
         # A session stopped while an update was due does the update first when resumed; one
         # stopped in its evaluation runs the evaluation episodes it has not run yet (a finished
         # one stays done).
-        if phase == Phase.EVALUATION \
-                and len(self.evaluation_results) >= self.params.evaluation_episodes:
+        if phase == Phase.EVALUATION and self.evaluation_finished():
             phase = Phase.DONE
         self.phase = phase if phase in (Phase.TRAINING, Phase.UPDATING, Phase.EVALUATION,
                                         Phase.DONE) else Phase.TRAINING
+
+    def start_after(self) -> None:
+        """Start a new session with the policy just loaded from a finished one (start_from).
+
+        A returning person: the counters from zero, the strategy at its last step (the one
+        with the person), whose first episode judges the policy it starts with.
+        """
+        self.episode = self.total_episodes = self.human_involved_episodes = 0
+        self.population_episodes = self.judging_episodes = 0
+        previous = self.progress.step
+        while not self.progress.is_last_step:
+            self.progress.skip()
+        self._start_step(previous)
+        self.judging_due = True
+
+    def evaluation_finished(self) -> bool:
+        """Return whether the evaluation has its episodes: ``evaluation_episodes`` complete ones.
+
+        An evaluation episode with a command missing is run again (Table II is computed over
+        the complete ones), up to ``evaluation_episodes`` more: then the session ends with what
+        it has, and the report says how many were incomplete.
+        """
+        wanted = self.params.evaluation_episodes
+        complete = sum(1 for result in self.evaluation_results if not result.commands_missing)
+        return complete >= wanted or len(self.evaluation_results) >= 2 * wanted

@@ -14,9 +14,10 @@ from hrc_common.contract import Phase
 RESULT_FIELDS = ('episode', 'training_step', 'human_involved', 'evaluation', 'steps',
                  'terminated', 'truncated', 'episode_return', 'errors', 'robot_effort',
                  'human_effort', 'converged', 'event', 'judging', 'robot_reversals',
-                 'human_reversals')
+                 'human_reversals', 'commands_missing')
 # Fields that checkpoints written before them do not hold, and the value they read as.
-RESULT_DEFAULTS = {'robot_reversals': float('nan'), 'human_reversals': float('nan')}
+RESULT_DEFAULTS = {'robot_reversals': float('nan'), 'human_reversals': float('nan'),
+                   'commands_missing': 0}
 
 
 @dataclass(frozen=True)
@@ -98,6 +99,7 @@ class EpisodeResult:
     judging: bool = False    # a judging episode (deterministic, counted in the totals)
     robot_reversals: float = 0.0   # reversals of the robot's command per second
     human_reversals: float = 0.0   # of the human's (hrc_common.smoothness)
+    commands_missing: int = 0      # periods in which a command was late (the sim applied 0)
 
     def to_plain(self) -> dict:
         """Return the metrics as plain data (checkpoints; no step record)."""

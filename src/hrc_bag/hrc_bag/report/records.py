@@ -90,6 +90,7 @@ class EpisodeRecord:
     steps: int = 0                  # control steps in the episode (0: unknown)
     robot_reversals: float = math.nan   # per second (hrc_common.smoothness; NaN: not recorded)
     human_reversals: float = math.nan
+    commands_missing: int = 0       # periods whose command came late (the sim applied 0)
 
 
 KINDS = ('training', 'judging', 'evaluation', 'practice')
@@ -191,6 +192,10 @@ def measures(session: SessionRecord) -> dict:
     before, final = session.episodes[:start], session.episodes[start:]
     training = [episode for episode in before if record_kind(episode) != 'practice']
     final = [episode for episode in final if record_kind(episode) != 'practice']
+    # Table II over the complete evaluation episodes (every command arrived) when there are any
+    complete = [episode for episode in final if not episode.commands_missing]
+    incomplete = len(final) - len(complete)
+    final = complete or final
     involved = sum(1 for episode in training if episode.human_involved)
     last_step = session.steps - 1
     converged = any(episode.converged and episode.training_step == last_step
@@ -204,6 +209,7 @@ def measures(session: SessionRecord) -> dict:
         else math.nan,
         'converged': converged,
         'evaluation_episodes': float(len(final)),
+        'incomplete_evaluations': float(incomplete),
         'practice_episodes': float(len(session.episodes) - len(training) - len(final)),
         # What a lab budgets for the person: their episodes during training at the session's
         # episode duration, breaks and the final evaluation excluded (NaN: duration unknown).
@@ -245,7 +251,8 @@ def record_from_bag_session(session) -> SessionRecord:
         final_evaluation=_final_flag(summary), kind=_kind_label(summary),
         steps=int(getattr(summary, 'steps', 0) or 0),
         robot_reversals=float(getattr(summary, 'robot_reversals', math.nan)),
-        human_reversals=float(getattr(summary, 'human_reversals', math.nan)))
+        human_reversals=float(getattr(summary, 'human_reversals', math.nan)),
+        commands_missing=int(getattr(summary, 'commands_missing', 0) or 0))
         for summary in session.summaries]
     strategy, robot_dof = case_roles().get(session.case_id, (session.strategy, session.robot_dof))
     try:

@@ -48,7 +48,9 @@ TABLE2_NOTE = (
     "the session's recorded sim parameters or the sim's defaults). Total error sums metres and "
     "radians (mixed units, as the paper's sum). " + INTERVAL_NOTE + ' Sessions that hit the '
     'episode limit enter the episode counts at the limit: those columns are restricted means '
-    '(a lower bound of the unrestricted mean).')
+    '(a lower bound of the unrestricted mean). An evaluation episode in which a command came '
+    'late (the sim applied zero) is left out when complete ones exist (the agent runs it '
+    'again), and a judging episode with one judged nothing.')
 OUTCOME_TITLE = 'converged / at the cap / unfinished'
 OUTCOME_NOTE = (
     'Converged / at the cap / unfinished: sessions whose training met the convergence rule in '
@@ -162,7 +164,7 @@ SESSION_KEYS = (['human_involved_episodes', 'total_episodes', 'converged',
                 + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes']
                 + ['tolerance_error', 'pretraining_episodes', 'episode_floor', 'person_floor',
                    'paper_episodes', 'paper_person_episodes', 'window_stopped',
-                   'window_episodes', 'window_person_episodes']
+                   'window_episodes', 'window_person_episodes', 'incomplete_evaluations']
                 + list(REVERSAL_KEYS) + ['robot_chatters'])
 
 
