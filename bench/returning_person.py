@@ -19,27 +19,14 @@ import tempfile
 
 from hrc_common.session_control import FINAL_CHECKPOINT
 from hrc_common.session_plan import SessionSettings
-from hrc_engine.engine import EngineConfig, InProcessSession
+from hrc_engine.engine import EngineConfig, SummariesSession
 from hrc_study.statistics import bootstrap_interval
 import numpy
 
 
-class _Summaries(InProcessSession):
-    """An in-process session that keeps its episode summaries (plain values)."""
-
-    def __init__(self, config):
-        super().__init__(config)
-        self.summaries = []
-
-    def _write(self, topic, message):
-        super()._write(topic, message)
-        if topic == '/hrc/episode':
-            self.summaries.append(message)
-
-
 def run(case: int, seed: int, runs: pathlib.Path, session_id: str, start_from: str = ''):
     """Run one session (no bags); return its episode summaries."""
-    session = _Summaries(EngineConfig(SessionSettings(
+    session = SummariesSession(EngineConfig(SessionSettings(
         case=case, seed=seed, session_id=session_id, record=False, runs_dir=str(runs),
         start_from=start_from)))
     session.run()

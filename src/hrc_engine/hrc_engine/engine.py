@@ -322,3 +322,19 @@ def run_session(config: EngineConfig) -> SessionResult:
 def config_dict(config: EngineConfig) -> dict:
     """Return the config as plain values (for logs and experiment tables)."""
     return asdict(config)
+
+
+class SummariesSession(InProcessSession):
+    """A session that also keeps every EpisodeSummary it writes, as plain values (``summaries``).
+
+    For benches and tests that read a session's episodes without its bags (``record=False``).
+    """
+
+    def __init__(self, config: EngineConfig):
+        super().__init__(config)
+        self.summaries = []
+
+    def _write(self, topic: str, message: dict) -> None:
+        super()._write(topic, message)
+        if topic == '/hrc/episode':
+            self.summaries.append(message)

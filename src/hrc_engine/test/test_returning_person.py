@@ -8,23 +8,13 @@ the person. Without the start (a fresh policy) the first episode is the robot al
 """
 
 from hrc_common.session_plan import SessionSettings
-from hrc_engine.engine import EngineConfig, InProcessSession
+from hrc_engine.engine import EngineConfig, SummariesSession
 
 OVERRIDES = {'sim.episode_duration': 8.0}
 
 
-class _Summaries(InProcessSession):
-    def __init__(self, config):
-        super().__init__(config)
-        self.summaries = []
-
-    def _write(self, topic, message):
-        if topic == '/hrc/episode':
-            self.summaries.append(message)
-
-
 def run(tmp_path, session_id, **settings):
-    session = _Summaries(EngineConfig(SessionSettings(
+    session = SummariesSession(EngineConfig(SessionSettings(
         case=2, seed=0, session_id=session_id, record=False, runs_dir=str(tmp_path / 'runs'),
         evaluation_episodes=1, overrides=OVERRIDES, **settings)))
     session.run()

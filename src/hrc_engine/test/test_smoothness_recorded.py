@@ -11,23 +11,13 @@ import math
 
 from hrc_common.session_plan import SessionSettings
 from hrc_common.smoothness import chatters
-from hrc_engine.engine import EngineConfig, InProcessSession
+from hrc_engine.engine import EngineConfig, SummariesSession
 import pytest
-
-
-class _Summaries(InProcessSession):
-    def __init__(self, config):
-        super().__init__(config)
-        self.summaries = []
-
-    def _write(self, topic, message):
-        if topic == '/hrc/episode':
-            self.summaries.append(message)
 
 
 @pytest.mark.parametrize('profile', ['paper', 'novice'])
 def test_the_simulated_person_reverses_less_often_than_people_correct(profile):
-    session = _Summaries(EngineConfig(SessionSettings(
+    session = SummariesSession(EngineConfig(SessionSettings(
         case=5, seed=0, training_episodes=2, evaluation_episodes=1, session_id='reversals',
         record=False, overrides={'sim.episode_duration': 20.0, 'human.profile': profile}),
         checkpoints=False))
