@@ -25,6 +25,7 @@ COLUMNS = [('human_involved_episodes', 'human-involved episodes', 1),
            ('pendulum_error', 'pendulum (rad)', 3),
            ('ball_error', 'ball (m)', 3),
            ('total_error', 'total error (m + rad)', 3),
+           ('tolerance_error', 'total error (over tolerances)', 2),
            ('human_effort', 'human effort (normalized)', 4),
            ('robot_effort', 'robot effort (normalized)', 4),
            ('human_effort_physical', 'human effort (N^2 or (N*m)^2)', 4),
@@ -46,11 +47,12 @@ TABLE2_NOTE = (
     "variance of the normalized action, 1 = the sim's limit; the physical columns multiply it "
     "by the limit squared: N^2 for the slider's force, (N*m)^2 for the pendulum's torque, from "
     "the session's recorded sim parameters or the sim's defaults). Total error sums metres and "
-    "radians (mixed units, as the paper's sum). " + INTERVAL_NOTE + ' Sessions that hit the '
-    'episode limit enter the episode counts at the limit: those columns are restricted means '
-    '(a lower bound of the unrestricted mean). An evaluation episode in which a command came '
-    'late (the sim applied zero) is left out when complete ones exist (the agent runs it '
-    'again), and a judging episode with one judged nothing.')
+    "radians (mixed units, as the paper's sum); over tolerances: slider / 0.01 m + pendulum / "
+    '0.1 rad + ball / 0.05 m, unit-free (1 = one subtask at its tolerance). ' + INTERVAL_NOTE
+    + ' Sessions that hit the episode limit enter the episode counts at the limit: those '
+    'columns are restricted means (a lower bound of the unrestricted mean). An evaluation '
+    'episode in which a command came late (the sim applied zero) is left out when complete '
+    'ones exist (the agent runs it again), and a judging episode with one judged nothing.')
 OUTCOME_TITLE = 'converged / at the cap / unfinished'
 OUTCOME_NOTE = (
     'Converged / at the cap / unfinished: sessions whose training met the convergence rule in '
@@ -160,7 +162,7 @@ def table2_csv(groups: dict, intervals: dict) -> str:
 SESSION_KEYS = (['human_involved_episodes', 'total_episodes', 'converged',
                  'evaluation_episodes']
                 + [key for key, _, _ in COLUMNS[3:]
-                   if key not in PHYSICAL_EFFORT_KEYS + REVERSAL_KEYS]
+                   if key not in PHYSICAL_EFFORT_KEYS + REVERSAL_KEYS + ('tolerance_error',)]
                 + list(PHYSICAL_EFFORT_KEYS) + ['person_minutes']
                 + ['tolerance_error', 'pretraining_episodes', 'episode_floor', 'person_floor',
                    'paper_episodes', 'paper_person_episodes', 'window_stopped',
