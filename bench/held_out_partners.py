@@ -1,0 +1,179 @@
+#!/usr/bin/env python3
+"""Held-out partners: a robot scored against the robot trained for each partner (the oracle).
+
+The protocol (in the manner of ZSC-Eval's best-response-relative score, for continuous
+control): the held-out partners are the people unlike the training population
+(``hrc_partners.partners_first.unlike_people`` of person N of the profile: slower,
+heavier-handed, lapsing, timid; each one trait outside the population's spread) and person N
+itself. For each, the **oracle** is a robot of the paper's task-first strategy trained with that
+very partner (``bench/unlike_people_oracle.py --json``: case 2 when the robot rotates, case 1
+when it translates), its frozen policy evaluated with the partner met afresh. The robot under
+test (a partners-first robot of case 8 or 7, trained with the simulated population and never
+with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is scored twice:
+
+* **met first**: its frozen policy with the partner met afresh (the partner's first
+  ``--episodes`` episodes), its total error over the oracle's;
+* **after adapting**: a session with the partner that starts from the robot's policy (as a
+  returning person's: the last step, the first episode judges it, then SAC learns) for at most
+  ``--adapt`` of the partner's episodes, then evaluated (``--episodes``): its error over the
+  oracle's. The person's minutes are those episodes at 40 s.
+
+Medians over seeds with a 95% percentile bootstrap interval (seeded). Every run folder is one
+robot (its learning configuration is read from its checkpoints)::
+
+    python bench/unlike_people_oracle.py --cases 2 1 --seeds 0 1 2 3 4 --json oracles.json
+    hrc experiment --cases 7 8 --seeds 5 --checkpoints --learning sac --name pf-sac ...
+    hrc experiment --cases 7 8 --seeds 5 --checkpoints --learning partner_aware --name pf-pa ...
+    python bench/held_out_partners.py runs/pf-sac runs/pf-pa --oracles oracles.json --out x.md
+"""
+
+import argparse
+import json
+import multiprocessing
+import pathlib
+import statistics
+import sys
+
+import numpy
+import torch
+
+from hrc_agent_node.agent_core import AgentCore
+from hrc_agent_node.checkpoint import load_session_start, read_checkpoint
+from hrc_agent_node.config import AgentParams
+from hrc_common.contract import SimLimits
+from hrc_common.params import from_dict, with_overrides
+from hrc_engine.offline import run_session
+from hrc_engine.partners import SimulatedHumanPartner
+from hrc_joystick_node.human_profile import load_profile
+from hrc_joystick_node.population import sample_person
+from hrc_partners.partners_first import unlike_people
+from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
+from hrc_study.statistics import bootstrap_interval
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from partners_first import evaluate, sessions  # noqa: E402  (bench/partners_first.py)
+
+ORACLE_CASE = {8: 2, 7: 1}          # the same role assignment in the paper's task first
+FIRST_TARGET, ADAPTED_TARGET = 2.0, 1.5
+EPISODE_MINUTES = 40.0 / 60.0
+
+
+def adapted_error(task: dict, partner) -> tuple:
+    """Return (evaluation error, the partner's episodes) after adapting to ``partner``."""
+    config = read_checkpoint(task['checkpoint'])['config']
+    known = AgentParams.__dataclass_fields__
+    trained = from_dict(AgentParams, {name: value for name, value in config['params'].items()
+                                      if name in known})
+    params = with_overrides(trained, seed=task['seed'], start_from=str(task['checkpoint']),
+                            resume_from='', max_training_episodes=task['adapt'],
+                            evaluation_episodes=task['episodes'], checkpoint_dir='',
+                            torch_threads=1)
+    physics = PhysicsParams()
+    core = AgentCore(params, limits=SimLimits.of(physics))
+    load_session_start(core)
+    with SliderPendulumBall(physics) as sim:
+        summary = run_session(core, sim, SimulatedHumanPartner(
+            partner, core.human_dof, task['seed'], SimLimits.of(physics).human_step))
+    return float(summary['evaluation']['total_error']), int(summary['human_involved_episodes'])
+
+
+def score(task: dict) -> dict:
+    """Score one robot with one held-out partner: met first and after adapting."""
+    torch.set_num_threads(1)
+    person = sample_person(load_profile(task['profile']), task['seed'])
+    partner = dict(person=person, **unlike_people(person))[task['who']]
+    first = evaluate(task['checkpoint'], partner, task['seed'], task['episodes'])
+    adapted, episodes = adapted_error(task, partner)
+    return dict(task, checkpoint=str(task['checkpoint']), first=first, adapted=adapted,
+                adapt_episodes=episodes)
+
+
+def robot_name(checkpoint) -> str:
+    """Return the robot's learning configuration in words (from its checkpoint)."""
+    params = read_checkpoint(checkpoint)['config']['params']
+    name = params.get('algorithm', '?')
+    return f'{name} + partner model' if params.get('partner_inference') else name
+
+
+def interval_text(values) -> str:
+    interval = bootstrap_interval(values, numpy.median)
+    if numpy.isnan(interval.low):
+        return f'{interval.estimate:.2f}x'
+    return f'{interval.estimate:.2f}x [{interval.low:.2f}, {interval.high:.2f}]'
+
+
+def table(results: list, oracles: dict) -> list:
+    """Return the Markdown lines: per robot, case and partner the ratios to the oracle."""
+    lines = ["| robot | case (robot's DOF) | partner | oracle's error | met first / oracle | "
+             f'<= {FIRST_TARGET:g}x | after adapting / oracle | <= {ADAPTED_TARGET:g}x | '
+             "the partner's episodes (minutes) |", '|---|---|---|---|---|---|---|---|---|']
+    keys = sorted({(r['robot'], r['case'], r['who']) for r in results})
+    for robot, case, who in keys:
+        rows = [r for r in results if (r['robot'], r['case'], r['who']) == (robot, case, who)]
+        pairs = [(r, oracles.get((ORACLE_CASE[case], r['seed'], who))) for r in rows]
+        pairs = [(r, o) for r, o in pairs if o]
+        if not pairs:
+            continue
+        first = [r['first'] / o for r, o in pairs]
+        adapted = [r['adapted'] / o for r, o in pairs]
+        episodes = statistics.median(r['adapt_episodes'] for r, _ in pairs)
+        dof = 'rotation' if case == 8 else 'translation'
+        lines.append(
+            f'| {robot} | {case} ({dof}) | {who} | '
+            f'{statistics.median(o for _, o in pairs):.4f} | {interval_text(first)} | '
+            f"{'yes' if max(first) <= FIRST_TARGET else '**no**'} | {interval_text(adapted)} | "
+            f"{'yes' if max(adapted) <= ADAPTED_TARGET else '**no**'} | "
+            f'{episodes:g} ({episodes * EPISODE_MINUTES:.1f}) |')
+    return lines
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('runs', type=pathlib.Path, nargs='+',
+                        help='<runs-dir>/<experiment>: partners-first robots, one folder each')
+    parser.add_argument('--oracles', type=pathlib.Path, required=True,
+                        help='bench/unlike_people_oracle.py --json output (cases 2 and 1)')
+    parser.add_argument('--episodes', type=int, default=3, help='evaluation episodes')
+    parser.add_argument('--adapt', type=int, default=3, help="the partner's episodes at most")
+    parser.add_argument('--profile', default='paper')
+    parser.add_argument('--seeds', type=int, nargs='*', default=None,
+                        help='only these seeds (default: every seed of the runs)')
+    parser.add_argument('--parallel', type=int, default=2)
+    parser.add_argument('--out', type=pathlib.Path, help='write the table here (Markdown)')
+    parser.add_argument('--json', type=pathlib.Path, help='write every score here too')
+    parser.add_argument('--scores', type=pathlib.Path,
+                        help='the --json of an earlier run: make the table from its scores')
+    args = parser.parse_args(argv)
+    oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
+               for row in json.loads(args.oracles.read_text())}
+    if args.scores:
+        return write_table(json.loads(args.scores.read_text()), oracles, args.out)
+    tasks = [dict(robot=robot_name(entry['checkpoint']), case=entry['case'],
+                  seed=entry['seed'], checkpoint=entry['checkpoint'], who=who,
+                  profile=args.profile, episodes=args.episodes, adapt=args.adapt)
+             for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
+             and (args.seeds is None or entry['seed'] in args.seeds)
+             for who in ('person', *unlike_people(load_profile(args.profile)))]
+    if not tasks:
+        print(f'held_out_partners: no partners-first checkpoint under {args.runs}',
+              file=sys.stderr)
+        return 2
+    print(f'held_out_partners: {len(tasks)} scores on {args.parallel} processes', flush=True)
+    with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
+        results = pool.map(score, tasks)
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2))
+    return write_table(results, oracles, args.out)
+
+
+def write_table(results: list, oracles: dict, out) -> int:
+    """Print the table (and write it to ``out``); return 0."""
+    lines = table(results, oracles)
+    print('\n'.join(lines))
+    if out:
+        out.write_text('\n'.join(lines) + '\n')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
