@@ -476,6 +476,10 @@ class AgentCore(HumanObservation, UpdateSchedule, OperatorControls, CheckpointSt
         record = log.pending
         subtasks = self.robot_subtasks
         components, reward = self.tree.reward(reached, subtasks)
+        # smoothness: minus action_rate_cost x the squared change of the normalized action
+        change = record.action - (log.robot_actions[-2] if len(log.robot_actions) > 1
+                                  else record.action)
+        reward -= self.params.action_rate_cost * change * change
         record.subtask_ids = tuple(subtasks)
         record.reward_components = tuple(components)
         record.reward = reward

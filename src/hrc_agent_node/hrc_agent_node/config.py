@@ -54,6 +54,10 @@ class AgentParams:
                                     'task_tree.yaml')
     cases_file: str = param('', 'Strategies and cases YAML; empty = share/hrc_agent_node/'
                                 'params/cases.yaml')
+    action_rate_cost: float = param(0.0, "Smoothness: the robot's reward loses this times "
+                                         'the squared change of its normalized action from '
+                                         "the step before (0 = the paper's reward)", low=0.0,
+                                    high=100.0)
     preset: str = param('paper', 'Reward preset of the task tree file (paper = alpha 10, '
                                  'sigma 1, mu 0; tuned = sigma scaled to each range; graded = '
                                  'sigma half the distance from the goal to the stops, a slope '
