@@ -18,6 +18,10 @@ with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is 
   ``--adapt`` of the partner's episodes, then evaluated (``--episodes``): its error over the
   oracle's. The person's minutes are those episodes at 40 s.
 
+Without ``--oracles`` the reference is each robot's own error with the session's person met
+afresh (the robustness ratio of ``bench/partners_first.py``): an oracle for every held-out
+partner takes up to 300 of that partner's episodes per seed, hours on 2 cores.
+
 Medians over seeds with a 95% percentile bootstrap interval (seeded). Every run folder is one
 robot (its learning configuration is read from its checkpoints)::
 
@@ -102,15 +106,33 @@ def interval_text(values) -> str:
     return f'{interval.estimate:.2f}x [{interval.low:.2f}, {interval.high:.2f}]'
 
 
+def own_person_references(results: list) -> dict:
+    """Return {(oracle case, seed, partner): the robot's error met first with its person}.
+
+    The reference when no oracle was trained: each robot against itself with the session's
+    person (keyed as the oracles are, per robot).
+    """
+    return {(r['robot'], ORACLE_CASE[r['case']], r['seed'], who): r['first']
+            for r in results if r['who'] == 'person'
+            for who in ('person', *unlike_people(load_profile(r['profile'])))}
+
+
 def table(results: list, oracles: dict) -> list:
-    """Return the Markdown lines: per robot, case and partner the ratios to the oracle."""
-    lines = ["| robot | case (robot's DOF) | partner | oracle's error | met first / oracle | "
-             f'<= {FIRST_TARGET:g}x | after adapting / oracle | <= {ADAPTED_TARGET:g}x | '
+    """Return the Markdown lines: per robot, case and partner the ratios to the reference.
+
+    ``oracles`` None: the reference is the robot's own error with the session's person.
+    """
+    own = own_person_references(results) if oracles is None else None
+    reference = 'oracle' if oracles is not None else "its own with the session's person"
+    lines = [f"| robot | case (robot's DOF) | partner | reference error ({reference}) | "
+             'met first / reference | '
+             f'<= {FIRST_TARGET:g}x | after adapting / reference | <= {ADAPTED_TARGET:g}x | '
              "the partner's episodes (minutes) |", '|---|---|---|---|---|---|---|---|---|']
     keys = sorted({(r['robot'], r['case'], r['who']) for r in results})
     for robot, case, who in keys:
         rows = [r for r in results if (r['robot'], r['case'], r['who']) == (robot, case, who)]
-        pairs = [(r, oracles.get((ORACLE_CASE[case], r['seed'], who))) for r in rows]
+        pairs = [(r, oracles.get((ORACLE_CASE[case], r['seed'], who)) if own is None
+                  else own.get((robot, ORACLE_CASE[case], r['seed'], who))) for r in rows]
         pairs = [(r, o) for r, o in pairs if o]
         if not pairs:
             continue
@@ -131,8 +153,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('runs', type=pathlib.Path, nargs='+',
                         help='<runs-dir>/<experiment>: partners-first robots, one folder each')
-    parser.add_argument('--oracles', type=pathlib.Path, required=True,
-                        help='bench/unlike_people_oracle.py --json output (cases 2 and 1)')
+    parser.add_argument('--oracles', type=pathlib.Path,
+                        help='bench/unlike_people_oracle.py --json output (cases 2 and 1); '
+                        "without: each robot's errors over its own with the session's person "
+                        '(the robustness ratio of bench/partners_first.py)')
     parser.add_argument('--episodes', type=int, default=3, help='evaluation episodes')
     parser.add_argument('--adapt', type=int, default=3, help="the partner's episodes at most")
     parser.add_argument('--profile', default='paper')
@@ -145,7 +169,7 @@ def main(argv=None) -> int:
                         help='the --json of an earlier run: make the table from its scores')
     args = parser.parse_args(argv)
     oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
-               for row in json.loads(args.oracles.read_text())}
+               for row in json.loads(args.oracles.read_text())} if args.oracles else None
     if args.scores:
         return write_table(json.loads(args.scores.read_text()), oracles, args.out)
     tasks = [dict(robot=robot_name(entry['checkpoint']), case=entry['case'],
