@@ -96,7 +96,11 @@ def robot_name(checkpoint) -> str:
     """Return the robot's learning configuration in words (from its checkpoint)."""
     params = read_checkpoint(checkpoint)['config']['params']
     name = params.get('algorithm', '?')
-    return f'{name} + partner model' if params.get('partner_inference') else name
+    if params.get('partner_inference'):
+        name += ' + partner model'
+    if params.get('action_rate_cost'):
+        name += f" + action-rate cost {params['action_rate_cost']:g}"
+    return name
 
 
 def interval_text(values) -> str:
@@ -125,8 +129,9 @@ def table(results: list, oracles: dict) -> list:
     own = own_person_references(results) if oracles is None else None
     reference = 'oracle' if oracles is not None else "its own with the session's person"
     lines = [f"| robot | case (robot's DOF) | partner | reference error ({reference}) | "
-             'met first / reference | '
-             f'<= {FIRST_TARGET:g}x | after adapting / reference | <= {ADAPTED_TARGET:g}x | '
+             'met first: error, / reference | '
+             f'<= {FIRST_TARGET:g}x | after adapting: error, / reference | '
+             f'<= {ADAPTED_TARGET:g}x | '
              "the partner's episodes (minutes) |", '|---|---|---|---|---|---|---|---|---|']
     keys = sorted({(r['robot'], r['case'], r['who']) for r in results})
     for robot, case, who in keys:
@@ -142,8 +147,10 @@ def table(results: list, oracles: dict) -> list:
         dof = 'rotation' if case == 8 else 'translation'
         lines.append(
             f'| {robot} | {case} ({dof}) | {who} | '
-            f'{statistics.median(o for _, o in pairs):.4f} | {interval_text(first)} | '
-            f"{'yes' if max(first) <= FIRST_TARGET else '**no**'} | {interval_text(adapted)} | "
+            f'{statistics.median(o for _, o in pairs):.4f} | '
+            f"{statistics.median(r['first'] for r, _ in pairs):.4f}, {interval_text(first)} | "
+            f"{'yes' if max(first) <= FIRST_TARGET else '**no**'} | "
+            f"{statistics.median(r['adapted'] for r, _ in pairs):.4f}, {interval_text(adapted)} | "
             f"{'yes' if max(adapted) <= ADAPTED_TARGET else '**no**'} | "
             f'{episodes:g} ({episodes * EPISODE_MINUTES:.1f}) |')
     return lines
@@ -171,7 +178,10 @@ def main(argv=None) -> int:
     oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
                for row in json.loads(args.oracles.read_text())} if args.oracles else None
     if args.scores:
-        return write_table(json.loads(args.scores.read_text()), oracles, args.out)
+        scores = json.loads(args.scores.read_text())
+        for row in scores:          # named again from the checkpoint (robots named before)
+            row['robot'] = robot_name(row['checkpoint'])
+        return write_table(scores, oracles, args.out)
     tasks = [dict(robot=robot_name(entry['checkpoint']), case=entry['case'],
                   seed=entry['seed'], checkpoint=entry['checkpoint'], who=who,
                   profile=args.profile, episodes=args.episodes, adapt=args.adapt)

@@ -305,10 +305,11 @@ def branch_verdict(name: str, branch: Finding, alpha: float = ALPHA) -> str:
     the other way (Holm within the branch); else undecided.
     """
     if branch.p_value < alpha:
-        return f'{name}: supported (p = {branch.p_value:.3g})'
+        return f'{name}: supported on its own (p = {branch.p_value:.3g})'
     if branch.p_reverse < alpha:
-        return f'{name}: refuted, {branch.reversal} (Holm p = {branch.p_reverse:.3g})'
-    return f'{name}: undecided (p = {branch.p_value:.3g})'
+        return (f'{name}: refuted on its own, {branch.reversal} (Holm p = '
+                f'{branch.p_reverse:.3g})')
+    return f'{name}: undecided on its own (p = {branch.p_value:.3g})'
 
 
 def finding_e(data: CaseData, profile: str, key: str = 'e', keys: dict = MEASURED) -> Finding:
