@@ -17,6 +17,7 @@ import pathlib
 import statistics
 import tempfile
 
+from hrc_common.contract import EpisodeKind
 from hrc_common.session_control import FINAL_CHECKPOINT
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import EngineConfig, SummariesSession
@@ -34,14 +35,16 @@ def run(case: int, seed: int, runs: pathlib.Path, session_id: str, start_from: s
 
 
 def person_episodes(summaries) -> int:
-    """Return the human-involved training and judging episodes (kind 1 or 2)."""
-    return sum(1 for item in summaries if item['human_involved'] and item['kind'] in (1, 2))
+    """Return the human-involved training and judging episodes."""
+    return sum(1 for item in summaries if item['human_involved']
+               and item['kind'] in (EpisodeKind.TRAINING, EpisodeKind.JUDGING))
 
 
 def pair(case: int, seed: int, runs: pathlib.Path) -> tuple:
     """Return (ratio, person's episodes first, second) of one person back for one case."""
     first = run(case, seed, runs, f'case{case}-seed{seed}-first')
-    evaluation = [item['total_error'] for item in first if item['kind'] == 3]
+    evaluation = [item['total_error'] for item in first
+                  if item['kind'] == EpisodeKind.EVALUATION]
     checkpoint = runs / 'checkpoints' / f'case{case}-seed{seed}-first' / FINAL_CHECKPOINT
     second = run(case, seed, runs, f'case{case}-seed{seed}-second', str(checkpoint))
     return (second[0]['total_error'] / statistics.mean(evaluation), person_episodes(first),

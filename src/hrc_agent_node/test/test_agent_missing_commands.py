@@ -7,12 +7,11 @@ Table II (the evaluation summary) is over the complete ones. Hand-made states (n
 seeded cores: deterministic.
 """
 
-import types
-
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
+from hrc_testing.hand_states import hand_state
 
 STEPS = 4
 LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)
@@ -20,11 +19,7 @@ LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)
 
 def state(step, final=False, missing=False):
     """Return a state every subtask of which is satisfied (a command late when ``missing``)."""
-    return types.SimpleNamespace(step=step, slider_position=0.0, slider_velocity=0.0,
-                                 pendulum_angle=0.0, pendulum_angular_velocity=0.0,
-                                 ball_position=0.0, ball_velocity=0.0, truncated=final,
-                                 terminated=False, applied_force=0.0, applied_torque=0.0,
-                                 robot_command_missing=missing, human_command_missing=False)
+    return hand_state(step, final, robot_command_missing=missing, human_command_missing=False)
 
 
 def core_of(**overrides):

@@ -7,12 +7,11 @@ not depend on how fast the machine is.
 """
 
 import threading
-import types
-
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
 from hrc_common.params import with_overrides
+from hrc_testing.hand_states import hand_state
 
 LIMITS = SimLimits(control_period=0.2, max_force=2.0, max_torque=0.5)
 STEPS = 12
@@ -20,10 +19,8 @@ UPDATES_PER_STEP = 2
 
 
 def state(step, final=False):
-    return types.SimpleNamespace(step=step, slider_position=0.01 * step, slider_velocity=0.0,
-                                 pendulum_angle=0.1, pendulum_angular_velocity=0.0,
-                                 ball_position=0.02, ball_velocity=0.0, truncated=final,
-                                 terminated=False, applied_force=0.0, applied_torque=0.0)
+    return hand_state(step, final, slider_position=0.01 * step, pendulum_angle=0.1,
+                      ball_position=0.02)
 
 
 def make_core():

@@ -229,7 +229,8 @@ def measures(session: SessionRecord) -> dict:
     values.update(person_floor=float(person_floor), episode_floor=float(floor),
                   human_involved_above_floor=values['human_involved_episodes'] - person_floor,
                   episodes_above_floor=values['total_episodes'] - floor)
-    values.update(paper_counts(session, [episode.kind if kinds_known(session) else ''
+    known = kinds_known(session)
+    values.update(paper_counts(session, [episode.kind if known else ''
                                          for episode in session.episodes]))
     return values
 
