@@ -1,8 +1,10 @@
-"""A recorder stopped mid-session: the session says what the bags miss and does not exit 0.
+"""A recorder stopped mid-session: lockstep waits for it, and the bags miss nothing.
 
-A recorder stopped (SIGSTOP) for some seconds in a lockstep session missed whole episodes;
-the runner exited 0 and the report showed the others without a word. The graph still does
-not wait for its recorder (see CHANGELOG); it says so at the end now.
+A recorder stopped (SIGSTOP) for some seconds in a lockstep session missed whole episodes
+(the writers' keep-last histories overwrote what it had not received) and the runner exited 0.
+The sim now publishes no state more than a window ahead of the recorder's acknowledgement
+(hrc_sim_node.recorder_gate): the test waits for the sim to say it waits, lets the recorder go
+on, and reads every episode's file back with rosbags.
 """
 
 import os
@@ -11,9 +13,12 @@ import signal
 import subprocess
 
 import pytest
+from rosbags.highlevel import AnyReader
 
 from hrc_common.executables import executable_path
 from hrc_testing.nodes import wait_for
+
+EPISODES = 8
 
 
 def recorder_pid(domain_id: int) -> int:
@@ -29,18 +34,35 @@ def recorder_pid(domain_id: int) -> int:
     return 0
 
 
+def states_per_episode(folder: pathlib.Path) -> dict:
+    """Return {episode file name: (the steps of its states, whether the last ends it)}."""
+    found = {}
+    for path in sorted(folder.glob('*_episode*.mcap')):
+        with AnyReader([path]) as reader:
+            connections = [c for c in reader.connections if c.topic == '/hrc/state']
+            states = [reader.deserialize(raw, connection.msgtype)
+                      for connection, _, raw in reader.messages(connections=connections)]
+        found[path.name] = ([state.step for state in states], bool(states) and bool(
+            states[-1].terminated or states[-1].truncated))
+    return found
+
+
 @pytest.mark.slow
-def test_a_stalled_recorder_makes_the_session_say_what_is_missing(tmp_path, ros_domain_id):
+def test_a_stalled_recorder_holds_lockstep_and_misses_nothing(tmp_path, ros_domain_id):
     log = open(tmp_path / 'runner.log', 'w+')
     runner = subprocess.Popen(
         [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
          str(ros_domain_id), '--session-id', 'stall', '--bags-dir', 'bags', '--runs-dir', 'runs',
-         '--episodes', '12', '--eval-episodes', '1'],
+         '--episodes', str(EPISODES), '--eval-episodes', '1'],
         cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    sim_log = tmp_path / 'runs' / 'stall' / 'logs' / 'sim.log'
 
     def output():
         log.seek(0)
         return log.read()
+
+    def sim_says(words):
+        return sim_log.exists() and words in sim_log.read_text()
 
     try:
         first = tmp_path / 'bags' / 'stall' / 'stall_episode0001.mcap'
@@ -48,15 +70,21 @@ def test_a_stalled_recorder_makes_the_session_say_what_is_missing(tmp_path, ros_
         pid = recorder_pid(ros_domain_id)
         assert pid > 0 and runner.poll() is None, output()
         os.kill(pid, signal.SIGSTOP)
-        try:    # the graph goes on without its recorder: three more episodes
-            assert wait_for(lambda: '| episode   4 |' in output(), 180), output()
+        try:    # the sim says it waits (after 5 s of waiting), then the recorder goes on
+            assert wait_for(lambda: sim_says('waiting for the recorder'), 120), output()
         finally:
             os.kill(pid, signal.SIGCONT)
-        assert runner.wait(timeout=300) == 1, output()
+        assert wait_for(lambda: sim_says('the recorder caught up'), 120), output()
+        assert runner.wait(timeout=300) == 0, output()
     finally:
         if runner.poll() is None:
             os.killpg(runner.pid, signal.SIGKILL)
             runner.wait()
     printed = output()
-    assert 'the recorder missed' in printed, printed
-    assert '[session] the bags miss part of what the session ran (above): exit 1' in printed
+    assert 'the recorder missed' not in printed, printed
+    found = states_per_episode(tmp_path / 'bags' / 'stall')
+    # every episode of the session (the training ones and the evaluation) has a whole file:
+    # its initial state, one per step with none left out, and a last one that ends it
+    assert len(found) >= EPISODES + 1, (sorted(found), printed)
+    for name, (steps, ended) in found.items():
+        assert ended and len(steps) >= 2 and steps == list(range(len(steps))), (name, steps)

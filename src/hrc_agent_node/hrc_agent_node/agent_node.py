@@ -111,10 +111,12 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
                                                  event_callbacks=quiet_pub)
         self.episode_pub = self.create_publisher(EpisodeSummary, topics.EPISODE,
                                                  qos.EPISODE_QOS, event_callbacks=quiet_pub)
-        self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP, qos.AGENT_STEP_QOS,
+        self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP,
+                                              qos.writer_qos(qos.AGENT_STEP_QOS),
                                               event_callbacks=quiet_pub)
         self.wrench_pub = self.create_publisher(WrenchStamped, topics.ROBOT_CMD_WRENCH,
-                                                qos.COMMAND_QOS, event_callbacks=quiet_pub)
+                                                qos.writer_qos(qos.COMMAND_QOS),
+                                                event_callbacks=quiet_pub)
         self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
                                  event_callbacks=quiet_sub)
         if self.params.human_action_source == 'same_step':

@@ -25,6 +25,7 @@ import sys
 import time
 
 from hrc_common import bounded_yaml
+from hrc_common.cdr_header import header_stamp
 from hrc_common import qos as hrc_qos
 from hrc_common import topics as hrc_topics
 from hrc_common.nodes import closing_log, DrainedNode, run_node, take_waiting
@@ -33,6 +34,7 @@ from hrc_common.session_end import SessionEndWatch
 from hrc_common.params import as_dict, declare_parameters, ParameterError
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message
+from std_msgs.msg import Header
 import yaml
 
 from hrc_bag.qos_yaml import profile_to_dict
@@ -102,6 +104,11 @@ class RecorderNode(DrainedNode):
                                    f'{self._waiting}')
             self._discovery_timer = self.create_timer(self.params.discovery_period,
                                                       self._discover)
+        # How far this recorder has taken the states, after each batch: a lockstep sim that
+        # awaits it (await_recorder) runs no further ahead (hrc_sim_node.recorder_gate).
+        self._progress_pub = self.create_publisher(Header, hrc_topics.RECORDER_PROGRESS,
+                                                   hrc_qos.RECORDER_PROGRESS_QOS)
+        self._state_topic = self.resolve_topic_name(hrc_topics.STATE)
         self._tick_timer = self.create_timer(
             min(self.params.batch_period, self.params.flush_period / 2), self._drain)
         # How many publishers each recording subscription has matched, said when it changes: a
@@ -155,8 +162,16 @@ class RecorderNode(DrainedNode):
         return batch
 
     def _drain(self) -> None:
-        """Hand every waiting message to the core in one batch (and let it write and close)."""
-        self.core.record_batch(self._take_waiting())
+        """Hand every waiting message to the core in one batch; say the newest state taken."""
+        batch = self._take_waiting()
+        self.core.record_batch(batch)
+        stamps = [header_stamp(message.data) for message, _ in batch
+                  if message.topic == self._state_topic]
+        if stamps:
+            sec, nanosec = max(stamps)
+            progress = Header(frame_id=self.core.session_id or '')
+            progress.stamp.sec, progress.stamp.nanosec = int(sec), int(nanosec)
+            self._progress_pub.publish(progress)
 
     def _report_matches(self) -> None:
         """Log each subscription whose count of matched publishers changed."""

@@ -26,6 +26,16 @@ def profile_of(spec: qos_table.TopicQoS) -> QoSProfile:
         deadline=Duration(nanoseconds=spec.deadline_ns))
 
 
+def writer_qos(profile: QoSProfile) -> QoSProfile:
+    """Return ``profile`` with the depth of a recorded stream's writer (STREAM_WRITER_DEPTH).
+
+    Depth is not part of QoS matching: the readers keep the table's depth.
+    """
+    return QoSProfile(history=profile.history, depth=qos_table.STREAM_WRITER_DEPTH,
+                      reliability=profile.reliability, durability=profile.durability,
+                      deadline=profile.deadline)
+
+
 STATE_QOS = profile_of(qos_table.STATE)
 COMMAND_QOS = profile_of(qos_table.COMMAND)
 HUMAN_ACTION_QOS = profile_of(qos_table.HUMAN_ACTION)
@@ -34,6 +44,9 @@ EPISODE_QOS = profile_of(qos_table.EPISODE)
 AGENT_STEP_QOS = profile_of(qos_table.AGENT_STEP)
 JOY_QOS = qos_profile_sensor_data
 # Visualization (image, markers): best effort, only the newest matters.
+# /hrc/recorder/progress: only the newest acknowledgement matters.
+RECORDER_PROGRESS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                                   reliability=ReliabilityPolicy.RELIABLE)
 VISUAL_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                         reliability=ReliabilityPolicy.BEST_EFFORT)
 

@@ -27,6 +27,14 @@ class TopicQoS:
 # episodes the sim holds and no commands flow, so the event is informative, not an error.
 COMMAND_DEADLINE_NS = NS_PER_S      # 1 s
 
+# Keep-last depth of the writers of the recorded streams (state, commands, the human's action,
+# the agent's step, joint states); readers keep the depths below. A reliable writer whose
+# history is full drops the oldest sample even if a stalled reader has not received it: with
+# the depths below a recorder stopped for seconds lost whole lockstep episodes. A lockstep sim
+# that awaits its recorder stays within a window these histories hold
+# (hrc_sim_node.recorder_gate.window_states), so all it published can still be retransmitted.
+STREAM_WRITER_DEPTH = 1000
+
 STATE = TopicQoS(depth=10)
 COMMAND = TopicQoS(depth=1, deadline_ns=COMMAND_DEADLINE_NS)
 HUMAN_ACTION = TopicQoS(depth=10)

@@ -300,6 +300,8 @@ def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
         recorder['session_id'] = settings.session_id
         recorder['output_dir'] = settings.bags_dir
         agent['wait_for_subscribers'] = ['human', 'recorder']
+        # lockstep runs no further ahead of the recorder than the writers' histories hold
+        parameters['sim']['await_recorder'] = True
 
 
 def write_session_files(settings: SessionSettings, parameters: dict, session_dir: pathlib.Path,

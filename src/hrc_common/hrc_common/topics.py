@@ -35,6 +35,10 @@ INPUT_LOST = '/hrc/session/input_lost'
 # nodes (and what to do), or for the agent it starts again after a resume (std_msgs/String,
 # transient local): the console and ``hrc operator status`` say it, the page "please wait".
 RUNNER_WAITING = '/hrc/session/runner_waiting'
+# How far the recorder has taken the session's states (std_msgs/Header: stamp = the newest
+# /hrc/state it holds, frame_id = its session id), after each batch; a lockstep sim that
+# awaits its recorder publishes no state far ahead of it (hrc_sim_node.recorder_gate).
+RECORDER_PROGRESS = '/hrc/recorder/progress'
 # What a replay node replays ('' = nothing: live), std_msgs/String, transient local: the pages
 # mark a replay as one.
 REPLAY = '/hrc/replay'

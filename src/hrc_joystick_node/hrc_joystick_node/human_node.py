@@ -120,10 +120,11 @@ class HumanNode(Node):
 
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.action_publisher = self.create_publisher(HumanAction, topics.HUMAN_ACTION,
-                                                      qos.HUMAN_ACTION_QOS,
+                                                      qos.writer_qos(qos.HUMAN_ACTION_QOS),
                                                       event_callbacks=quiet_pub)
         self.wrench_publisher = self.create_publisher(WrenchStamped, topics.HUMAN_CMD_WRENCH,
-                                                      qos.COMMAND_QOS, event_callbacks=quiet_pub)
+                                                      qos.writer_qos(qos.COMMAND_QOS),
+                                                      event_callbacks=quiet_pub)
         self.status_publisher = self.create_publisher(DiagnosticStatus, HUMAN_INPUT,
                                                       qos.SESSION_QOS)
         # The session first: when an announcement and a state wait together, the executor

@@ -3,8 +3,6 @@
 The ROS side of :mod:`hrc_sim_node.sim_node` (it converts, nothing here decides).
 """
 
-import struct
-
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from hrc_common.contract import BODY_COLOURS
@@ -22,17 +20,6 @@ def stamp_of(nanoseconds: int) -> Time:
     """Return a builtin_interfaces/Time for a simulation time in nanoseconds."""
     sec, nanosec = stamp_fields(nanoseconds)
     return Time(sec=sec, nanosec=nanosec)
-
-
-def command_stamp(data: bytes) -> tuple:
-    """Return (sec, nanosec) of a CDR-serialized WrenchStamped without decoding it.
-
-    The header's stamp comes first, after the 4-byte encapsulation (byte 1: 1 = little
-    endian). Too short: (-1, 0), which no state carries.
-    """
-    if len(data) < 12:
-        return -1, 0
-    return struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
 
 
 def state_message(state, episode: int, stamp: Time, missing: dict, slice_index: int = 0,

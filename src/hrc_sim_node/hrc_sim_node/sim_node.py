@@ -5,16 +5,12 @@ Publishes ``/hrc/state`` (TaskState), ``/joint_states`` with each period's state
 when ``camera_rate`` > 0, ``/hrc/sim/image``; consumes ``/hrc/robot/cmd_wrench``,
 ``/hrc/human/cmd_wrench`` and ``/hrc/session``; serves ``/hrc/sim/reset``.
 
-Step protocol (docs/architecture.md): a command answers a state by carrying the state's stamp.
-In ``lockstep`` the sim advances as soon as every actor in ``expected_actors`` has answered the
-current state (or after ``lockstep_timeout`` wall seconds: the missing command counts as zero
-and the next state's ``*_command_missing`` flag says so); the human only while the session says
-they are involved (one who sits out sends nothing); with no actor to await it runs free, as
-fast as it can. In ``realtime`` a wall timer steps every ``control_period`` with each
-actor's command answering the newest state; one older than ``command_timeout`` counts as zero
-and is reported. The rules are the pure core ``hrc_sim_node.protocol`` (shared with the
-in-process engine); a reset may switch the clock mode (``ResetEpisode.clock_mode``), and its
-response reports the mode, the control period and the limits the sim owns.
+Step protocol (docs/architecture.md; the pure core ``hrc_sim_node.protocol``, shared with the
+in-process engine): a command answers a state by carrying its stamp. ``lockstep`` advances when
+every actor in ``expected_actors`` has answered (or at ``lockstep_timeout``: the missing command
+counts as zero and is flagged) and, with ``await_recorder``, no further than a window ahead of
+the recorder (``hrc_sim_node.recorder_gate``); ``realtime`` steps on a wall timer. A reset may
+switch the mode; its response reports the mode, the control period and the sim's limits.
 
 Commands (``hrc_sim_node.commands``): from each actor only its degree of freedom is applied
 (``robot_dof`` parameter, the human gets the other, both updated from ``/hrc/session``); other
@@ -27,10 +23,12 @@ Operator abort (``/hrc/session`` with phase ``aborted``): a running episode stop
 sim holds (no more steps or states, nothing applied) until ``/hrc/sim/reset`` is called again.
 """
 
+import sys
 import time
 
 from geometry_msgs.msg import WrenchStamped
 from hrc_common import qos, topics
+from hrc_common.cdr_header import header_stamp
 from hrc_common.contract import SimLimits
 from hrc_common.dof import DOF_INDEX, DOF_NAME
 from hrc_common.nodes import run_node
@@ -43,8 +41,9 @@ from hrc_sim_node.body_geometry import model_urdf
 from hrc_sim_node.commands import HUMAN, ROBOT, unit_of
 from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, stamp_fields, stamp_ns, StepProtocol
+from hrc_sim_node.recorder_wait import EXIT_RECORDER_STALLED, RecorderStalled, RecorderWait
 from hrc_sim_node.sim_log import summary_line, WarningThrottle
-from hrc_sim_node.sim_messages import (command_stamp, joint_state_message, marker_array,
+from hrc_sim_node.sim_messages import (joint_state_message, marker_array,
                                        stamp_of, state_message)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from hrc_sim_node.stepper import SimStepper
@@ -73,17 +72,15 @@ COMMAND_SUBSCRIPTION_QOS = QoSProfile(
     history=qos.COMMAND_QOS.history, depth=COMMAND_SUBSCRIPTION_DEPTH,
     reliability=qos.COMMAND_QOS.reliability, durability=qos.COMMAND_QOS.durability,
     deadline=qos.COMMAND_QOS.deadline)
-# No QoS event handlers (hrc_common.qos.NO_*_EVENTS: each costs every turn of the executor);
-# a silent actor is reported by the lockstep timeout or the realtime command_timeout.
-NO_PUBLISHER_EVENTS = qos.NO_PUBLISHER_EVENTS
-NO_SUBSCRIPTION_EVENTS = qos.NO_SUBSCRIPTION_EVENTS
+# No QoS event handlers (qos.NO_*_EVENTS: each costs every turn of the executor); a silent
+# actor is reported by the lockstep timeout or the realtime command_timeout.
+NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS
 # Commands read from a subscription's queue in one turn of the executor at most (fairness).
 COMMAND_DRAIN_LIMIT = 10000
-# Period (s) of the free-run timer: as short as possible, the timer is re-armed every step.
-FREE_RUN_PERIOD_S = 1e-6
+FREE_RUN_PERIOD_S = 1e-6      # s: the free-run timer is re-armed every step
 
 
-class SimNode(Node):
+class SimNode(RecorderWait, Node):
     """Thin ROS wrapper of :class:`SliderPendulumBall` and :class:`StepProtocol`."""
 
     def __init__(self):
@@ -100,12 +97,14 @@ class SimNode(Node):
             raise ParameterError(f'SimParams rejected: gui: {error}') from error
         self.protocol = StepProtocol(ProtocolSettings.of(params))
         self.stepper = SimStepper(self.physics, self.protocol)
+        self._setup_recorder_wait(params, self.protocol.slices)
         self._state = None              # last PhysicsState
         self._seeded = False
         self._exiting = False
         self._throttle = WarningThrottle(WARN_THROTTLE_S)
 
-        self._state_pub = self.create_publisher(TaskState, topics.STATE, qos.STATE_QOS,
+        self._state_pub = self.create_publisher(TaskState, topics.STATE,
+                                                qos.writer_qos(qos.STATE_QOS),
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
         # States within a period at the human's rate (the human node, the person's page).
         self._slice_pub = self.create_publisher(TaskState, topics.SLICE_STATE, qos.STATE_QOS,
@@ -114,9 +113,9 @@ class SimNode(Node):
         # reset may switch the mode.
         self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS,
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
-        self._joint_pub = self.create_publisher(JointState, topics.JOINT_STATES,
-                                                qos.OF_TOPIC[topics.JOINT_STATES],
-                                                event_callbacks=NO_PUBLISHER_EVENTS)
+        self._joint_pub = self.create_publisher(
+            JointState, topics.JOINT_STATES, qos.writer_qos(qos.OF_TOPIC[topics.JOINT_STATES]),
+            event_callbacks=NO_PUBLISHER_EVENTS)
         self.create_publisher(String, topics.ROBOT_DESCRIPTION,
                               qos.OF_TOPIC[topics.ROBOT_DESCRIPTION]).publish(
             String(data=model_urdf(self.physics.params)))
@@ -196,6 +195,7 @@ class SimNode(Node):
             seed = None  # next from the seeded sequence
             origin = 'next initial state of the seeded sequence'
         self._seeded = True
+        self.recorder_gate.drop()           # a step held for the recorder ends with its episode
         first = self.stepper.start_episode(episode, seed)
         state = first.state
         message = self._publish(first)
@@ -236,8 +236,10 @@ class SimNode(Node):
             self.get_logger().info(f'clock mode switched to {mode} by a reset request')
 
     def _cancel_timers(self):
+        """Stop stepping: the timers of both modes, and a step held for the recorder."""
         for timer in (self._timeout_timer, self._free_run, self._step_timer):
             timer.cancel()
+        self.recorder_gate.drop()
 
     def _on_reset(self, request, response):
         response.clock_mode = self.protocol.mode
@@ -285,6 +287,8 @@ class SimNode(Node):
     # -- stepping ------------------------------------------------------------------------------
     def _advance(self, order):
         """Apply one control period or human slice as ``order`` (a StepOrder) says; publish."""
+        if self._recorder_holds(order):
+            return
         for actor, value in order.ignored:
             self._warn('human_not_involved', f'{actor} command {value:+.3g} ignored: the '
                        f'session says the human is not involved now')
@@ -306,6 +310,7 @@ class SimNode(Node):
         if advanced.period_end:
             self._state = state
             self._state_pub.publish(message)
+            self.recorder_gate.on_published(advanced.stamp)
             self._joint_pub.publish(joint_state_message(state, stamp))   # after: actors first
             self.health.on_state(state.step, advanced.missing, time.monotonic())
         else:
@@ -365,7 +370,7 @@ class SimNode(Node):
                     self._read_command(each, taken[0])
 
     def _read_command(self, actor: str, data: bytes):
-        sec, nanosec = command_stamp(data)
+        sec, nanosec = header_stamp(data)
         stamp = stamp_ns(sec, nanosec)
         wrench = None
         if self.protocol.is_answer(stamp):
@@ -484,7 +489,11 @@ class SimNode(Node):
 
 def main(args=None):
     """Run the sim node (``ros2 run hrc_sim_node sim_node``)."""
-    return run_node(SimNode, 'sim_node', __doc__, SimParams, args=args)
+    try:
+        return run_node(SimNode, 'sim_node', __doc__, SimParams, args=args)
+    except RecorderStalled as error:
+        print(f'[ERROR] [sim]: {error}', file=sys.stderr, flush=True)
+        return EXIT_RECORDER_STALLED
 
 
 if __name__ == '__main__':

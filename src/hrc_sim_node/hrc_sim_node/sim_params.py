@@ -25,6 +25,13 @@ class SimParams(PhysicsParams):
     lockstep_timeout: float = param(
         1.0, 'lockstep: wall seconds to wait for the commands of a step before counting the '
         'missing ones as zero', low=0.001, high=600.0)
+    await_recorder: bool = param(
+        False, 'lockstep: publish no state more than a window of periods ahead of the '
+        "recorder's /hrc/recorder/progress (hrc_sim_node.recorder_gate), so a stalled recorder "
+        'misses nothing; hrc session sets it when it records')
+    recorder_timeout: float = param(
+        60.0, 'lockstep, await_recorder: exit (code 3) when a step has waited this long (wall '
+        's) for a recorder that acknowledges nothing', low=1.0, high=3600.0)
     command_timeout: float = param(
         0.5, 'realtime: a command older than this (wall s) counts as zero and is reported',
         low=0.01, high=60.0)
