@@ -16,7 +16,7 @@ a ``-p name:=value`` applies to every composed node.
 recorder; the agent stays alone: the session restarts it on a resume and reads its exit code).
 
 Exit codes: 0 after Ctrl-C/SIGTERM, 2 for bad parameters or node names (every reason at once),
-3 when a composed recorder cannot write its bags.
+3 when a composed recorder cannot write its bags (or a composed sim waited too long for it).
 """
 
 import importlib
@@ -25,6 +25,7 @@ import sys
 
 from hrc_bag.format import RecordingError
 from hrc_common.nodes import report_bad_parameters, run_nodes, wants_help
+from hrc_sim_node.recorder_wait import RecorderStalled
 
 EXECUTABLE = 'compose_nodes'
 # node name -> (module, class) of the node
@@ -89,7 +90,7 @@ def main(argv=None) -> int:
     try:
         return run_nodes([node_factory(name) for name in names], EXECUTABLE, SUMMARY, None,
                          argv)
-    except RecordingError as error:
+    except (RecordingError, RecorderStalled) as error:
         print(f'[ERROR] [{EXECUTABLE}] recording stopped, the session must stop: {error}',
               file=sys.stderr, flush=True)
         return EXIT_RECORDING_FAILED
