@@ -176,6 +176,9 @@ class StepProtocol:
         self.totals = Counter()              # the session's events (every episode)
         self.finished_episodes = 0
         self._answers = {}                   # lockstep: actor -> Command for the awaited state
+        # actor -> stale commands since the awaited state was published: a lockstep timeout
+        # with many of them means a flood may have pushed the matching one out of the queue
+        self.stale_while_waiting = Counter()
         self._kept = {}                      # realtime: actor -> (Command, receipt s, stamp)
         self._episode_first_stamp = None     # realtime: stamps of this episode start here
         self._slice = 0                      # human slices of the running period applied
@@ -217,6 +220,7 @@ class StepProtocol:
         self.step = 0
         self.counters = Counter()
         self._answers = {}
+        self.stale_while_waiting = Counter()
         self._kept = {}
         self._episode_first_stamp = None
         self._start_period()
@@ -237,6 +241,7 @@ class StepProtocol:
         self.sim_time_ns = 0 if self.sim_time_ns is None else self.sim_time_ns + self.period_ns
         self.step = int(step)
         self._answers = {}
+        self.stale_while_waiting = Counter()
         self._start_period()
         if self._episode_first_stamp is None:
             self._episode_first_stamp = self.sim_time_ns
@@ -279,6 +284,7 @@ class StepProtocol:
         self.slice_stamp_ns = stamp
         self.awaited = stamp
         self._answers = {}
+        self.stale_while_waiting = Counter()
         return stamp
 
     def hold(self) -> None:
@@ -326,6 +332,7 @@ class StepProtocol:
             self.sim_time_ns if self.slice_stamp_ns is None else self.slice_stamp_ns)
         if not self.is_answer(stamp):
             self._count(actor + '_stale')
+            self.stale_while_waiting[actor] += 1
             return CommandResult(actor, 'stale', stamp, awaited)
         dof = self.dof_of[actor]
         limit = self.limits.full_scale(dof)

@@ -11,7 +11,7 @@ from hrc_sim_node.body_geometry import body_poses, JOINT_NAMES, joint_values
 from hrc_sim_node.commands import HUMAN, ROBOT
 from hrc_sim_node.physics_params import PhysicsParams
 from hrc_sim_node.protocol import stamp_fields
-from sensor_msgs.msg import JointState
+from sensor_msgs.msg import Image, JointState
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -80,3 +80,24 @@ def marker_array(state, params: PhysicsParams, stamp: Time) -> MarkerArray:
         marker.color = ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0)
         markers.markers.append(marker)
     return markers
+
+
+class SimVisuals:
+    """The sim node's markers and camera image on their timers (a mixin of SimNode)."""
+
+    def _publish_markers(self):
+        if self._state is None:
+            return
+        self._marker_pub.publish(marker_array(self._state, self.params,
+                                              stamp_of(self.protocol.sim_time_ns)))
+
+    def _publish_image(self):
+        if self._state is None:
+            return
+        width, height = self.params.image_width, self.params.image_height
+        pixels = self.physics.render(width, height)
+        image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0,
+                      step=width * 3, data=pixels.tobytes())
+        image.header.stamp = stamp_of(self.protocol.sim_time_ns)
+        image.header.frame_id = 'world'
+        self._image_pub.publish(image)

@@ -43,8 +43,8 @@ from hrc_sim_node.physics import physics_params_of, SliderPendulumBall
 from hrc_sim_node.protocol import ProtocolSettings, stamp_fields, stamp_ns, StepProtocol
 from hrc_sim_node.recorder_wait import EXIT_RECORDER_STALLED, RecorderStalled, RecorderWait
 from hrc_sim_node.sim_log import summary_line, WarningThrottle
-from hrc_sim_node.sim_messages import (joint_state_message, marker_array,
-                                       stamp_of, state_message)
+from hrc_sim_node.sim_messages import (joint_state_message, SimVisuals, stamp_of,
+                                       state_message)
 from hrc_sim_node.sim_params import CLOCK_MODES, LOCKSTEP, REALTIME, SimParams
 from hrc_sim_node.stepper import SimStepper
 from rclpy.node import Node
@@ -75,12 +75,11 @@ COMMAND_SUBSCRIPTION_QOS = QoSProfile(
 # No QoS event handlers (qos.NO_*_EVENTS: each costs every turn of the executor); a silent
 # actor is reported by the lockstep timeout or the realtime command_timeout.
 NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS
-# Commands read from a subscription's queue in one turn of the executor at most (fairness).
-COMMAND_DRAIN_LIMIT = 10000
+COMMAND_DRAIN_LIMIT = 10000   # commands read from a queue in one turn at most (fairness)
 FREE_RUN_PERIOD_S = 1e-6      # s: the free-run timer is re-armed every step
 
 
-class SimNode(RecorderWait, Node):
+class SimNode(RecorderWait, SimVisuals, Node):
     """Thin ROS wrapper of :class:`SliderPendulumBall` and :class:`StepProtocol`."""
 
     def __init__(self):
@@ -333,9 +332,13 @@ class SimNode(RecorderWait, Node):
         order = self.protocol.on_timeout()
         if order is None:
             return
+        flood = sum(self.protocol.stale_while_waiting[actor] for actor in order.absent)
         self._warn('lockstep_timeout', f'step {self._state.step}: no command from '
                    f'{", ".join(order.absent)} within lockstep_timeout '
-                   f'{self.params.lockstep_timeout} s: counted as zero')
+                   f'{self.params.lockstep_timeout} s: counted as zero' + (
+                       f'; {flood} commands of no state came meanwhile: a flood from another '
+                       f'publisher may have pushed the matching one out of the '
+                       f'{COMMAND_SUBSCRIPTION_DEPTH}-deep queue' if flood else ''))
         self._advance(order)
 
     def _on_realtime_tick(self):
@@ -463,24 +466,6 @@ class SimNode(RecorderWait, Node):
             f'session {message.session_id!r} aborted ({message.message}): episode '
             f'{self.episode} stopped at step {self._state.step}; holding, nothing applied, '
             f'until {topics.RESET_SERVICE} is called')
-
-    # -- visualization -------------------------------------------------------------------------
-    def _publish_markers(self):
-        if self._state is None:
-            return
-        self._marker_pub.publish(marker_array(self._state, self.params,
-                                              stamp_of(self.protocol.sim_time_ns)))
-
-    def _publish_image(self):
-        if self._state is None:
-            return
-        width, height = self.params.image_width, self.params.image_height
-        pixels = self.physics.render(width, height)
-        image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0,
-                      step=width * 3, data=pixels.tobytes())
-        image.header.stamp = stamp_of(self.protocol.sim_time_ns)
-        image.header.frame_id = 'world'
-        self._image_pub.publish(image)
 
     def close(self):
         """Release PyBullet."""

@@ -50,6 +50,20 @@ def test_lockstep_stale_stamps_are_ignored_and_counted():
     assert protocol.on_timeout().missing == {'robot': True, 'human': True}
 
 
+def test_a_timeout_knows_how_many_stale_commands_came_while_it_waited():
+    """The sim's warning then says a flood may have pushed the matching command out."""
+    protocol = started()
+    for _ in range(3):
+        protocol.on_command('human', 12345 * 10 ** 9, wrench(), 0.0)
+    protocol.on_command('robot', 0, wrench(force_z=1.0), 0.0)
+    order = protocol.on_timeout()
+    assert order.absent == ['human']
+    assert protocol.stale_while_waiting == {'human': 3}
+    protocol.next_stamp(1, final=False)         # the next wait starts from nothing
+    assert protocol.stale_while_waiting == {}
+    assert protocol.counters['human_stale'] == 3
+
+
 def test_the_first_answer_to_a_state_stands():
     protocol = started(expected=('robot', 'human', ))
     protocol.on_command('robot', 0, wrench(force_z=1.0), 0.0)
