@@ -16,22 +16,9 @@ import pytest
 from rosbags.highlevel import AnyReader
 
 from hrc_common.executables import executable_path
-from hrc_testing.nodes import wait_for
+from hrc_testing.nodes import node_pid, wait_for
 
 EPISODES = 8
-
-
-def recorder_pid(domain_id: int) -> int:
-    """Return the pid of the recorder node running on ``domain_id`` (0 if none)."""
-    for entry in pathlib.Path('/proc').iterdir():
-        try:
-            command = (entry / 'cmdline').read_bytes()
-            environment = (entry / 'environ').read_bytes().split(b'\0')
-        except (OSError, ValueError):
-            continue
-        if b'recorder_node' in command and f'ROS_DOMAIN_ID={domain_id}'.encode() in environment:
-            return int(entry.name)
-    return 0
 
 
 def states_per_episode(folder: pathlib.Path) -> dict:
@@ -66,8 +53,14 @@ def test_a_stalled_recorder_holds_lockstep_and_misses_nothing(tmp_path, ros_doma
 
     try:
         first = tmp_path / 'bags' / 'stall' / 'stall_episode0001.mcap'
-        assert wait_for(lambda: first.exists() and recorder_pid(ros_domain_id), 120), output()
-        pid = recorder_pid(ros_domain_id)
+        pid = 0
+
+        def started():
+            nonlocal pid
+            pid = node_pid('recorder_node', ros_domain_id)
+            return first.exists() and pid
+
+        assert wait_for(started, 120), output()
         assert pid > 0 and runner.poll() is None, output()
         os.kill(pid, signal.SIGSTOP)
         try:    # the sim says it waits (after 5 s of waiting), then the recorder goes on

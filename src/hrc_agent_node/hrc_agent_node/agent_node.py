@@ -112,13 +112,14 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         self.episode_pub = self.create_publisher(EpisodeSummary, topics.EPISODE,
                                                  qos.EPISODE_QOS, event_callbacks=quiet_pub)
         self.step_pub = self.create_publisher(AgentStep, topics.AGENT_STEP,
-                                              qos.writer_qos(qos.AGENT_STEP_QOS),
+                                              qos.stream_qos(qos.AGENT_STEP_QOS),
                                               event_callbacks=quiet_pub)
         self.wrench_pub = self.create_publisher(WrenchStamped, topics.ROBOT_CMD_WRENCH,
-                                                qos.writer_qos(qos.COMMAND_QOS),
+                                                qos.stream_qos(qos.COMMAND_QOS),
                                                 event_callbacks=quiet_pub)
-        self.create_subscription(TaskState, topics.STATE, self.on_state, qos.STATE_QOS,
-                                 event_callbacks=quiet_sub)
+        # every state, also after a stall: each carries the sim's flags of missing commands
+        self.create_subscription(TaskState, topics.STATE, self.on_state,
+                                 qos.stream_qos(qos.STATE_QOS), event_callbacks=quiet_sub)
         if self.params.human_action_source == 'same_step':
             # only same_step reads the human's answers; with 'applied' (the default) a reader
             # here would cost the human node a delivery and this process a wake-up per step for

@@ -26,10 +26,12 @@ def profile_of(spec: qos_table.TopicQoS) -> QoSProfile:
         deadline=Duration(nanoseconds=spec.deadline_ns))
 
 
-def writer_qos(profile: QoSProfile) -> QoSProfile:
-    """Return ``profile`` with the depth of a recorded stream's writer (STREAM_WRITER_DEPTH).
+def stream_qos(profile: QoSProfile) -> QoSProfile:
+    """Return ``profile`` with the depth of a recorded stream (STREAM_WRITER_DEPTH).
 
-    Depth is not part of QoS matching: the readers keep the table's depth.
+    For the streams' writers (a stalled recorder gets what it missed retransmitted) and for a
+    reader that must see every message after a stall (the agent's states: each carries the
+    flags of the commands the sim counted missing). Depth is not part of QoS matching.
     """
     return QoSProfile(history=profile.history, depth=qos_table.STREAM_WRITER_DEPTH,
                       reliability=profile.reliability, durability=profile.durability,

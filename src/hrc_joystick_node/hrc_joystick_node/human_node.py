@@ -120,10 +120,10 @@ class HumanNode(Node):
 
         quiet_pub, quiet_sub = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS  # wait set
         self.action_publisher = self.create_publisher(HumanAction, topics.HUMAN_ACTION,
-                                                      qos.writer_qos(qos.HUMAN_ACTION_QOS),
+                                                      qos.stream_qos(qos.HUMAN_ACTION_QOS),
                                                       event_callbacks=quiet_pub)
         self.wrench_publisher = self.create_publisher(WrenchStamped, topics.HUMAN_CMD_WRENCH,
-                                                      qos.writer_qos(qos.COMMAND_QOS),
+                                                      qos.stream_qos(qos.COMMAND_QOS),
                                                       event_callbacks=quiet_pub)
         self.status_publisher = self.create_publisher(DiagnosticStatus, HUMAN_INPUT,
                                                       qos.SESSION_QOS)

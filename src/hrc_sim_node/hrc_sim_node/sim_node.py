@@ -103,7 +103,7 @@ class SimNode(RecorderWait, SimVisuals, Node):
         self._throttle = WarningThrottle(WARN_THROTTLE_S)
 
         self._state_pub = self.create_publisher(TaskState, topics.STATE,
-                                                qos.writer_qos(qos.STATE_QOS),
+                                                qos.stream_qos(qos.STATE_QOS),
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
         # States within a period at the human's rate (the human node, the person's page).
         self._slice_pub = self.create_publisher(TaskState, topics.SLICE_STATE, qos.STATE_QOS,
@@ -113,7 +113,7 @@ class SimNode(RecorderWait, SimVisuals, Node):
         self._clock_pub = self.create_publisher(Clock, topics.CLOCK, CLOCK_QOS,
                                                 event_callbacks=NO_PUBLISHER_EVENTS)
         self._joint_pub = self.create_publisher(
-            JointState, topics.JOINT_STATES, qos.writer_qos(qos.OF_TOPIC[topics.JOINT_STATES]),
+            JointState, topics.JOINT_STATES, qos.stream_qos(qos.OF_TOPIC[topics.JOINT_STATES]),
             event_callbacks=NO_PUBLISHER_EVENTS)
         self.create_publisher(String, topics.ROBOT_DESCRIPTION,
                               qos.OF_TOPIC[topics.ROBOT_DESCRIPTION]).publish(

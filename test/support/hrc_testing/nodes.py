@@ -124,3 +124,21 @@ def read_bag_with_rosbags(typestore, folder) -> dict:
             messages[connection.topic].append(
                 typestore.deserialize_cdr(raw, connection.msgtype))
     return messages
+
+
+def node_pid(executable: str, domain_id: int) -> int:
+    """Return the pid of the process running ``executable`` on ``domain_id`` (0 if none).
+
+    The nodes of ``hrc session`` run as separate processes; a test that stops one (SIGSTOP) to
+    freeze it finds it by its command line and its ROS_DOMAIN_ID.
+    """
+    for entry in pathlib.Path('/proc').iterdir():
+        try:
+            command = (entry / 'cmdline').read_bytes()
+            environment = (entry / 'environ').read_bytes().split(b'\0')
+        except (OSError, ValueError):
+            continue
+        if (executable.encode() in command
+                and f'ROS_DOMAIN_ID={domain_id}'.encode() in environment):
+            return int(entry.name)
+    return 0
