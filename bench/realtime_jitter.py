@@ -30,6 +30,13 @@ ratio::
 
     python bench/realtime_jitter.py --compare-learning --rounds 2
 
+``--compare-foxglove`` (target: the Foxglove live view costs the control loop nothing
+measurable) runs the same session alternately without and with ``hrc session --foxglove``, a
+Foxglove WebSocket client connected and subscribed to every channel in the second arm (it
+counts what it receives), and prints the jitter and latency of both and their ratio::
+
+    python bench/realtime_jitter.py --compare-foxglove --rounds 2
+
 ``--realtime-priority N`` runs the session's nodes on SCHED_FIFO at priority N
 (``HRC_REALTIME_PRIORITY``, hrc_common.realtime) and this listener's threads at the same priority,
 so that its receive times are not delayed by ordinarily scheduled work either; 0 (default) = off.
@@ -40,8 +47,11 @@ sets) and the machine's load and the CPU time the hypervisor took from this VM m
 """
 
 import argparse
+import asyncio
+import json
 import os
 import pathlib
+import socket
 import statistics
 import subprocess
 import sys
@@ -100,11 +110,43 @@ def machine_line(before: tuple, after: tuple) -> str:
     return line
 
 
+def free_port() -> int:
+    """Return a TCP port that is free on the loopback now."""
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        return probe.getsockname()[1]
+
+
+async def foxglove_viewer(port: int, stop: threading.Event, received: list) -> None:
+    """Connect to the Foxglove server (retrying until it serves), subscribe to every channel."""
+    import websockets   # lazy: only the --compare-foxglove arm needs it
+    while not stop.is_set():
+        try:
+            async with websockets.connect(f'ws://127.0.0.1:{port}',
+                                          subprotocols=['foxglove.sdk.v1']) as client:
+                while not stop.is_set():
+                    try:
+                        frame = await asyncio.wait_for(client.recv(), 0.5)
+                    except asyncio.TimeoutError:
+                        continue
+                    if isinstance(frame, str):
+                        message = json.loads(frame)
+                        if message.get('op') == 'advertise':
+                            await client.send(json.dumps({'op': 'subscribe', 'subscriptions': [
+                                {'id': channel['id'], 'channelId': channel['id']}
+                                for channel in message['channels']]}))
+                    else:
+                        received.append(len(frame))
+        except (OSError, websockets.exceptions.WebSocketException):
+            await asyncio.sleep(0.2)
+
+
 def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0,
-            learning: str = 'sac') -> dict:
+            learning: str = 'sac', foxglove: bool = False) -> dict:
     """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}.
 
     ``priority`` > 0: the session's nodes and this listener on SCHED_FIFO at that priority.
+    ``foxglove``: the session also serves the Foxglove live view, a viewer subscribed to all.
     """
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
@@ -150,9 +192,17 @@ def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int
                '--learning', learning]
     for setting in settings:
         command += ['--set', setting]
+    viewer_stop, viewer_frames = threading.Event(), []
+    if foxglove:
+        port = free_port()
+        command += ['--foxglove', '--foxglove-port', str(port)]
+        viewer = threading.Thread(target=lambda: asyncio.run(
+            foxglove_viewer(port, viewer_stop, viewer_frames)), daemon=True)
+        viewer.start()
     ticks_before = cpu_ticks()
     result = subprocess.run(command, capture_output=True, text=True, env=environment)
     ticks_after = cpu_ticks()
+    viewer_stop.set()
     time.sleep(0.5)
     rclpy.shutdown(context=context)
     thread.join(timeout=5)
@@ -168,6 +218,11 @@ def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int
                 if statistics.mean(values) > 0.1}
     figures = {'lockstep_episodes': sorted(set(by_episode) - set(realtime)),
                'machine': machine_line(ticks_before, ticks_after)}
+    if foxglove:
+        figures['viewer'] = (len(viewer_frames), sum(viewer_frames))
+        if not viewer_frames:
+            figures['error'] = 'the Foxglove viewer received nothing: the arm measured no view'
+            return figures
     if not realtime:
         figures['error'] = ("no realtime episode to measure: in this case the first episodes "
                             "are the robot's alone, in lockstep; use --case 3..6 or more "
@@ -202,6 +257,9 @@ def report(figures: dict, label: str = '') -> None:
           f'{figures["intervals"]}, mean period {figures["mean_period_ms"]:.2f} ms')
     print(f'{prefix}period jitter |dt - 200 ms|: p50 {figures["jitter_p50"]:.2f} ms, '
           f'p99 {figures["jitter_p99"]:.2f} ms, max {figures["jitter_max"]:.2f} ms')
+    if 'viewer' in figures:
+        print(f'{prefix}the Foxglove viewer received {figures["viewer"][0]} messages '
+              f'({figures["viewer"][1]} bytes)')
     for actor in ('robot', 'human'):
         if actor in figures:
             p50, p99, count = figures[actor]
@@ -247,6 +305,9 @@ def main() -> int:
     add_learning_option(parser)
     parser.add_argument('--compare-learning', action='store_true',
                         help='run with the learning between and inside episodes, alternately')
+    parser.add_argument('--compare-foxglove', action='store_true',
+                        help='run without and with the Foxglove live view (a viewer '
+                             'subscribed), alternately')
     parser.add_argument('--rounds', type=int, default=1,
                         help='rounds of the comparison (each: one session of each arm)')
     parser.add_argument('--inside-horizon', type=int, default=64,
@@ -259,7 +320,9 @@ def main() -> int:
         parser.error('--realtime-priority must be 0 (off) or 1..99')
     print(settings_line(args), flush=True)
 
-    if not args.compare_learning:
+    if args.compare_learning and args.compare_foxglove:
+        parser.error('--compare-learning and --compare-foxglove: one comparison per run')
+    if not (args.compare_learning or args.compare_foxglove):
         print(f'running a realtime session of {args.episodes} episode(s) of 40 s ...',
               flush=True)
         figures = measure(args.case, args.episodes, args.domain_id, args.settings,
@@ -270,19 +333,23 @@ def main() -> int:
         report(figures)
         return 0
 
-    try:
-        algorithm = load_learning(params_dir(), args.learning)['algorithm']
-    except (ValueError, KeyError) as error:
-        parser.error(f'--learning {args.learning}: {error}')
-    arms = {label: list(args.settings) + settings
-            for label, settings in comparison_arms(algorithm, args.inside_horizon).items()}
+    if args.compare_foxglove:
+        arms = {'without the Foxglove view': (list(args.settings), False),
+                'with the Foxglove view and a viewer': (list(args.settings), True)}
+    else:
+        try:
+            algorithm = load_learning(params_dir(), args.learning)['algorithm']
+        except (ValueError, KeyError) as error:
+            parser.error(f'--learning {args.learning}: {error}')
+        arms = {label: (list(args.settings) + settings, False)
+                for label, settings in comparison_arms(algorithm, args.inside_horizon).items()}
     results = {label: [] for label in arms}
     for round_index in range(args.rounds):
-        for label, settings in arms.items():
+        for label, (settings, foxglove) in arms.items():
             print(f'round {round_index + 1}/{args.rounds}: {label} '
                   f'({args.episodes} episode(s) of 40 s) ...', flush=True)
             figures = measure(args.case, args.episodes, args.domain_id, settings,
-                              args.realtime_priority, args.learning)
+                              args.realtime_priority, args.learning, foxglove)
             if 'error' in figures:
                 print(figures['error'], file=sys.stderr)
                 return 1
@@ -298,9 +365,9 @@ def main() -> int:
         print(f'  {label}: period jitter p99 {p99[label]:.2f} ms (rounds: {each}), command '
               f'latency p99 ' + ', '.join(f'{actor} {value:.2f} ms'
                                           for actor, value in latency.items()))
-    without, *with_updates = p99.values()
-    for label, value in zip(list(p99)[1:], with_updates):
-        print(f'jitter p99 {label} / learning between episodes: {value / without:.2f}x')
+    (first, without), *others = p99.items()
+    for label, value in others:
+        print(f'jitter p99 {label} / {first}: {value / without:.2f}x')
     return 0
 
 

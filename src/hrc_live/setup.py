@@ -10,7 +10,9 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        ('share/' + package_name + '/params', ['../../params/display.yaml']),
+        ('share/' + package_name + '/params', ['../../params/display.yaml',
+                                               '../../params/foxglove.yaml']),
+        ('share/' + package_name + '/params/foxglove', ['../../params/foxglove/hrc_layout.json']),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
@@ -21,5 +23,6 @@ setup(
     license='Apache-2.0',
     entry_points={'console_scripts': [
         'display_node = hrc_live.display_node:main',
+        'foxglove_node = hrc_live.foxglove_node:main',
     ]},
 )

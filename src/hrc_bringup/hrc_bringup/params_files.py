@@ -24,6 +24,7 @@ from hrc_common.paths import params_dir
 from hrc_common.session_plan import NODES
 from hrc_joystick_node.human_core import HumanParams
 from hrc_live.display_params import DisplayParams
+from hrc_live.foxglove_view import FoxgloveParams
 from hrc_sim_node.sim_params import SimParams
 
 COMMAND = 'python -m hrc_bringup.params_files --write'
@@ -36,6 +37,7 @@ PARAMETER_FILES = {
     'recorder.yaml': ('recorder', RecorderParams),
     'replay.yaml': ('replay', ReplayParams),
     'display.yaml': ('display', DisplayParams),
+    'foxglove.yaml': ('foxglove', FoxgloveParams),
 }
 
 

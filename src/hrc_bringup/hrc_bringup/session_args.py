@@ -78,6 +78,13 @@ def add_person_options(parser: argparse.ArgumentParser) -> None:
                         '(params/display.yaml)')
     parser.add_argument('--display-port', type=int, default=None, metavar='PORT',
                         help='port of the pages (default: params/display.yaml; 0 = any free)')
+    parser.add_argument('--foxglove', action='store_true',
+                        help='also serve the session live to Foxglove (hrc_live foxglove_node: '
+                        'the 3D scene, errors, reward, actions, status on ws://127.0.0.1:8766; '
+                        'layout params/foxglove/hrc_layout.json; params/foxglove.yaml)')
+    parser.add_argument('--foxglove-port', type=int, default=None, metavar='PORT',
+                        help='port of the Foxglove server (default: params/foxglove.yaml; 0 = '
+                        'any free, logged)')
     parser.add_argument('--tlx', action='store_true',
                         help='with --display: ask the raw NASA-TLX on the page when the '
                         'session is done; stored in <runs-dir>/<session>/tlx.yaml (0600)')

@@ -109,6 +109,8 @@ class SessionRun:
                                                              self.settings))
             print_display_address(self.supervisor.processes['display'], self.executor,
                                   self.stop_reason)
+        if options.foxglove:
+            self.supervisor.start('foxglove', foxglove_command(options, params_dir))
         if live_input and not wait_for_input(
                 self.guard or InputGuard(self.progress.node, live_input,
                                          self.parameters['human'].get('device', '')),
@@ -309,6 +311,17 @@ def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path,
     if settings.subject_id:
         command += ['-p', f'subject_id:={settings.subject_id}',
                     '-p', f'condition:={condition_words(settings, options)}']
+    return command
+
+
+def foxglove_command(options, params_dir: pathlib.Path) -> list:
+    """Return the command line of the Foxglove live view of this session."""
+    command = [str(executable_path('hrc_live', 'foxglove_node')), '--ros-args']
+    foxglove_params = params_dir / 'foxglove.yaml'
+    if foxglove_params.is_file():
+        command += ['--params-file', str(foxglove_params)]
+    if options.foxglove_port is not None:
+        command += ['-p', f'port:={options.foxglove_port}']
     return command
 
 

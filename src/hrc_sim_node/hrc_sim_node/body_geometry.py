@@ -130,3 +130,15 @@ def body_poses(state: PhysicsState, params: PhysicsParams) -> dict:
                   hinge_height + along * sin_angle + above * cos_angle),
                  _rotation_about_x(angle)),
     }
+
+
+def body_shapes(params: PhysicsParams) -> dict:
+    """Return {body: (shape, (x, y, z) size in m)} of the viewers' scene (markers, Foxglove).
+
+    ``shape``: 'cylinder' | 'cube' | 'sphere'; the sizes of the model's visuals (the rod drawn
+    a little longer than the slider's travel), centred on :func:`body_poses`.
+    """
+    return {'rod': ('cylinder', (2 * ROD_RADIUS, 2 * ROD_RADIUS, params.rod_length + 0.04)),
+            'slider': ('cube', SLIDER_SIZE),
+            'pendulum': ('cube', (BEAM_WIDTH, params.pendulum_length, BEAM_HEIGHT)),
+            'ball': ('sphere', (2 * params.ball_radius,) * 3)}

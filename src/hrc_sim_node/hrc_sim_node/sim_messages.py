@@ -7,7 +7,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose, Quaternion, Vector3
 from hrc_common.contract import BODY_COLOURS
 from hrc_msgs.msg import TaskState
-from hrc_sim_node.body_geometry import body_poses, JOINT_NAMES, joint_values
+from hrc_sim_node.body_geometry import body_poses, body_shapes, JOINT_NAMES, joint_values
 from hrc_sim_node.commands import HUMAN, ROBOT
 from hrc_sim_node.physics_params import PhysicsParams
 from hrc_sim_node.protocol import stamp_fields
@@ -52,31 +52,25 @@ def joint_state_message(state, stamp: Time) -> JointState:
 
 
 # Marker looks: id, RViz type, size (m) and colour of each body (the paper's colours).
-MARKER_STYLE = {
-    'rod': (0, Marker.CYLINDER, None, BODY_COLOURS['rod']),
-    'slider': (1, Marker.CUBE, (0.05, 0.05, 0.03), BODY_COLOURS['slider']),
-    'pendulum': (2, Marker.CUBE, None, BODY_COLOURS['pendulum']),
-    'ball': (3, Marker.SPHERE, None, BODY_COLOURS['ball']),
-}
+MARKER_IDS = {'rod': 0, 'slider': 1, 'pendulum': 2, 'ball': 3}
+MARKER_TYPES = {'cylinder': Marker.CYLINDER, 'cube': Marker.CUBE, 'sphere': Marker.SPHERE}
 
 
 def marker_array(state, params: PhysicsParams, stamp: Time) -> MarkerArray:
     """Return the rod, slider, pendulum and ball as RViz/Foxglove markers in frame 'world'."""
-    sizes = {'rod': (0.012, 0.012, params.rod_length + 0.04),
-             'slider': MARKER_STYLE['slider'][2],
-             'pendulum': (0.03, params.pendulum_length, 0.01),
-             'ball': (2 * params.ball_radius,) * 3}
+    shapes = body_shapes(params)
     markers = MarkerArray()
     for name, (position, orientation) in body_poses(state, params).items():
-        marker_id, marker_type, _, rgb = MARKER_STYLE[name]
-        marker = Marker(ns='hrc_sim', id=marker_id, type=marker_type, action=Marker.ADD)
+        shape, size = shapes[name]
+        rgb = BODY_COLOURS[name]
+        marker = Marker(ns='hrc_sim', id=MARKER_IDS[name], type=MARKER_TYPES[shape],
+                        action=Marker.ADD)
         marker.header.stamp = stamp
         marker.header.frame_id = 'world'
         marker.pose = Pose(position=Point(x=position[0], y=position[1], z=position[2]),
                            orientation=Quaternion(x=orientation[0], y=orientation[1],
                                                   z=orientation[2], w=orientation[3]))
-        marker.scale = Vector3(x=float(sizes[name][0]), y=float(sizes[name][1]),
-                               z=float(sizes[name][2]))
+        marker.scale = Vector3(x=float(size[0]), y=float(size[1]), z=float(size[2]))
         marker.color = ColorRGBA(r=rgb[0], g=rgb[1], b=rgb[2], a=1.0)
         markers.markers.append(marker)
     return markers
