@@ -30,6 +30,9 @@ from hrc_bringup.session_report import report
 from hrc_bringup.study_hooks import condition_words, index_session, owner_only, wait_for_tlx
 from hrc_bringup.supervisor import describe_exit, Supervisor
 
+# CPU niceness of the Foxglove live view: at 0 it raised the realtime period jitter's p99 by
+# 1.31x (bench/realtime_jitter.py --compare-foxglove, 2 rounds on 2 cores).
+VIEWER_NICENESS = 10
 # Seconds the runner waits for the display's address in its log before going on.
 DISPLAY_ADDRESS_WAIT_S = 15.0
 # Stop order: the actors first, the recorder last so it records everything and closes its bags.
@@ -110,7 +113,9 @@ class SessionRun:
             print_display_address(self.supervisor.processes['display'], self.executor,
                                   self.stop_reason)
         if options.foxglove:
-            self.supervisor.start('foxglove', foxglove_command(options, params_dir))
+            # a viewer yields the CPU to the control loop (it drops samples, never holds one)
+            self.supervisor.start('foxglove', foxglove_command(options, params_dir),
+                                  niceness=VIEWER_NICENESS)
         if live_input and not wait_for_input(
                 self.guard or InputGuard(self.progress.node, live_input,
                                          self.parameters['human'].get('device', '')),
