@@ -45,10 +45,23 @@ def hrc(*args, cwd, timeout=120) -> subprocess.CompletedProcess:
 class Runner:
     """One ``hrc session`` process with its output in a file."""
 
+    started = []        # every runner of the test, stopped at its end (a failed test too)
+
     def __init__(self, command: list, cwd: pathlib.Path, log: pathlib.Path):
         self.log = open(log, 'w+')
         self.process = subprocess.Popen(command, cwd=cwd, stdout=self.log,
                                         stderr=subprocess.STDOUT, text=True)
+        Runner.started.append(self)
+
+    def stop(self) -> None:
+        """SIGTERM a runner still running: it stops its nodes (a SIGKILL would orphan them)."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
 
     def output(self) -> str:
         self.log.seek(0)
@@ -148,8 +161,11 @@ def test_an_experimenter_runs_two_conditions_with_an_abort_and_an_unplug(tmp_pat
         second.wait_for_output(r'joystick disconnected', 60)
         writer = plug_in(str(fifo))
         second.wait_for_output(r'the joystick is connected again', 60)
+        # as the console shows it: the agent's own paused status says the joystick is back
+        assert wait_for(lambda: 'connected again' in operator(ros_domain_id, 'status')[1],
+                        60, interval=0.5)
         code, said = operator(ros_domain_id, 'resume')
-        assert code == 0 and 'resuming' in said, said
+        assert code == 0 and 'resumed' in said, said
         second.wait_for_output(r'waiting up to \d+ s for the NASA-TLX', 300)
         answer_tlx(browser, page)
         assert second.finish() == 0, second.output()
@@ -157,6 +173,9 @@ def test_an_experimenter_runs_two_conditions_with_an_abort_and_an_unplug(tmp_pat
         browser.quit()
         if writer is not None:
             os.close(writer)
+        for runner in Runner.started:   # their nodes would stay on the test's domain
+            runner.stop()
+        Runner.started.clear()
 
     # The report of the study: one row per condition, its attempts, outcome and TLX.
     result = hrc('bag', 'report', '--study-dir', 'study', '--out', 'report', cwd=tmp_path,

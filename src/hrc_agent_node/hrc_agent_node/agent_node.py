@@ -30,6 +30,7 @@ from hrc_agent_node.agent_core import AgentCore, PopulationStepRefused
 from hrc_agent_node.agent_messages import (agent_step_fields, episode_summary_fields,
                                           session_status_fields)
 from hrc_agent_node.agent_health import LearnerHealth, update_line
+from hrc_agent_node.agent_input_hold import InputHold
 from hrc_agent_node.agent_practice import PracticeEpisodes
 from hrc_agent_node.agent_startup import SESSION_MATCH_GRACE_S, StartupWait
 from hrc_agent_node.agent_services import (ANNOUNCE_ACK_TIMEOUT_S, EXIT_LINGER_S,
@@ -70,7 +71,7 @@ def stamp_key(stamp) -> tuple:
     return (int(stamp.sec), int(stamp.nanosec))
 
 
-class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
+class AgentNode(OperatorServices, InputHold, PracticeEpisodes, StartupWait, Node):
     """ROS front of an AgentCore session (see the module docstring for the protocol)."""
 
     def __init__(self):
@@ -131,6 +132,7 @@ class AgentNode(OperatorServices, PracticeEpisodes, StartupWait, Node):
         self.create_service(Trigger, RESUME_SERVICE, self.on_resume)
         self.create_service(Trigger, ABORT_SERVICE, self.on_abort)
         self.create_service(Trigger, STOP_FOR_INPUT_SERVICE, self.on_stop_for_input)
+        self._create_input_hold()
         self.learner_health = LearnerHealth()
         DiagnosticsReporter(self, lambda: [self.learner_health.status(self.core,
                                                                       self.break_seconds())])

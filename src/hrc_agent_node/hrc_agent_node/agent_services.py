@@ -9,8 +9,9 @@ Operator controls (``std_srvs/Trigger``, names in ``hrc_common.session_control``
   announced, nothing more is answered, the checkpoint of the last episode end (latest.pt) is
   kept as it is, and the node exits with code ``EXIT_OPERATOR_ABORT`` (3). (A service call waits
   for a PPO update in progress, which takes about a second.)
-* ``/hrc/agent/stop_for_input``: the same, called by the session runner for a lost joystick;
-  the aborted status names the reason (``STOPPED_FOR_INPUT``).
+* ``/hrc/agent/stop_for_input``: called by the session runner for a lost joystick: the
+  session is held in this process (:mod:`hrc_agent_node.agent_input_hold`) until the
+  operator's resume once the input is back; in the practice it stops as an abort does.
 
 A mixin of :class:`hrc_agent_node.agent_node.AgentNode` (its core, publishers and exit).
 """
@@ -66,7 +67,10 @@ class OperatorServices:
         """Resume a paused session (or cancel a pause that has not taken effect)."""
         if self.practice is not None:
             response.success, response.message = False, PRACTICE_NO_PAUSE
+        elif self.refuse_resume_for_input(response):
+            pass
         elif self.core.phase == 'paused':
+            self.held_for_input = ''
             self.core.resume()
             # A person gets the same break before the next episode as after an episode.
             self.next_episode_at = time.monotonic() + self.break_seconds()
@@ -88,8 +92,13 @@ class OperatorServices:
         return self._stop_now(response, 'by the operator')
 
     def on_stop_for_input(self, request, response):
-        """Stop now as ``on_abort`` does, for the session runner's lost joystick."""
-        return self._stop_now(response, STOPPED_FOR_INPUT)
+        """Hold the session for the session runner's lost joystick (the practice: stop)."""
+        if self.practice is not None or self.exit_at is not None:
+            return self._stop_now(response, STOPPED_FOR_INPUT)
+        if self.held_for_input:
+            response.success, response.message = True, f'already held: {self.held_for_input}'
+            return response
+        return self.hold_for_input(response)
 
     def _stop_now(self, response, who: str):
         """Abort the session now (``who``: by whom and why, in the aborted status)."""

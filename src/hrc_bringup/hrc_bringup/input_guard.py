@@ -4,10 +4,11 @@ Never a silent stand-in: in realtime with ``--human device``, ``joy`` or ``auto`
 does not start until the input is there (:func:`wait_for_input` lists the joystick devices it
 sees and how to fix it); the human node holds zero and asks to pause when its input is lost
 (``on_input_lost: pause``, its ``/hrc/human/input`` status) and :class:`InputGuard` then pauses
-the session at once (the agent is stopped mid-episode: zero commands, the sim holds; the page,
-the console and ``hrc operator status`` say "joystick disconnected"); after the human node
-reports the input back the operator resumes and the agent continues from the last finished
-episode.
+the session at once: the agent holds it in its own process (zero commands, the running episode
+dropped, the sim holds, phase paused; the page, the console and ``hrc operator status`` say
+"joystick disconnected", and "connected again" as soon as the human node reports it back);
+the agent refuses the operator's resume until then, and runs the interrupted episode again
+(``hrc_agent_node.agent_input_hold``).
 """
 
 import sys
@@ -16,16 +17,13 @@ import time
 from diagnostic_msgs.msg import DiagnosticStatus
 from hrc_common import qos, topics
 from hrc_common.contract import ACTIVE_PHASES, Phase
-from hrc_common.session_control import (AGENT_RESTARTING_MESSAGE, LOST_INPUT_WORDS,
-                                         OPERATOR_SERVICES, STOP_FOR_INPUT_SERVICE)
+from hrc_common.session_control import LOST_INPUT_WORDS, STOP_FOR_INPUT_SERVICE
 from hrc_live.input_check import (device_missing_message, device_presence, INPUT_LOST_TOPIC,
                                   joy_missing_message, joystick_devices, lost_reason)
 from hrc_msgs.msg import HumanAction, SessionStatus, TaskState
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
-# Seconds the runner keeps serving the operator services after a resume it answered.
-SERVICE_RETIRE_S = 1.0
 # Link watchdog: a gap between states longer than this (s) is a break or a pause, not a loss;
 # the human node's input status comes at least every second, so this long without it (s) means
 # its station is unreachable.
@@ -38,11 +36,10 @@ class InputGuard:
 
     Watches ``/hrc/human/action``: an answer holding zero because the input is lost
     (:func:`hrc_live.input_check.lost_reason`) while the person is involved makes the runner
-    stop the agent mid-episode (its abort service: zero commands, the sim holds, the last
-    checkpoint kept), say "joystick disconnected" on ``/hrc/session/input_lost`` (the pages) and
-    on ``/hrc/session`` (phase paused, for ``operator status``), and serve the operator services
-    itself until the operator resumes after the input is back; then the agent is started again
-    from the last finished episode.
+    say "joystick disconnected" on ``/hrc/session/input_lost`` (the pages, the agent) and ask
+    the agent to hold (``/hrc/agent/stop_for_input``); ``input_lost`` is cleared as soon as the
+    human node reports the input back. The agent, the one writer of ``/hrc/session``, says the
+    pause and takes the operator's resume; the loss ends when its status runs again.
     """
 
     def __init__(self, node, kind: str, device: str, link_timeout: float = 1.0):
@@ -55,20 +52,12 @@ class InputGuard:
         self.last_state_at = self.last_action_at = self.input_status_at = None
         self.states_flow_since = None   # states run again after a gap (break, pause) since
         self.involved = False           # the person acts in the current training step
-        self.agent_down = False         # the agent was stopped for the loss and has exited
-        self.resume_requested = False
-        self.abort_requested = False
+        self.held = False               # the agent has said it holds for the loss
         self.last_status = None
-        self._services = []
         self._practice_told = False
-        self._retire_at = 0.0
-        self._status_pub = None
         self._waiting_pub = None        # /hrc/session/runner_waiting: one writer, made once
-        self.restarting_since = None    # monotonic s of a resume whose agent has not spoken yet
-        self._own_message = ''          # the stand-in status's last message
         self._string = String
         self._trigger = Trigger
-        self._session_status = SessionStatus
         self._topics, self._qos = topics, qos
         self.lost_pub = node.create_publisher(String, INPUT_LOST_TOPIC, qos.SESSION_QOS)
         self.lost_pub.publish(String(data=''))
@@ -117,18 +106,20 @@ class InputGuard:
         self._waiting_pub.publish(self._string(data=reason))
 
     def _on_status(self, status):
-        if self.restarting_since is not None and status.message != self._own_message:
-            self._agent_speaks_again()
-        if self._status_pub is None:   # the agent's, not our own stand-in status
-            self.last_status = status
-            if status.human_involved and not self.involved:
-                # The person's side sends nothing while the robot learns alone: the silence
-                # the link watchdog measures starts when the person joins, not before.
-                self.states_flow_since = time.monotonic()
-            self.involved = bool(status.human_involved)
-            # The person's step begins while their input is already gone: pause now.
-            if self.involved and self.input_status.get('pause_requested') == 'true':
-                self._lose(self.input_status.get('message') or 'the human node asks to pause')
+        self.last_status = status
+        if status.human_involved and not self.involved:
+            # The person's side sends nothing while the robot learns alone: the silence
+            # the link watchdog measures starts when the person joins, not before.
+            self.states_flow_since = time.monotonic()
+        self.involved = bool(status.human_involved)
+        if self.lost:
+            if status.phase == Phase.PAUSED:
+                self.held = True
+            elif self.held and status.phase in ACTIVE_PHASES:
+                self._clear_loss()      # the operator's resume: the agent runs on
+        # The person's step begins while their input is already gone: pause now.
+        elif self.involved and self.input_status.get('pause_requested') == 'true':
+            self._lose(self.input_status.get('message') or 'the human node asks to pause')
 
     def _on_input_status(self, status):
         values = {item.key: item.value for item in status.values}
@@ -156,8 +147,6 @@ class InputGuard:
         else:
             print(f'[session] the joystick is disconnected again: {message}', flush=True)
         self.lost_pub.publish(self._string(data='' if present else self.lost))
-        if self._status_pub is not None:
-            self._publish_paused()
 
     def _on_state(self, state):
         now = time.monotonic()
@@ -186,96 +175,17 @@ class InputGuard:
         if not reason.startswith(LOST_INPUT_WORDS):
             reason = f'{LOST_INPUT_WORDS}: {reason}'
         self.lost = reason
-        print(f'[session] {reason}: pausing the session now (the agent stops mid-episode, '
-              f'the sim holds, zero commands); resume with "hrc operator '
+        print(f'[session] {reason}: pausing the session now (the agent holds it: the running '
+              f'episode dropped, the sim holds, zero commands); resume with "hrc operator '
               f'resume" or the console once it is back', flush=True)
         self.lost_pub.publish(self._string(data=reason))
         if self.abort_client.service_is_ready():
             self.abort_client.call_async(self._trigger.Request())
 
-    def on_agent_exit(self) -> None:
-        """Stand in for the agent stopped for the loss: operator services, phase paused."""
-        self.agent_down = True
-        if self._services:  # lost again before the last stand-in services were retired
-            return self._publish_paused()
-        self._services = [self.node.create_service(self._trigger, OPERATOR_SERVICES[name],
-                                                    getattr(self, f'_serve_{name}'))
-                          for name in ('pause', 'resume', 'abort')]
-        self._publish_paused()
-
-    def _publish_paused(self) -> None:
-        """Say on /hrc/session (for ``operator status``) that the session is paused, and why."""
-        if self._status_pub is None:
-            self._status_pub = self.node.create_publisher(self._session_status,
-                                                          self._topics.SESSION,
-                                                          self._qos.SESSION_QOS)
-        if self.last_status is not None:
-            status = self.last_status
-            status.phase = int(Phase.PAUSED)
-            status.message = (f'{self.lost}; the joystick is connected again: paused, resume '
-                              f'when ready' if self.back else
-                              f'{self.lost}: paused; resume after it is back')
-            self._own_message = status.message
-
-            self._status_pub.publish(status)
-
-    def _serve_pause(self, request, response):
-        response.success, response.message = True, f'already paused: joystick disconnected ' \
-            f'({self.lost})'
-        return response
-
-    def _serve_resume(self, request, response):
-        present, why = self.present()
-        if not present:
-            response.success = False
-            response.message = f'the joystick is still disconnected: {why}'
-            return response
-        self.resume_requested = True
-        response.success = True
-        response.message = ('resuming: the agent continues from the last finished episode '
-                            '(the interrupted one runs again)')
-        return response
-
-    def _serve_abort(self, request, response):
-        self.abort_requested = True
-        response.success, response.message = True, 'aborted while paused (joystick ' \
-            'disconnected); resume from the last checkpoint'
-        return response
-
-    def resumed(self) -> None:
-        """Stop standing in for the agent: nothing is lost any more (the agent runs on)."""
-        self._drop_status_publisher()
-        self._clear_loss()
-
-    def restarting(self) -> None:
-        """Say the agent is starting again after the operator's resume, until it speaks.
-
-        Its start takes seconds (the interpreter, torch, the checkpoint). The stand-in status
-        writer goes first (one writer of /hrc/session); meanwhile the runner says
-        :data:`AGENT_RESTARTING_MESSAGE` on /hrc/session/runner_waiting (the page: "Resuming",
-        the console), not the pause the operator has just ended. The agent's first status
-        ends it.
-        """
-        self.resumed()
-        self.restarting_since = time.monotonic()
-        self.say_waiting(AGENT_RESTARTING_MESSAGE)
-
-    def _agent_speaks_again(self) -> None:
-        print(f'[session] the agent runs again ({time.monotonic() - self.restarting_since:.1f} s '
-              f'after the resume)', flush=True)
-        self.restarting_since = None
-        self.say_waiting('')
-
-    def _drop_status_publisher(self) -> None:
-        if self._status_pub is not None:
-            self.node.destroy_publisher(self._status_pub)
-            self._status_pub = None
-
     def _clear_loss(self) -> None:
-        # The services go a moment later: the answer to the resume call must reach the caller
-        # first (the new agent takes seconds to serve them itself).
-        self._retire_at = time.monotonic() + SERVICE_RETIRE_S
-        self.lost, self.agent_down, self.resume_requested, self.back = '', False, False, False
+        print('[session] resumed by the operator: the agent goes on in its process (the '
+              'interrupted episode runs again)', flush=True)
+        self.lost, self.held, self.back = '', False, False
         self.lost_pub.publish(self._string(data=''))
 
     def watch_link(self) -> None:
@@ -296,12 +206,8 @@ class InputGuard:
                        f'episode runs (network link to the station or human node down)')
 
     def tick(self) -> None:
-        """Retire the stand-in operator services once their last answer is out."""
+        """Watch the link to the person's side (two hosts)."""
         self.watch_link()
-        if self._services and not self.agent_down and time.monotonic() > self._retire_at:
-            for service in self._services:
-                self.node.destroy_service(service)
-            self._services = []
 
 
 def wait_for_input(guard: InputGuard, executor, timeout: float, stop_reason: list) -> bool:

@@ -20,7 +20,6 @@ from hrc_common.session_control import EXIT_OPERATOR_ABORT, LATEST_CHECKPOINT
 from hrc_common.session_plan import NODES, SessionSettings
 import rclpy
 from rclpy.context import Context
-import yaml
 
 from hrc_bringup.input_guard import InputGuard, wait_for_input
 from hrc_bringup.practice import run_practice
@@ -58,7 +57,6 @@ class SessionRun:
         self.supervisor = Supervisor(run_dir / logs, env)
         self.stop_reason = []
         self.process_of = {}     # node -> the name of its process (sim+human when composed)
-        self.restarts = 0
         self.started = now_text()
 
     def run(self, params_dir: pathlib.Path, composed: tuple, live_input: str) -> int:
@@ -130,8 +128,6 @@ class SessionRun:
                 return practice_code
             self.progress.restart()
             self.started = now_text()
-            if self.guard is not None:
-                self.guard.resumed()  # nothing to resume: an input lost in practice is only told
         return None
 
     def _start_nodes(self, composed: tuple) -> None:
@@ -183,44 +179,17 @@ class SessionRun:
                 return 124
 
     def _guard_tick(self):
-        """Tick the person's input guard: an exit code, 'continue' after a resume, or None."""
-        guard = self.guard
-        if guard is None:
-            return None
-        guard.tick()
-        if not guard.agent_down:
-            return None
-        if guard.abort_requested:
-            print('[session] the operator aborted the session while it was paused '
-                  '(joystick disconnected)', flush=True)
-            return EXIT_OPERATOR_ABORT
-        if guard.resume_requested:
-            self.restarts += 1
-            restart_agent(self.supervisor, self.parameters, self.settings, self.run_dir,
-                          self.restarts)
-            guard.restarting()
-            print('[session] resumed by the operator: the agent is starting again and '
-                  'continues from the last finished episode', flush=True)
-            return 'continue'
+        """Tick the person's input guard (the agent holds a lost input itself): None."""
+        if self.guard is not None:
+            self.guard.tick()
         return None
 
     def _on_exits(self):
         """Handle a node that exited: the exit code, 'continue', or None (none exited)."""
-        finished, guard = self.supervisor.exited(), self.guard
+        finished = self.supervisor.exited()
         if not finished:
             return None
         first = finished[0]
-        if (guard is not None and guard.lost and first.name == 'agent'
-                and first.returncode == EXIT_OPERATOR_ABORT and not guard.agent_down):
-            guard.on_agent_exit()
-            print('[session] paused (joystick disconnected): waiting for the input and '
-                  "the operator's resume", flush=True)
-            return 'continue'
-        if guard is not None and guard.agent_down and first.name == 'agent':
-            finished = finished[1:]
-            if not finished:
-                return 'continue'
-            first = finished[0]
         if first.name == 'agent' and first.returncode == 0:
             print('[session] the agent finished the session', flush=True)
             if self.options.tlx:
@@ -328,28 +297,3 @@ def foxglove_command(options, params_dir: pathlib.Path) -> list:
     if options.foxglove_port is not None:
         command += ['-p', f'port:={options.foxglove_port}']
     return command
-
-
-def write_parameters(parameters: dict, path: pathlib.Path) -> pathlib.Path:
-    """Write a ROS 2 parameter file with a section per node."""
-    path.write_text(yaml.safe_dump(
-        {node: {'ros__parameters': values} for node, values in parameters.items()},
-        sort_keys=False))
-    return path
-
-
-def restart_agent(supervisor: Supervisor, parameters: dict, settings: SessionSettings,
-                  run_dir: pathlib.Path, restarts: int) -> None:
-    """Start the agent again from the session's last checkpoint (after a paused input loss)."""
-    checkpoint = (pathlib.Path(parameters['agent']['checkpoint_dir']) / settings.session_id
-                  / LATEST_CHECKPOINT)
-    resumed = {node: dict(values) for node, values in parameters.items()}
-    if checkpoint.is_file():
-        resumed['agent']['resume_from'] = str(checkpoint)
-    path = write_parameters(resumed, run_dir / f'parameters-resume-{restarts}.yaml')
-    old_log = supervisor.log_dir / 'agent.log'
-    if old_log.is_file():
-        old_log.rename(supervisor.log_dir / f'agent-before-resume-{restarts}.log')
-    package, executable, _ = NODES['agent']
-    supervisor.start('agent', [str(executable_path(package, executable)), '--ros-args',
-                               '--params-file', str(path)])

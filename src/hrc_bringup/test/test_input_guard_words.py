@@ -11,7 +11,6 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from hrc_bringup import input_guard
 from hrc_common.contract import Phase, SimLimits
 from hrc_common.paths import params_dir
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
 from hrc_joystick_node.human_core import HumanCore, HumanParams, SOURCE_CODE
 from hrc_joystick_node.human_profile import load_profiles
 from hrc_msgs.msg import HumanAction, SessionStatus
@@ -93,53 +92,37 @@ def test_the_joystick_back_is_said_at_once_and_lost_again_too():
                                    strategy='responsibility_guided'))
     guard._on_input_status(input_status(False, '/dev/input/js0 vanished'))
     assert guard.lost.startswith('joystick disconnected')
-    guard.on_agent_exit()                           # the runner stands in: phase paused
     lost_words = [message.data for message in node.published['/hrc/session/input_lost']]
     assert lost_words == ['', guard.lost]
-    assert node.published['/hrc/session'][-1].message.endswith('resume after it is back')
-    # plugged in again: the pages' input_lost is cleared and the paused status says so, before
-    # any resume
+    # plugged in again: input_lost (the pages' and the agent's) is cleared before any resume
     guard._on_input_status(input_status(True, '/dev/input/js0 opens'))
     assert node.published['/hrc/session/input_lost'][-1].data == ''
-    paused = node.published['/hrc/session'][-1]
-    assert paused.phase == Phase.PAUSED and 'connected again' in paused.message
-    assert guard._serve_resume(None, SimpleNamespace()).success
     # unplugged again before the resume: said again
     guard._on_input_status(input_status(False, '/dev/input/js0 vanished'))
     assert node.published['/hrc/session/input_lost'][-1].data == guard.lost
-    assert node.published['/hrc/session'][-1].message.endswith('resume after it is back')
-    assert node.publishers.count('/hrc/session') == 1     # one stand-in publisher, reused
+    # the agent is the one writer of /hrc/session: the runner stands in for nobody
+    assert '/hrc/session' not in node.publishers
 
 
-def test_after_the_resume_the_agent_is_said_to_be_starting_until_it_speaks(capsys):
-    """The agent's restart takes seconds: "resuming" is said meanwhile, not the ended pause."""
+def test_the_loss_ends_when_the_agents_status_runs_again_after_its_hold(capsys):
+    """The agent holds in its process; its own statuses say the hold and the resume."""
     node = FakeNode()
     guard = input_guard.InputGuard(node, 'device', '/dev/input/js0')
-    guard._on_status(SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
-                                   strategy='responsibility_guided', episode=4))
+    running = SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
+                            strategy='responsibility_guided', episode=4)
+    guard._on_status(running)
     guard._on_input_status(input_status(False, '/dev/input/js0 vanished'))
-    guard.on_agent_exit()
+    guard._on_status(running)          # a status from before the hold, late: still lost
+    assert guard.lost and not guard.held
+    guard._on_status(SessionStatus(phase=int(Phase.PAUSED), human_involved=True,
+                                   message='joystick disconnected: paused'))
+    assert guard.lost and guard.held
     guard._on_input_status(input_status(True, '/dev/input/js0 opens'))
-    stand_in = node.published['/hrc/session'][-1]
-    guard.restarting()                              # the runner has started the agent again
-    # one writer of /hrc/session: the stand-in's goes before the agent starts; the runner's
-    # word is on runner_waiting
-    assert node.destroyed == 1 and guard._status_pub is None
-    assert [said.data for said in node.published['/hrc/session/runner_waiting']] == [
-        AGENT_RESTARTING_MESSAGE]
+    assert guard.lost                  # back, but not resumed yet
+    guard._on_status(running)          # the operator's resume: the agent runs on
+    assert guard.lost == '' and not guard.held
     assert node.published['/hrc/session/input_lost'][-1].data == ''
-    assert guard.lost == '' and not guard.agent_down
-    guard._on_status(stand_in)                      # the stand-in's last status, late: not it
-    assert guard.restarting_since is not None
-    # the new agent's first status ends the wait
-    guard._on_status(SessionStatus(phase=int(Phase.TRAINING), human_involved=True,
-                                   strategy='responsibility_guided', episode=4,
-                                   message='session starting'))
-    assert guard.restarting_since is None
-    assert node.published['/hrc/session/runner_waiting'][-1].data == ''
-    assert guard.last_status.message == 'session starting' and guard.involved
-    assert 'the agent runs again' in capsys.readouterr().out
-    assert node.publishers.count('/hrc/session/runner_waiting') == 1
+    assert 'resumed by the operator: the agent goes on in its process' in capsys.readouterr().out
 
 
 @pytest.mark.parametrize('kind', ['joy', 'auto'])

@@ -33,12 +33,6 @@ def about_lost_input(message: str) -> bool:
 # parameters (2, hrc_common.nodes.EXIT_BAD_PARAMETERS).
 EXIT_OPERATOR_ABORT = 3
 
-# The session runner's word on /hrc/session (phase paused) from the operator's resume after a
-# lost joystick until the restarted agent speaks: loading the agent's checkpoint takes seconds,
-# and the pages must not keep saying "connected again: wait for the operator" meanwhile.
-AGENT_RESTARTING_MESSAGE = ('resuming: the agent is starting again from its last checkpoint '
-                            '(the interrupted episode runs again)')
-
 # Checkpoint file names in <checkpoint_dir>/<session_id>/, written by the agent node and the
 # in-process engine alike: at every episode end (the one to resume from), and once at the end
 # of training.

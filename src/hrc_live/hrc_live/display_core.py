@@ -18,7 +18,6 @@ import math
 import threading
 import typing
 
-from hrc_common.session_control import about_lost_input, AGENT_RESTARTING_MESSAGE
 from hrc_common.contract import InputSource
 from hrc_sim_node.physics import PhysicsParams
 
@@ -287,9 +286,6 @@ class DisplayModel:
                 changes['break_started'] = now
             if session.phase in ('paused', 'aborted'):
                 changes['interrupted'] = True
-            if (current.runner_waiting == AGENT_RESTARTING_MESSAGE
-                    and not about_lost_input(session.message)):
-                changes['runner_waiting'] = ''  # the restarted agent speaks (not the runner)
             alone = current.alone
             # the robot's own episodes: every training episode so far without the person (the
             # agent's counters: a pause or a restarted agent does not start the count again)

@@ -10,7 +10,6 @@ notice (:func:`state_document`).
 
 import math
 
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE
 from hrc_common.contract import BODY_COLOURS, rgb8
 from hrc_sim_node.body_geometry import BEAM_HEIGHT, body_poses, ROD_RADIUS, SLIDER_SIZE
 from hrc_sim_node.physics import PhysicsParams, PhysicsState
@@ -179,9 +178,6 @@ def console_document(snapshot: Snapshot, study: dict = None, tlx: str = '') -> d
         'milestone': milestone(snapshot),
         'invalid_state': snapshot.invalid_state,
         'runner_waiting': snapshot.runner_waiting,
-        # red only when the operator must act (plug the joystick in), not while the agent starts
-        'runner_waiting_tone': ('wait' if snapshot.runner_waiting == AGENT_RESTARTING_MESSAGE
-                                else 'bad'),
         'replay': snapshot.replay,
         'study': dict(study or {}),
         'tlx': tlx,

@@ -14,7 +14,7 @@ import math
 import re
 import typing
 
-from hrc_common.session_control import about_lost_input, AGENT_RESTARTING_MESSAGE
+from hrc_common.session_control import about_lost_input
 from hrc_live.display_core import AgentPlan, Overlay, ResultView, SessionView, Snapshot
 
 
@@ -39,8 +39,6 @@ EFFECT_WORDS = {
                             'smoothly to keep it still.'}
 BANNER_HOLD_S = 1.0     # s a banner stays up at least, unless its tone changes
 ALONE_BANNER = 'The robot is practising alone: please wait'
-# After the operator's resume while the robot starts again (seconds; see AGENT_RESTARTING_MESSAGE)
-RESTARTING_BANNER = 'Resuming: the robot is getting ready. Please wait a few seconds.'
 REPLAY_BANNER = 'Replay of a recorded session: nothing you do now is used'
 INVALID_STATE_NOTICE = ('The simulation sent an invalid state (not a finite number): the '
                         'picture is frozen. Operator: see the sim log.')
@@ -179,8 +177,6 @@ def banner_of(snapshot: Snapshot, in_episode: bool, countdown) -> tuple:
         return 'Stopped by the operator. Please let go of the joystick.', 'stop'
     if phase == 'done':
         return 'The session is finished. Thank you!', 'info'
-    if snapshot.runner_waiting == AGENT_RESTARTING_MESSAGE:
-        return RESTARTING_BANNER, 'wait'
     if phase == 'paused' and about_lost_input(session.message):
         # the runner's pause for a lost input: the joystick is back, the operator resumes
         return 'The joystick is connected again: please wait for the operator', 'wait'

@@ -11,9 +11,8 @@ from hrc_live.display_core import (AgentPlan, DisplayModel, HumanView, ResultVie
                                    StateView)
 from hrc_live.display_documents import (configuration_points, console_document, scene_bounds,
                                         state_document, status_document)
-from hrc_common.session_control import AGENT_RESTARTING_MESSAGE, STOPPED_FOR_INPUT
-from hrc_live.display_words import (INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay,
-                                    RESTARTING_BANNER)
+from hrc_common.session_control import STOPPED_FOR_INPUT
+from hrc_live.display_words import INPUT_LOST_BANNER, INPUT_LOST_NOTICE, overlay
 from hrc_sim_node.physics import PhysicsParams
 import pytest
 
@@ -226,24 +225,16 @@ def test_an_unplug_mid_episode_then_a_resume_the_person_reads_one_clear_message_
     assert console_document(model.snapshot(now=4.1))['input']['detail'].endswith(
         'no writer has the FIFO open')              # the technical reason: the console only
     runner_says = ('joystick disconnected (zero held, session should pause): no writer has '
-                   'the FIFO open: paused; resume after it is back')   # the runner's status
+                   'the FIFO open: paused; resume after it is back')   # the agent's hold
     model.on_session(session(phase='paused', message=runner_says), now=4.5)
     assert overlay(model.snapshot(now=5.0)).banner == INPUT_LOST_BANNER
     # Plugged in again: the operator resumes (not "paused by the operator": it was not).
     model.set_input_lost('')
     assert overlay(model.snapshot(now=6.0)).banner == (
         'The joystick is connected again: please wait for the operator')
-    # The operator resumes: the runner says the robot is starting again until it speaks.
-    model.set_runner_waiting(AGENT_RESTARTING_MESSAGE)
-    words = overlay(model.snapshot(now=9.0))
-    assert (words.banner, words.tone) == (RESTARTING_BANNER, 'wait')
-    document = console_document(model.snapshot(now=9.0))
-    assert (document['runner_waiting'], document['runner_waiting_tone']) == (
-        AGENT_RESTARTING_MESSAGE, 'wait')             # not red: nothing to do
-    # Resumed: the agent starts again after a break, counted down, although the newest state
-    # is still the interrupted episode's step 12.
+    # Resumed (the agent holds in its process): the interrupted episode starts again after a
+    # break, counted down, although the newest state is still its step 12.
     model.on_session(session(phase='training'), now=20.0)
-    assert model.snapshot(now=20.0).runner_waiting == ''    # the agent speaks again
     words = overlay(model.snapshot(now=21.2))
     assert (words.banner, words.countdown, words.notice) == (
         'Get ready: the next round starts in 3 s', 3, '')

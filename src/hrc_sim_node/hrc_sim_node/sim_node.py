@@ -77,6 +77,9 @@ COMMAND_SUBSCRIPTION_QOS = QoSProfile(
 NO_PUBLISHER_EVENTS, NO_SUBSCRIPTION_EVENTS = qos.NO_PUBLISHER_EVENTS, qos.NO_SUBSCRIPTION_EVENTS
 COMMAND_DRAIN_LIMIT = 10000   # commands read from a queue in one turn at most (fairness)
 FREE_RUN_PERIOD_S = 1e-6      # s: the free-run timer is re-armed every step
+# A status with one of these phases stops a running episode at once (an operator's abort, the
+# agent held for a lost input mid-episode; an operator's pause comes between episodes).
+HOLDING_PHASES = (SessionStatus.PHASE_ABORTED, SessionStatus.PHASE_PAUSED)
 
 
 class SimNode(RecorderWait, SimVisuals, Node):
@@ -420,7 +423,7 @@ class SimNode(RecorderWait, SimVisuals, Node):
             f'{topic}: {names}' + suffix)
 
     def _on_session(self, message: SessionStatus):
-        if message.phase == SessionStatus.PHASE_ABORTED and self.protocol.active:
+        if message.phase in HOLDING_PHASES and self.protocol.active:
             self._hold_after_abort(message)
         robot, human = DOF_NAME.get(message.robot_dof), DOF_NAME.get(message.human_dof)
         dof_of = self.protocol.dof_of
@@ -462,8 +465,9 @@ class SimNode(RecorderWait, SimVisuals, Node):
         """Stop the running episode at once: no more steps, nothing applied, hold."""
         self.protocol.hold()
         self._cancel_timers()
+        phase = 'paused' if message.phase == SessionStatus.PHASE_PAUSED else 'aborted'
         self.get_logger().warning(
-            f'session {message.session_id!r} aborted ({message.message}): episode '
+            f'session {message.session_id!r} {phase} ({message.message}): episode '
             f'{self.episode} stopped at step {self._state.step}; holding, nothing applied, '
             f'until {topics.RESET_SERVICE} is called')
 
