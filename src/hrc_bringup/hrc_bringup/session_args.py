@@ -31,10 +31,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help='lockstep: as fast as the graph allows (headless); realtime: '
                         'every 0.2 s of wall time (a person at the joystick)')
     parser.add_argument('--human', dest='human_input', default='sim',
-                        choices=('sim', 'auto', 'device', 'joy', 'model', 'script'),
-                        help='human input (default sim: the simulated human; model: a cloned '
-                        'human model, --set human.model_file=PATH; script: a scripted stick in '
-                        'simulation time, --set human.script_file=PATH)')
+                        choices=('sim', 'auto', 'device', 'joy', 'gamepad', 'model', 'script'),
+                        help='human input (default sim: the simulated human; gamepad: any '
+                        "gamepad through the person's page, the browser's Gamepad API, implies "
+                        '--display; model: a cloned human model, --set human.model_file=PATH; '
+                        'script: a scripted stick in simulation time, --set '
+                        'human.script_file=PATH)')
     parser.add_argument('--profile', dest='human_profile', default='',
                         help='simulated-human profile (params/sim_human.yaml)')
     add_learning_option(parser)
@@ -137,6 +139,10 @@ def parse_args(argv=None):
     parser = build_parser()
     options = parser.parse_args(argv)
     options.argv = list(sys.argv[1:] if argv is None else argv)
+    # a gamepad through the page: the display publishes it on /joy, the human node reads /joy
+    options.gamepad = options.human_input == 'gamepad'
+    if options.gamepad:
+        options.human_input, options.display = 'joy', True
     overrides = {}
     for path in options.params_files:
         try:
@@ -148,6 +154,8 @@ def parse_args(argv=None):
         overrides.update(parse_overrides(options.overrides))
     except ValueError as error:
         parser.error(str(error))
+    if options.gamepad:     # the display publishes the stick the person chose as /joy axis 0
+        overrides.setdefault('human.axis', 0)
     settings = SessionSettings(
         case=options.case, seed=options.seed, mode=options.mode,
         human_input=options.human_input, human_profile=options.human_profile,

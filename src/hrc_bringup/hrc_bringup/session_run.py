@@ -282,6 +282,8 @@ def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path,
         command += ['-p', f'port:={options.display_port}']
     if options.tlx:
         command += ['-p', f'tlx_file:={(run_dir / "tlx.yaml").resolve()}']
+    if options.gamepad:
+        command += ['-p', 'gamepad:=true']
     if settings.subject_id:
         command += ['-p', f'subject_id:={settings.subject_id}',
                     '-p', f'condition:={condition_words(settings, options)}']

@@ -49,6 +49,7 @@ from hrc_common.tlx import check_tlx, raw_tlx, TLX_STEP
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
 from rclpy.node import Node
+from sensor_msgs.msg import Joy
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 import yaml
@@ -59,6 +60,7 @@ from hrc_live.display_documents import (console_document, overlay_document, scen
                                         state_document, status_document)
 from hrc_live.display_words import overlay, SteadyBanner
 from hrc_live.display_params import DisplayParams
+from hrc_live.gamepad import gamepad_body, joy_values
 from hrc_live.input_check import INPUT_LOST_TOPIC
 from hrc_live.page_server import EventHub, PageServer, tlx_body
 
@@ -69,6 +71,9 @@ SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the per
 # The sim's parameters the drawing needs, and the agent's the overlay needs.
 SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limit',
                   'control_period', 'episode_duration')
+# s: a page's gamepad silent this long is gone (unplugged, the page closed): its /joy writer is
+# withdrawn. The page sends every 20 ms while one is connected.
+GAMEPAD_SILENCE_S = 0.5
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
 
 
@@ -138,6 +143,11 @@ class DisplayNode(Node):
                                           self.on_agent)
         self.create_timer(params.query_period, self.poll_queries)
         self.create_timer(1.0 / params.words_rate, self.push_words)
+        # the person's gamepad from the page (hrc_live.gamepad): a /joy writer while it sends
+        self.joy_pub, self.gamepad_at, self.gamepad_name = None, 0.0, ''
+        self._gamepad_lock = threading.Lock()
+        if params.gamepad:
+            self.create_timer(GAMEPAD_SILENCE_S / 2, self.drop_silent_gamepad)
         self.session_id = None
         self.tlx_stored = set()       # session ids whose questionnaire was answered
         self.tlx_saved = {}           # session id -> (time, raw TLX) stored by this display
@@ -315,6 +325,36 @@ class DisplayNode(Node):
         except (OSError, yaml.YAMLError, UnicodeDecodeError):
             return []
         return [item for item in document or [] if isinstance(item, dict)]
+
+    def store_gamepad(self, body: bytes):
+        """Publish one reading of the page's gamepad on /joy; return (HTTP code, answer)."""
+        if not self.params.gamepad:
+            return 404, 'no gamepad in this session (display parameter gamepad is false)'
+        record, problem = gamepad_body(body)
+        if problem:
+            return 400, problem
+        axes, buttons = joy_values(record)
+        message = Joy(axes=axes, buttons=buttons)
+        message.header.stamp = self.get_clock().now().to_msg()
+        name = f"{record.get('id', '') or 'a gamepad'}, axis {record.get('axis_index', 0)}"
+        with self._gamepad_lock:
+            if self.joy_pub is None:
+                self.joy_pub = self.create_publisher(Joy, topics.JOY, qos.JOY_QOS)
+            if name != self.gamepad_name:
+                self.get_logger().info(f"the person's gamepad ({name}) drives {topics.JOY}")
+                self.gamepad_name = name
+            self.gamepad_at = time.monotonic()
+            self.joy_pub.publish(message)
+        return 200, 'ok'
+
+    def drop_silent_gamepad(self) -> None:
+        """Withdraw the /joy writer when the page's gamepad fell silent (unplugged, closed)."""
+        with self._gamepad_lock:
+            if self.joy_pub is None or time.monotonic() - self.gamepad_at < GAMEPAD_SILENCE_S:
+                return
+            self.destroy_publisher(self.joy_pub)
+            self.joy_pub, self.gamepad_name = None, ''
+        self.get_logger().warning(f"the person's gamepad is silent: {topics.JOY} withdrawn")
 
     def store_tlx(self, body: bytes):
         """Check and append one raw NASA-TLX answer; return (HTTP code, answer).

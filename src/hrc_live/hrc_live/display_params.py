@@ -25,6 +25,10 @@ class DisplayParams:
                             "person's page); empty = no subject")
     condition: str = param('', "the condition and its place in the subject's order, shown on "
                            'the console (e.g. "condition 2 of 6 in the order (case 3)")')
+    gamepad: bool = param(
+        False, "take the person's gamepad from their page (the browser's Gamepad API, POST "
+        '/gamepad) and publish it on /joy for the human node (input: joy); the publisher '
+        'exists only while a gamepad sends, so a runner sees no input without one')
     sim_node: str = param('sim', 'node whose parameters give the geometry and timing')
     agent_node: str = param('agent', 'node whose parameters give the episode counts and the '
                             'break between episodes')

@@ -82,9 +82,11 @@ def device_missing_message(path: str, why: str, seen: list) -> str:
 
 def joy_missing_message(publishers: int) -> str:
     """Return what the operator reads when /joy has no publisher."""
-    return (f'/joy has {publishers} publishers: no joy node is running. Fix: start one '
-            f'(ros2 run joy joy_node) in the same ROS_DOMAIN_ID, or use --human device with the '
-            f'joystick device, or --human sim for the simulated human.')
+    return (f'/joy has {publishers} publishers: no joy node is running and no gamepad sends '
+            f"from the person's page. Fix: start one (ros2 run joy joy_node) in the same "
+            f"ROS_DOMAIN_ID; with --human gamepad, connect a gamepad to the person's computer "
+            f'and move its stick on their page; or use --human device with the joystick '
+            f'device, or --human sim for the simulated human.')
 
 
 def lost_reason(source: int, detail: str, involved: bool) -> str:

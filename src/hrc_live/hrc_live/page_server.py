@@ -342,7 +342,7 @@ class PageServer:
             self.node.hub.disconnect(client)
 
     def post(self, request) -> None:
-        """Answer one POST request: a control button or the TLX form."""
+        """Answer one POST request: a control button, the TLX form or the gamepad."""
         path = request.path.split('?', 1)[0]
         text_plain = 'text/plain; charset=utf-8'
         try:
@@ -366,8 +366,11 @@ class PageServer:
                 code, text = self.node.control(path[len('/control/'):])
             elif path == '/tlx':
                 code, text = self.node.store_tlx(body)
+            elif path == '/gamepad':
+                code, text = self.node.store_gamepad(body)
             else:
-                code, text = 404, 'not here: POST /control/<pause|resume|abort> or /tlx'
+                code, text = 404, ('not here: POST /control/<pause|resume|abort>, /tlx or '
+                                   '/gamepad')
             self.answer(request, code, text.encode(), text_plain)
         except (BrokenPipeError, ConnectionResetError):
             pass
