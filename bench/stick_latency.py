@@ -17,6 +17,14 @@ applied them are counted as never applied.
 The human node sends each move at once (answering the newest state) and the sim applies the
 newest command at each slice of ``--human-period`` s (default 0.02 s, the sim's; several values
 run one after the other in one invocation).
+
+``--gamepad``: the stick is a gamepad on the person's page instead (the browser's Gamepad API,
+a virtual gamepad in headless Chromium in place of ``navigator.getGamepads``): the page sends
+it every 20 ms to the display node, which publishes ``/joy``, which the human node reads
+(``input: joy``). A move's time is taken just before the call that sets the virtual stick, so
+the latency includes the page's 20 ms sampling and the WebDriver call (a few ms)::
+
+    python bench/stick_latency.py --gamepad --moves 300
 """
 
 import argparse
@@ -56,19 +64,76 @@ def raw_of(index: int) -> int:
     return magnitude if index % 2 else -magnitude
 
 
+class FifoStick:
+    """A joystick device: js_event records written to a FIFO the human node reads."""
+
+    def __init__(self, work: pathlib.Path):
+        self.fifo = work / 'js0'
+        os.mkfifo(self.fifo)
+        self.human_parameters = {'input': 'device', 'device': str(self.fifo), 'axis': AXIS}
+        self.descriptor = None
+
+    def start(self) -> None:
+        self.descriptor = os.open(self.fifo, os.O_WRONLY)   # the human node holds the other end
+        self.started = time.monotonic()
+        time.sleep(1.0)                                     # let it see the device open
+
+    def move(self, index: int) -> tuple:
+        """Move the stick; return (write time, the command the sim applies, N*m)."""
+        raw = raw_of(index)
+        os.write(self.descriptor, pack_event(
+            int((time.monotonic() - self.started) * 1000) & 0xFFFFFFFF, raw, JS_EVENT_AXIS, AXIS))
+        return time.perf_counter(), device_axis(raw) * MAX_TORQUE
+
+    def stop(self) -> None:
+        os.close(self.descriptor)
+
+
+class PageGamepad:
+    """A virtual gamepad on the person's page in headless Chromium (``--gamepad``)."""
+
+    def __init__(self, env: dict):
+        self.display = NodeProcess('hrc_live', 'display_node', env=env,
+                                   parameters={'port': 0, 'gamepad': True})
+        self.human_parameters = {'input': 'joy', 'axis': 0}
+
+    def start(self) -> None:
+        sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'src' / 'hrc_live'
+                               / 'test'))
+        from browser import open_browser   # lazy: only --gamepad needs Chromium
+        from page_graph import served_port  # lazy: the page tests' helpers, with Chromium
+        self.browser = open_browser(1280, 720)
+        self.browser.get(f'http://127.0.0.1:{served_port(self.display)}/')
+        self.browser.execute_script(
+            "window.virtualPad = {index: 0, id: 'bench gamepad', connected: true, mapping: "
+            "'standard', axes: [0, 0.9, 0, 0], buttons: [{pressed: false}]}; "
+            'navigator.getGamepads = () => [window.virtualPad];')   # 0.9: the stick chosen
+        time.sleep(1.0)
+
+    def move(self, index: int) -> tuple:
+        """Move the stick; return (time before the call, the command the sim applies, N*m)."""
+        value = (0.2 + 0.002 * index) * (1 if index % 2 else -1)   # unique, inside [-1, 1]
+        written = time.perf_counter()
+        self.browser.execute_script(f'window.virtualPad.axes[1] = {value}')
+        return written, -value * MAX_TORQUE                          # /joy: stick up is +
+
+    def stop(self) -> None:
+        self.browser.quit()
+        self.display.stop()
+
+
 def measure(name: str, human_period: float, args, domain_id: int) -> dict:
     """Run at ``human_period`` (s); return the latencies (ms) and the count of lost moves."""
     work = pathlib.Path(tempfile.mkdtemp(prefix='hrc-stick-'))
-    fifo = work / 'js0'
-    os.mkfifo(fifo)
     env = ros_environment(domain_id)
+    stick = PageGamepad(env) if args.gamepad else FifoStick(work)
     sim = NodeProcess('hrc_sim_node', 'sim_node', env=env, parameters={
         'mode': 'realtime', 'start_on_launch': True, 'auto_reset': True,
         'expected_actors': ['human'], 'robot_dof': 'translation', 'marker_rate': 0.0,
         'human_period': human_period})
     human = NodeProcess('hrc_joystick_node', 'human_node', env=env, parameters={
-        'input': 'device', 'device': str(fifo), 'axis': AXIS, 'deadzone': 0.0,
-        'on_input_lost': 'zero', 'dof': 'rotation', 'input_check_period': 0.1})
+        **stick.human_parameters, 'deadzone': 0.0, 'on_input_lost': 'zero', 'dof': 'rotation',
+        'input_check_period': 0.1})
     context = Context()
     rclpy.init(context=context, domain_id=domain_id)
     node = rclpy.create_node('bench_stick_latency', context=context)
@@ -97,18 +162,13 @@ def measure(name: str, human_period: float, args, domain_id: int) -> dict:
             time.sleep(0.05)
         if len(periods) < 5:
             raise RuntimeError(f'{name}: the realtime sim published no states\n{sim.output}')
-        descriptor = os.open(fifo, os.O_WRONLY)   # the human node holds the reading end
-        time.sleep(1.0)                           # let it see the device open
-        started = time.monotonic()
+        stick.start()
         for index in range(args.moves):
-            raw = raw_of(index)
-            os.write(descriptor, pack_event(int((time.monotonic() - started) * 1000) & 0xFFFFFFFF,
-                                            raw, JS_EVENT_AXIS, AXIS))
-            writes.append((time.perf_counter(), device_axis(raw) * MAX_TORQUE))
+            writes.append(stick.move(index))
             time.sleep(args.interval)
         time.sleep(0.6)
-        os.close(descriptor)
     finally:
+        stick.stop()
         rclpy.shutdown(context=context)
         thread.join(timeout=5)
         human.stop()
@@ -148,9 +208,13 @@ def main() -> int:
     parser.add_argument('--interval', type=float, default=0.037,
                         help='wall seconds between two moves (default 37 ms)')
     parser.add_argument('--domain-id', type=int, default=93)
+    parser.add_argument('--gamepad', action='store_true',
+                        help="a gamepad on the person's page (headless Chromium) instead of a "
+                             'joystick device')
     args = parser.parse_args()
     for offset, human_period in enumerate(args.human_period):
-        name = f'human_period {human_period} s, stick forwarded'
+        name = (f'human_period {human_period} s, '
+                f'{"gamepad through the page" if args.gamepad else "stick forwarded"}')
         result = measure(name, human_period, args, args.domain_id + offset)
         latencies = result['latencies']
         if not latencies:

@@ -31,7 +31,8 @@ SCRIPTS = list(console_scripts())
 # command line `hrc` (every other command is a verb of it, no alias is left).
 PROMISED = {('hrc_sim_node', 'sim_node'), ('hrc_agent_node', 'agent_node'),
             ('hrc_joystick_node', 'human_node'), ('hrc_bag', 'recorder_node'),
-            ('hrc_bag', 'replay_node'), ('hrc_live', 'display_node'), ('hrc_bringup', 'hrc')}
+            ('hrc_bag', 'replay_node'), ('hrc_live', 'display_node'),
+            ('hrc_live', 'foxglove_node'), ('hrc_bringup', 'hrc')}
 
 
 def test_the_console_scripts_are_the_nodes_and_hrc():

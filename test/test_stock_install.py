@@ -51,7 +51,9 @@ MODULE_KEYS = {
     'mcap_ros2': 'mcap-ros2-support', 'gymnasium': 'python3-gymnasium-pip',
     'stable_baselines3': 'python3-stable-baselines3-pip'}
 # Modules without a rosdep key there: the recipe's pip step installs them (their pin names).
-PIP_ONLY = {'mcap': 'mcap', 'zstandard': 'zstandard', 'ray': 'ray', 'pettingzoo': 'pettingzoo'}
+# (foxglove-sdk, added later, was not looked up in rosdistro: pinned for pip either way.)
+PIP_ONLY = {'mcap': 'mcap', 'zstandard': 'zstandard', 'ray': 'ray', 'pettingzoo': 'pettingzoo',
+            'foxglove': 'foxglove-sdk'}
 UBUNTU_NOBLE_NUMPY = '1.26.4'   # python3-numpy of Ubuntu 24.04, what /opt/ros/jazzy's debs use
 
 
