@@ -22,7 +22,7 @@ run one after the other in one invocation).
 a virtual gamepad in headless Chromium in place of ``navigator.getGamepads``): the page sends
 it every 20 ms to the display node, which publishes ``/joy``, which the human node reads
 (``input: joy``). A move's time is taken just before the call that sets the virtual stick, so
-the latency includes the page's 20 ms sampling and the WebDriver call (a few ms)::
+the latency includes the page's sampling (every 5 ms) and the WebDriver call (a few ms)::
 
     python bench/stick_latency.py --gamepad --moves 300
 """
@@ -50,6 +50,8 @@ from hrc_testing.nodes import NodeProcess, ros_environment  # noqa: E402 (after 
 
 AXIS = 1
 MAX_TORQUE = 0.5      # N*m: the sim's default, the human drives the rotation here
+# N*m: a move is found by its value; /joy carries float32 (a gamepad's moves differ by 1e-3)
+VALUE_TOLERANCE = 1e-6
 
 
 def percentile(values, fraction):
@@ -190,8 +192,8 @@ def measure(name: str, human_period: float, args, domain_id: int) -> dict:
     applied.sort()
     latencies, lost = [], 0
     for written, value in writes:
-        first = next((at for at, got in applied if at >= written and abs(got - value) < 1e-9),
-                     None)
+        first = next((at for at, got in applied
+                      if at >= written and abs(got - value) < VALUE_TOLERANCE), None)
         if first is None:
             lost += 1
         else:

@@ -72,7 +72,7 @@ SUMMARY = ("The pages of a live hrc session on http://127.0.0.1:<port>/: the per
 SIM_PARAMETERS = ('rod_length', 'pendulum_length', 'ball_radius', 'pendulum_limit',
                   'control_period', 'episode_duration')
 # s: a page's gamepad silent this long is gone (unplugged, the page closed): its /joy writer is
-# withdrawn. The page sends every 20 ms while one is connected.
+# withdrawn. The page sends at least every 50 ms while one is connected.
 GAMEPAD_SILENCE_S = 0.5
 AGENT_PARAMETERS = ('max_training_episodes', 'evaluation_episodes', 'episode_break', 'mode')
 

@@ -2,11 +2,12 @@
 
 The person's page reads a gamepad with the browser's Gamepad API (any gamepad the browser
 knows, with no driver or joystick device on the computer) and, while one is connected, sends
-the stick the person chose by moving it to ``POST /gamepad`` at the person's rate, with the
-page's session token. The display node publishes each as ``sensor_msgs/Joy`` on ``/joy`` and
-the human node takes it with ``input: joy`` and the guarantees of a joystick: the person's input
-only while messages come, a silent ``/joy`` (the gamepad unplugged, the page closed) is a lost
-input that pauses the session with the same words, never a silent stand-in.
+the stick the person chose by moving it to ``POST /gamepad`` with the page's session token: at
+once when it moved (it looks every 5 ms), every 50 ms when it did not. The display node
+publishes each as ``sensor_msgs/Joy`` on ``/joy`` and the human node takes it with ``input:
+joy`` and the guarantees of a joystick: the person's input only while messages come, a
+silent ``/joy`` (the gamepad unplugged, the page closed) is a lost input that pauses the
+session with the same words, never a silent stand-in.
 
 Body: ``{"axis": value in [-1, 1], "button": bool, "axis_index": int, "id": text}``: the
 chosen axis as the browser reports it (the standard mapping: stick up or left is -1), the
