@@ -213,6 +213,8 @@ class Snapshot:
     person_played: bool = False
     replay: str = ''            # what a replay node replays ('' = a live session)
     runner_waiting: str = ''    # why the session runner waits before starting ('' = it does not)
+    # each node's newest status on /diagnostics: (name, level 0..3, message, monotonic s)
+    health: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -337,6 +339,13 @@ class DisplayModel:
         """Set (or clear, with '') what a replay node replays."""
         with self._lock:
             self._update(replay=source)
+
+    def set_health(self, name: str, level: int, message: str, now: float) -> None:
+        """Take a node's status from /diagnostics (the newest of each name is kept)."""
+        with self._lock:
+            kept = {item[0]: item for item in self._snapshot.health}
+            kept[name] = (name, int(level), message, now)
+            self._update(health=tuple(sorted(kept.values())))
 
     def set_runner_waiting(self, reason: str) -> None:
         """Set (or clear, with '') why the session runner waits before it starts the nodes."""

@@ -23,6 +23,10 @@ COLORS = {**{name: rgb8(colour) for name, colour in BODY_COLOURS.items()},
           'background': (242, 243, 245), 'target': (200, 204, 210)}
 # A human command older than this (s) counts as stale on the console.
 STALE_COMMAND_S = 1.0
+# s: a node's /diagnostics status older than this is stale (they come once a second)
+STALE_HEALTH_S = 3.0
+HEALTH_LEVELS = ('OK', 'WARN', 'ERROR', 'STALE')     # diagnostic_msgs/DiagnosticStatus
+HEALTH_TONES = ('ok', 'wait', 'bad', 'wait')
 
 
 def configuration_points(physics: PhysicsParams, slider: float, angle: float,
@@ -123,6 +127,23 @@ def input_tone(snapshot: Snapshot, healthy: bool) -> str:
     return 'ok' if healthy else 'bad'
 
 
+def health_rows(snapshot: Snapshot) -> list:
+    """Return each node's newest /diagnostics status as the console shows it (by name).
+
+    Levels and thresholds are the nodes' own (``hrc_common.diagnostics``); a status that has not
+    come again for ``STALE_HEALTH_S`` is shown stale: its node may be gone or stalled.
+    """
+    rows = []
+    for name, level, message, received in snapshot.health:
+        age = max(0.0, snapshot.now - received)
+        level = min(max(level, 0), len(HEALTH_LEVELS) - 1)
+        words, tone = f'{HEALTH_LEVELS[level]}: {message}', HEALTH_TONES[level]
+        if age > STALE_HEALTH_S:
+            words, tone = f'no word for {age:.0f} s (last: {words})', 'wait'
+        rows.append({'name': name, 'status': words, 'tone': tone})
+    return rows
+
+
 def console_document(snapshot: Snapshot, study: dict = None, tlx: str = '') -> dict:
     """Return what the experimenter's console shows (JSON-safe).
 
@@ -165,7 +186,7 @@ def console_document(snapshot: Snapshot, study: dict = None, tlx: str = '') -> d
             'strategy': session.strategy, 'phase': session.phase,
             'human_involved': session.human_involved, 'message': session.message,
             'label': episode_label(session, snapshot.plan)},
-        'input': source, 'input_lost': snapshot.input_lost,
+        'input': source, 'input_lost': snapshot.input_lost, 'health': health_rows(snapshot),
         'episode': {'episode': errors.episode, 'steps': errors.steps,
                     'slider_error_m': round(means['slider'], 4),
                     'pendulum_error_rad': round(means['pendulum'], 4),

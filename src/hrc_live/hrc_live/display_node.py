@@ -41,11 +41,13 @@ import time
 from hrc_common import bounded_yaml
 from hrc_common import qos, topics
 from hrc_common.contract import atomic_write, dof_name, PERSONAL_FILE_MODE, phase_label
+from hrc_common.diagnostics import DIAGNOSTICS_TOPIC
 from hrc_common.nodes import run_node
 from hrc_common.parameter_query import ParameterQuery
 from hrc_common.params import declare_parameters, ParameterError, with_overrides
 from hrc_common.session_control import OPERATOR_SERVICES
 from hrc_common.tlx import check_tlx, raw_tlx, TLX_STEP
+from diagnostic_msgs.msg import DiagnosticArray
 from hrc_msgs.msg import EpisodeSummary, HumanAction, SessionStatus, TaskState
 from hrc_sim_node.physics import PhysicsParams
 from rclpy.node import Node
@@ -136,6 +138,8 @@ class DisplayNode(Node):
         self.create_subscription(String, topics.RUNNER_WAITING, self.on_runner_waiting,
                                  qos.SESSION_QOS)
         self.create_subscription(String, topics.REPLAY, self.on_replay, qos.SESSION_QOS)
+        # every node's health, as ROS tools read it (the console's "Health" table)
+        self.create_subscription(DiagnosticArray, DIAGNOSTICS_TOPIC, self.on_diagnostics, 10)
         self.controls = {command: self.create_client(Trigger, service)
                          for command, service in OPERATOR_SERVICES.items()}
         self.sim_query = ParameterQuery(self, params.sim_node, SIM_PARAMETERS, self.on_sim)
@@ -231,6 +235,12 @@ class DisplayNode(Node):
     def on_human(self, message: HumanAction):
         """Take the newest human action (its source and health)."""
         self.model.on_human(human_view(message, time.monotonic()))
+
+    def on_diagnostics(self, message: DiagnosticArray):
+        """Keep each node's newest status for the console."""
+        now = time.monotonic()
+        for status in message.status:      # level: a byte (OK 0, WARN 1, ERROR 2, STALE 3)
+            self.model.set_health(status.name, status.level[0], status.message, now)
 
     def on_input_lost(self, message: String):
         """Take the session runner's word that the person's input is lost ('' = back)."""

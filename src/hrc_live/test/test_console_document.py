@@ -62,3 +62,21 @@ def test_the_console_carries_the_subject_the_condition_the_tlx_and_the_runners_w
     assert document['tlx'] == "waiting for the person's answers"
     model.set_runner_waiting('')
     assert console_document(model.snapshot(now=1.0))['runner_waiting'] == ''
+
+
+def test_every_nodes_health_from_diagnostics_with_its_level_and_a_stale_one_said():
+    model = DisplayModel()
+    model.set_health('sim: timing', 0, 'period jitter p99 2.1 ms', now=10.0)
+    model.set_health('recorder: writing', 1, 'disk almost full: 900 MiB free', now=10.0)
+    model.set_health('human: input', 2, 'joystick lost', now=10.0)
+    model.set_health('sim: timing', 0, 'period jitter p99 2.4 ms', now=11.0)   # the newest kept
+    rows = console_document(model.snapshot(now=11.5))['health']
+    assert rows == [
+        {'name': 'human: input', 'status': 'ERROR: joystick lost', 'tone': 'bad'},
+        {'name': 'recorder: writing', 'status': 'WARN: disk almost full: 900 MiB free',
+         'tone': 'wait'},
+        {'name': 'sim: timing', 'status': 'OK: period jitter p99 2.4 ms', 'tone': 'ok'}]
+    # a node that has not spoken for over 3 s (they speak once a second): stale, not "OK"
+    stale = console_document(model.snapshot(now=14.5))['health'][2]
+    assert stale == {'name': 'sim: timing', 'tone': 'wait',
+                     'status': 'no word for 4 s (last: OK: period jitter p99 2.4 ms)'}

@@ -159,6 +159,17 @@ def test_console_input_health_and_buttons_then_the_tlx_form_on_the_page(graph, t
         return 'simulated (profile default)' in browser.find_element('id', 'input').text
     assert wait_for(showing_source, 30, 0.2), browser.find_element('tag name', 'body').text
     assert 'case 2' in browser.find_element('id', 'title').text
+    # every node's health from /diagnostics, in its level's colour
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+    health = agent.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+
+    def showing_health():
+        health.publish(DiagnosticArray(status=[DiagnosticStatus(
+            name='agent: learner', level=DiagnosticStatus.ERROR, message='update failed')]))
+        return 'ERROR: update failed' in browser.find_element('id', 'health').text
+    assert wait_for(showing_health, 30, 0.2), browser.find_element('id', 'health').text
+    cell = browser.find_element('css selector', '#health td.bad')
+    assert cell.text == 'ERROR: update failed'
     browser.find_element('id', 'pause').click()
     answer = browser.find_element('id', 'answer')
     assert wait_for(lambda: 'pause requested (test agent)' in answer.text, 30, 0.2), answer.text
