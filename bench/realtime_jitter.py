@@ -48,7 +48,6 @@ sets) and the machine's load and the CPU time the hypervisor took from this VM m
 
 import argparse
 import asyncio
-import json
 import os
 import pathlib
 import socket
@@ -117,30 +116,6 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
-async def foxglove_viewer(port: int, stop: threading.Event, received: list) -> None:
-    """Connect to the Foxglove server (retrying until it serves), subscribe to every channel."""
-    import websockets   # lazy: only the --compare-foxglove arm needs it
-    while not stop.is_set():
-        try:
-            async with websockets.connect(f'ws://127.0.0.1:{port}',
-                                          subprotocols=['foxglove.sdk.v1']) as client:
-                while not stop.is_set():
-                    try:
-                        frame = await asyncio.wait_for(client.recv(), 0.5)
-                    except asyncio.TimeoutError:
-                        continue
-                    if isinstance(frame, str):
-                        message = json.loads(frame)
-                        if message.get('op') == 'advertise':
-                            await client.send(json.dumps({'op': 'subscribe', 'subscriptions': [
-                                {'id': channel['id'], 'channelId': channel['id']}
-                                for channel in message['channels']]}))
-                    else:
-                        received.append(len(frame))
-        except (OSError, websockets.exceptions.WebSocketException):
-            await asyncio.sleep(0.2)
-
-
 def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int = 0,
             learning: str = 'sac', foxglove: bool = False) -> dict:
     """Run one realtime session; return its jitter and latency figures (ms), or {'error': ...}.
@@ -196,8 +171,12 @@ def measure(case: int, episodes: int, domain_id: int, settings=(), priority: int
     if foxglove:
         port = free_port()
         command += ['--foxglove', '--foxglove-port', str(port)]
-        viewer = threading.Thread(target=lambda: asyncio.run(
-            foxglove_viewer(port, viewer_stop, viewer_frames)), daemon=True)
+        # the test support (test/support/hrc_testing) is not installed: found from the checkout
+        sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / 'test' / 'support'))
+        from hrc_testing.foxglove_client import follow   # lazy: only this arm needs a viewer
+        viewer = threading.Thread(target=lambda: asyncio.run(follow(
+            f'ws://127.0.0.1:{port}', lambda _topic, _message, size: viewer_frames.append(size),
+            viewer_stop.is_set)), daemon=True)
         viewer.start()
     ticks_before = cpu_ticks()
     result = subprocess.run(command, capture_output=True, text=True, env=environment)

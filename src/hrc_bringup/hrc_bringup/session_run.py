@@ -112,7 +112,8 @@ class SessionRun:
                                   self.stop_reason)
         if options.foxglove:
             # a viewer yields the CPU to the control loop (it drops samples, never holds one)
-            self.supervisor.start('foxglove', foxglove_command(options, params_dir),
+            self.supervisor.start('foxglove', live_node_command('foxglove', params_dir,
+                                                                options.foxglove_port),
                                   niceness=VIEWER_NICENESS)
         if live_input and not wait_for_input(
                 self.guard or InputGuard(self.progress.node, live_input,
@@ -271,15 +272,24 @@ def print_display_address(display, executor, stop_reason: list) -> None:
           f's: see {display.log_path}', file=sys.stderr, flush=True)
 
 
+def live_node_command(node: str, params_dir: pathlib.Path, port) -> list:
+    """Return the command line of a live node of hrc_live (``display`` or ``foxglove``).
+
+    Its parameters from ``params_dir``/<node>.yaml when there, ``port`` given when not None.
+    """
+    command = [str(executable_path('hrc_live', f'{node}_node')), '--ros-args']
+    params_file = params_dir / f'{node}.yaml'
+    if params_file.is_file():
+        command += ['--params-file', str(params_file)]
+    if port is not None:
+        command += ['-p', f'port:={port}']
+    return command
+
+
 def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path,
                     settings: SessionSettings) -> list:
     """Return the command line of the display node of this session (subject: the console)."""
-    command = [str(executable_path('hrc_live', 'display_node')), '--ros-args']
-    display_params = params_dir / 'display.yaml'
-    if display_params.is_file():
-        command += ['--params-file', str(display_params)]
-    if options.display_port is not None:
-        command += ['-p', f'port:={options.display_port}']
+    command = live_node_command('display', params_dir, options.display_port)
     if options.tlx:
         command += ['-p', f'tlx_file:={(run_dir / "tlx.yaml").resolve()}']
     if options.gamepad:
@@ -287,15 +297,4 @@ def display_command(options, params_dir: pathlib.Path, run_dir: pathlib.Path,
     if settings.subject_id:
         command += ['-p', f'subject_id:={settings.subject_id}',
                     '-p', f'condition:={condition_words(settings, options)}']
-    return command
-
-
-def foxglove_command(options, params_dir: pathlib.Path) -> list:
-    """Return the command line of the Foxglove live view of this session."""
-    command = [str(executable_path('hrc_live', 'foxglove_node')), '--ros-args']
-    foxglove_params = params_dir / 'foxglove.yaml'
-    if foxglove_params.is_file():
-        command += ['--params-file', str(foxglove_params)]
-    if options.foxglove_port is not None:
-        command += ['-p', f'port:={options.foxglove_port}']
     return command

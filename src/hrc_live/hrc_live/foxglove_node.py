@@ -88,7 +88,8 @@ class FoxgloveNode(Node):
         self.create_subscription(SessionStatus, topics.SESSION, self.on_session,
                                  qos.SESSION_QOS)
         self.sim_query = ParameterQuery(self, self.params.sim_node, GEOMETRY, self.on_geometry)
-        self.create_timer(1.0, self.sim_query.poll)
+        self.session_record = None      # said again every second: a viewer that connects later
+        self.create_timer(1.0, self.every_second)  # sees the session's status within a second
         self.get_logger().info(f'serving Foxglove on ws://{self.params.host}:{self.server.port}'
                                f' (Foxglove: Open connection; layout: '
                                f'params/foxglove/hrc_layout.json)')
@@ -111,7 +112,13 @@ class FoxgloveNode(Node):
             self.channels['/hrc/agent'].log(agent_record(step))
 
     def on_session(self, status: SessionStatus) -> None:
-        self.channels['/hrc/session'].log(session_record(status))
+        self.session_record = session_record(status)
+        self.channels['/hrc/session'].log(self.session_record)
+
+    def every_second(self) -> None:
+        self.sim_query.poll()
+        if self.session_record is not None:
+            self.channels['/hrc/session'].log(self.session_record)
 
     def close(self) -> None:
         """Stop the server (its clients are told the connection closes)."""

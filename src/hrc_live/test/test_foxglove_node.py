@@ -7,27 +7,23 @@ the JSON records and the scene (protobuf, decoded with the schema the server adv
 """
 
 import asyncio
-import base64
-import json
 import re
-import struct
 import threading
+import time
 
-from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from hrc_common import qos, topics
 from hrc_msgs.msg import AgentStep, SessionStatus, TaskState
 from hrc_sim_node.body_geometry import body_poses
 from hrc_sim_node.physics_params import PhysicsParams
 import pytest
 import rclpy
-import websockets
 
+from hrc_testing.foxglove_client import follow
 from hrc_testing.nodes import wait_for
 
 pytestmark = pytest.mark.dds
 
 CHANNELS = ('/hrc/scene', '/hrc/errors', '/hrc/agent', '/hrc/session')
-MESSAGE_DATA = 0x01            # binary opcode of a message (ws-protocol v1)
 
 
 def the_state() -> TaskState:
@@ -37,45 +33,16 @@ def the_state() -> TaskState:
     return state
 
 
-def decoder_of(channel: dict):
-    """Return a function of a payload for an advertised channel (JSON or protobuf)."""
-    if channel['encoding'] == 'json':
-        return lambda payload: json.loads(payload)
-    files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel['schema']))
-    pool = descriptor_pool.DescriptorPool()
-    for file in files.file:
-        pool.Add(file)
-    message_class = message_factory.GetMessageClass(
-        pool.FindMessageTypeByName(channel['schemaName']))
-    return message_class.FromString
-
-
-async def first_messages(url: str, timeout: float) -> tuple:
+def first_messages(url: str, timeout: float) -> tuple:
     """Subscribe to every advertised channel; return (channels, {topic: first message})."""
-    async with websockets.connect(url, subprotocols=['foxglove.sdk.v1'],
-                                  open_timeout=timeout) as client:
-        channels, decoders, received = {}, {}, {}
-        loop = asyncio.get_running_loop()
-        deadline = loop.time() + timeout
-        while set(received) != set(CHANNELS) and loop.time() < deadline:
-            frame = await asyncio.wait_for(client.recv(), deadline - loop.time())
-            if isinstance(frame, str):
-                message = json.loads(frame)
-                if message.get('op') == 'advertise':
-                    subscriptions = []
-                    for channel in message['channels']:
-                        channels[channel['id']] = channel
-                        decoders[channel['id']] = decoder_of(channel)
-                        subscriptions.append({'id': channel['id'], 'channelId': channel['id']})
-                    await client.send(json.dumps({'op': 'subscribe',
-                                                  'subscriptions': subscriptions}))
-                continue
-            if frame[0] != MESSAGE_DATA:
-                continue
-            (subscription,) = struct.unpack_from('<I', frame, 1)
-            topic = channels[subscription]['topic']
-            received.setdefault(topic, decoders[subscription](frame[13:]))
-        return {channel['topic']: channel for channel in channels.values()}, received
+    received = {}
+    loop_deadline = time.monotonic() + timeout
+
+    def done():
+        return set(received) == set(CHANNELS) or time.monotonic() > loop_deadline
+    channels = asyncio.run(follow(
+        url, lambda topic, message, _: received.setdefault(topic, message), done))
+    return channels, received
 
 
 def test_a_foxglove_client_sees_the_scene_the_errors_the_actions_and_the_session(
@@ -90,14 +57,15 @@ def test_a_foxglove_client_sees_the_scene_the_errors_the_actions_and_the_session
     states = node.create_publisher(TaskState, topics.STATE, qos.STATE_QOS)
     steps = node.create_publisher(AgentStep, topics.AGENT_STEP, qos.AGENT_STEP_QOS)
     sessions = node.create_publisher(SessionStatus, topics.SESSION, qos.SESSION_QOS)
-    sessions.publish(SessionStatus(session_id='fox', case_id=2, episode=3,
-                                   phase=SessionStatus.PHASE_EVALUATION, human_involved=True,
-                                   message='evaluating'))
+    status = SessionStatus(session_id='fox', case_id=2, episode=3,
+                           phase=SessionStatus.PHASE_EVALUATION, human_involved=True,
+                           message='evaluating')
     step = AgentStep(episode=3, step=17, action=0.25, observation_human_action=-0.5, reward=0.75)
 
-    def publish():         # until the client has what it needs: the viewer's readers keep one
+    def publish():         # until the client has what it needs: a server keeps no history
         states.publish(the_state())
         steps.publish(step)
+        sessions.publish(status)
     node.create_timer(0.05, publish)
     spinning = threading.Event()
 
@@ -107,7 +75,7 @@ def test_a_foxglove_client_sees_the_scene_the_errors_the_actions_and_the_session
     spinner = threading.Thread(target=spin)
     spinner.start()
     try:
-        channels, received = asyncio.run(first_messages(url, timeout=60.0))
+        channels, received = first_messages(url, timeout=60.0)
     finally:
         spinning.set()
         spinner.join()
