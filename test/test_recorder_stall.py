@@ -11,6 +11,7 @@ import os
 import pathlib
 import signal
 import subprocess
+import time
 
 import pytest
 from rosbags.highlevel import AnyReader
@@ -79,5 +80,48 @@ def test_a_stalled_recorder_holds_lockstep_and_misses_nothing(tmp_path, ros_doma
     # every episode of the session (the training ones and the evaluation) has a whole file:
     # its initial state, one per step with none left out, and a last one that ends it
     assert len(found) >= EPISODES + 1, (sorted(found), printed)
+    for name, (steps, ended) in found.items():
+        assert ended and len(steps) >= 2 and steps == list(range(len(steps))), (name, steps)
+
+
+# s: how long the realtime test stops the recorder (a stimulus, not a measure: nothing is
+# asserted about time). A realtime sim never waits (a person acts); the writers' histories
+# (STREAM_WRITER_DEPTH) hold what 8 s of a realtime episode publishes, so nothing is lost.
+REALTIME_STALL_S = 8.0
+
+
+@pytest.mark.slow
+def test_a_recorder_stopped_for_8_s_in_realtime_misses_nothing(tmp_path, ros_domain_id):
+    log = open(tmp_path / 'runner.log', 'w+')
+    runner = subprocess.Popen(
+        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
+         str(ros_domain_id), '--session-id', 'stall', '--bags-dir', 'bags', '--runs-dir', 'runs',
+         '--case', '4', '--mode', 'realtime', '--episodes', '1', '--eval-episodes', '1',
+         '--set', 'sim.episode_duration=12.0', '--set', 'agent.episode_break=0.5'],
+        cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    sim_log = tmp_path / 'runs' / 'stall' / 'logs' / 'sim.log'
+
+    def output():
+        log.seek(0)
+        return log.read()
+
+    try:     # case 4: the person acts from the first episode, realtime throughout
+        assert wait_for(lambda: sim_log.exists() and 'episode 0 started' in sim_log.read_text()
+                        and node_pid('recorder_node', ros_domain_id), 120), output()
+        pid = node_pid('recorder_node', ros_domain_id)
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            time.sleep(REALTIME_STALL_S)
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        assert runner.wait(timeout=300) == 0, output()
+    finally:
+        if runner.poll() is None:
+            os.killpg(runner.pid, signal.SIGKILL)
+            runner.wait()
+    printed = output()
+    assert 'the recorder missed' not in printed, printed
+    found = states_per_episode(tmp_path / 'bags' / 'stall')
+    assert len(found) >= 2, (sorted(found), printed)
     for name, (steps, ended) in found.items():
         assert ended and len(steps) >= 2 and steps == list(range(len(steps))), (name, steps)
