@@ -16,6 +16,7 @@ import subprocess
 import sys
 
 from hrc_common.executables import executable_path
+from hrc_live.display_words import INPUT_LOST_BANNER
 from hrc_msgs.msg import HumanAction
 from hrc_testing.live import loose_task_tree, operator
 from hrc_testing.nodes import wait_for
@@ -66,6 +67,9 @@ def test_a_case2_session_with_a_gamepad_through_the_page(tmp_path, ros_domain_id
             r'episode \d+ started \(.*realtime\)', sim_log.read_text()), 180), output()
         browser.execute_script('window.virtualPad.connected = false')
         assert wait_for(lambda: 'joystick disconnected' in output(), 60), output()
+        # the person's page says the pause (the words of a lost joystick), no stand-in
+        assert wait_for(lambda: browser.find_element('id', 'banner-text').text
+                        == INPUT_LOST_BANNER, 30, 0.2), browser.find_element('id', 'banner').text
         code, said = operator(ros_domain_id, 'resume')
         assert code == 1 and 'still disconnected' in said, said
         browser.execute_script(f'window.virtualPad.connected = true; '
