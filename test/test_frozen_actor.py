@@ -9,13 +9,12 @@ agent judges again or runs the evaluation again), and the report names it.
 import os
 import pathlib
 import signal
-import subprocess
 
 import pytest
 from rosbags.highlevel import AnyReader
 
-from hrc_common.executables import executable_path
 from hrc_testing.nodes import node_pid, wait_for
+from hrc_testing.sessions import SessionRunner
 
 
 def missing_and_marked(folder: pathlib.Path, actor: str) -> dict:
@@ -55,36 +54,22 @@ FREEZES = {
 @pytest.mark.parametrize('freeze', FREEZES)
 def test_a_frozen_actor_leaves_no_unmarked_episode(tmp_path, ros_domain_id, freeze):
     executable, actor, involved, words, warnings, options = FREEZES[freeze]
-    log = open(tmp_path / 'runner.log', 'w+')
-    runner = subprocess.Popen(
-        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
-         str(ros_domain_id), '--session-id', 'frozen', '--bags-dir', 'bags', '--runs-dir',
-         'runs', '--eval-episodes', '1', *options],
-        cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    sim_log = tmp_path / 'runs' / 'frozen' / 'logs' / 'sim.log'
-
-    def output():
-        log.seek(0)
-        return log.read()
-
-    def sim_says(text):
-        return sim_log.exists() and text in sim_log.read_text()
-
+    session = SessionRunner(tmp_path, ros_domain_id, 'frozen', '--eval-episodes', '1', *options)
+    output = session.output
     try:
-        assert wait_for(lambda: sim_says(involved), 180), output()
+        assert wait_for(lambda: involved in session.node_log('sim'), 180), output()
         pid = node_pid(executable, ros_domain_id)
         assert pid > 0, output()
         os.kill(pid, signal.SIGSTOP)
         try:
-            assert wait_for(lambda: sim_log.read_text().count(words) >= warnings, 120), output()
+            assert wait_for(lambda: session.node_log('sim').count(words) >= warnings, 120), \
+                output()
         finally:
             os.kill(pid, signal.SIGCONT)
-        assert runner.wait(timeout=300) == 0, output()
+        assert session.process.wait(timeout=300) == 0, output()
     finally:
-        if runner.poll() is None:
-            os.killpg(runner.pid, signal.SIGKILL)
-            runner.wait()
-    found = missing_and_marked(tmp_path / 'bags' / 'frozen', actor)
+        session.stop()
+    found = missing_and_marked(session.bags(), actor)
     late = {episode: counts for episode, counts in found.items() if counts[0]}
     assert late, found
     for episode, (missing, marked) in late.items():

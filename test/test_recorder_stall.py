@@ -10,14 +10,13 @@ on, and reads every episode's file back with rosbags.
 import os
 import pathlib
 import signal
-import subprocess
 import time
 
 import pytest
 from rosbags.highlevel import AnyReader
 
-from hrc_common.executables import executable_path
 from hrc_testing.nodes import node_pid, wait_for
+from hrc_testing.sessions import SessionRunner
 
 EPISODES = 8
 
@@ -37,20 +36,12 @@ def states_per_episode(folder: pathlib.Path) -> dict:
 
 @pytest.mark.slow
 def test_a_stalled_recorder_holds_lockstep_and_misses_nothing(tmp_path, ros_domain_id):
-    log = open(tmp_path / 'runner.log', 'w+')
-    runner = subprocess.Popen(
-        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
-         str(ros_domain_id), '--session-id', 'stall', '--bags-dir', 'bags', '--runs-dir', 'runs',
-         '--episodes', str(EPISODES), '--eval-episodes', '1'],
-        cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    sim_log = tmp_path / 'runs' / 'stall' / 'logs' / 'sim.log'
-
-    def output():
-        log.seek(0)
-        return log.read()
+    session = SessionRunner(tmp_path, ros_domain_id, 'stall', '--episodes', str(EPISODES),
+                            '--eval-episodes', '1')
+    output = session.output
 
     def sim_says(words):
-        return sim_log.exists() and words in sim_log.read_text()
+        return words in session.node_log('sim')
 
     try:
         first = tmp_path / 'bags' / 'stall' / 'stall_episode0001.mcap'
@@ -62,21 +53,19 @@ def test_a_stalled_recorder_holds_lockstep_and_misses_nothing(tmp_path, ros_doma
             return first.exists() and pid
 
         assert wait_for(started, 120), output()
-        assert pid > 0 and runner.poll() is None, output()
+        assert pid > 0 and session.process.poll() is None, output()
         os.kill(pid, signal.SIGSTOP)
         try:    # the sim says it waits (after 5 s of waiting), then the recorder goes on
             assert wait_for(lambda: sim_says('waiting for the recorder'), 120), output()
         finally:
             os.kill(pid, signal.SIGCONT)
         assert wait_for(lambda: sim_says('the recorder caught up'), 120), output()
-        assert runner.wait(timeout=300) == 0, output()
+        assert session.process.wait(timeout=300) == 0, output()
     finally:
-        if runner.poll() is None:
-            os.killpg(runner.pid, signal.SIGKILL)
-            runner.wait()
+        session.stop()
     printed = output()
     assert 'the recorder missed' not in printed, printed
-    found = states_per_episode(tmp_path / 'bags' / 'stall')
+    found = states_per_episode(session.bags())
     # every episode of the session (the training ones and the evaluation) has a whole file:
     # its initial state, one per step with none left out, and a last one that ends it
     assert len(found) >= EPISODES + 1, (sorted(found), printed)
@@ -92,21 +81,12 @@ REALTIME_STALL_S = 8.0
 
 @pytest.mark.slow
 def test_a_recorder_stopped_for_8_s_in_realtime_misses_nothing(tmp_path, ros_domain_id):
-    log = open(tmp_path / 'runner.log', 'w+')
-    runner = subprocess.Popen(
-        [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
-         str(ros_domain_id), '--session-id', 'stall', '--bags-dir', 'bags', '--runs-dir', 'runs',
-         '--case', '4', '--mode', 'realtime', '--episodes', '1', '--eval-episodes', '1',
-         '--set', 'sim.episode_duration=12.0', '--set', 'agent.episode_break=0.5'],
-        cwd=tmp_path, stdout=log, stderr=subprocess.STDOUT, text=True, start_new_session=True)
-    sim_log = tmp_path / 'runs' / 'stall' / 'logs' / 'sim.log'
-
-    def output():
-        log.seek(0)
-        return log.read()
-
+    session = SessionRunner(tmp_path, ros_domain_id, 'stall', '--case', '4', '--mode',
+                            'realtime', '--episodes', '1', '--eval-episodes', '1', '--set',
+                            'sim.episode_duration=12.0', '--set', 'agent.episode_break=0.5')
+    output = session.output
     try:     # case 4: the person acts from the first episode, realtime throughout
-        assert wait_for(lambda: sim_log.exists() and 'episode 0 started' in sim_log.read_text()
+        assert wait_for(lambda: 'episode 0 started' in session.node_log('sim')
                         and node_pid('recorder_node', ros_domain_id), 120), output()
         pid = node_pid('recorder_node', ros_domain_id)
         os.kill(pid, signal.SIGSTOP)
@@ -114,14 +94,12 @@ def test_a_recorder_stopped_for_8_s_in_realtime_misses_nothing(tmp_path, ros_dom
             time.sleep(REALTIME_STALL_S)
         finally:
             os.kill(pid, signal.SIGCONT)
-        assert runner.wait(timeout=300) == 0, output()
+        assert session.process.wait(timeout=300) == 0, output()
     finally:
-        if runner.poll() is None:
-            os.killpg(runner.pid, signal.SIGKILL)
-            runner.wait()
+        session.stop()
     printed = output()
     assert 'the recorder missed' not in printed, printed
-    found = states_per_episode(tmp_path / 'bags' / 'stall')
+    found = states_per_episode(session.bags())
     assert len(found) >= 2, (sorted(found), printed)
     for name, (steps, ended) in found.items():
         assert ended and len(steps) >= 2 and steps == list(range(len(steps))), (name, steps)

@@ -1,9 +1,13 @@
-"""Helpers for tests of whole sessions: a task tree every state meets, exact digests."""
+"""Helpers for tests of whole sessions: a task tree every state meets, exact digests, a runner."""
 
+import os
 import pathlib
+import signal
+import subprocess
 
 import yaml
 
+from hrc_common.executables import executable_path
 from hrc_common.paths import params_dir
 
 
@@ -43,3 +47,42 @@ def exact_plain(value):
     if hasattr(value, '__dict__'):
         return exact_plain(vars(value))
     return repr(float(value))
+
+
+class SessionRunner:
+    """One ``hrc session`` of a test in ``folder`` (bags/, runs/), its terminal in a file.
+
+    For the tests that act on a running session's nodes (stop one, watch its log): the
+    runner's output, a node's log (``runs/<id>/logs/<node>.log``), and a stop that takes the
+    runner's process group down when the test ends early.
+    """
+
+    def __init__(self, folder, domain_id: int, session_id: str, *options):
+        self.folder, self.session_id = pathlib.Path(folder), session_id
+        self.log = open(self.folder / 'runner.log', 'w+')
+        self.process = subprocess.Popen(
+            [str(executable_path('hrc_bringup', 'hrc')), 'session', '--domain-id',
+             str(domain_id), '--session-id', session_id, '--bags-dir', 'bags', '--runs-dir',
+             'runs', *options],
+            cwd=self.folder, stdout=self.log, stderr=subprocess.STDOUT, text=True,
+            start_new_session=True)
+
+    def output(self) -> str:
+        """Everything the runner printed so far."""
+        self.log.seek(0)
+        return self.log.read()
+
+    def node_log(self, node: str) -> str:
+        """Return what ``node`` logged so far ('' before its log exists)."""
+        path = self.folder / 'runs' / self.session_id / 'logs' / f'{node}.log'
+        return path.read_text() if path.exists() else ''
+
+    def bags(self) -> pathlib.Path:
+        """Return the session's bag folder."""
+        return self.folder / 'bags' / self.session_id
+
+    def stop(self) -> None:
+        """Kill the runner's process group if it still runs (a test that failed early)."""
+        if self.process.poll() is None:
+            os.killpg(self.process.pid, signal.SIGKILL)
+            self.process.wait()
