@@ -76,6 +76,10 @@ moves at most ``max_rate`` per second.
    person around a profile (delay, noises, gains, constant perceptual offsets, learning rates),
    reproducibly from a seed; the ``*_offset`` fields are such a person's constant misjudgement
    of the zero (0 in the profiles themselves).
+9. **Co-adaptation to the partner's predictability** (:mod:`hrc_joystick_node.co_adaptation`,
+   off but in ``paper_co_adapting``). An internal model of the partner's degree of freedom
+   whose surprise makes the person stiffer (a gain on the intent), slower (slew rate and
+   neuromuscular lag) and, through frustration, noisier and less attentive.
 
 Determinism: every random draw comes from a numpy Generator seeded with ``(seed, episode)`` at
 each :meth:`SimulatedHuman.reset`, so an episode reproduces from the seed, the episode index,
@@ -120,6 +124,7 @@ import numpy
 
 from hrc_common.dof import check_dof, ROTATION, TRANSLATION
 from hrc_joystick_node.adaptation import TwoRateAdaptation
+from hrc_joystick_node.co_adaptation import CoAdaptation, co_adapting
 from hrc_joystick_node.fatigue import Fatigue
 from hrc_joystick_node.human_profile import HumanProfile
 from hrc_joystick_node.perception import advance, memory, Perception
@@ -195,6 +200,10 @@ class SimulatedHuman:
                                profile.fatigue_noise_ceiling, profile.fatigue_lapse_ceiling)
         self.adaptation = TwoRateAdaptation(profile.fast_retention, profile.fast_learning_rate,
                                             profile.slow_retention, profile.slow_learning_rate)
+        # None when the profile switches no mechanism on: the person is then bit-identical to
+        # one without the component.
+        self.co_adaptation = (CoAdaptation(profile, self.dof, self.control_period)
+                              if co_adapting(profile) else None)
         self.episode = None
         self._last_time = None  # simulation time (s) of the last state acted on
         self._acted_this_episode = False
@@ -217,6 +226,10 @@ class SimulatedHuman:
             boundaries = max(1, int(episode) - self.episode)
             rest = self.profile.rest_between_episodes if rest_seconds is None else rest_seconds
             self.fatigue.rest(boundaries * float(rest))
+            if self.co_adaptation is not None:
+                self.co_adaptation.rest(boundaries * float(rest))
+        if self.co_adaptation is not None:
+            self.co_adaptation.start_episode()
         self._acted_this_episode = False
         self._error_sum, self._error_steps = 0.0, 0
         self.episode = int(episode)
@@ -229,6 +242,7 @@ class SimulatedHuman:
         self._stick = 0.0  # where the stick is (normalized), before motor noise
         self._intent = 0.0  # where the arm is heading (after the rate limit)
         self._hold_integral = 0.0  # integral part of the level-2 hold (normalized command)
+        self._command = 0.0  # the last command (the efference copy of co-adaptation)
 
     @property
     def practice_factor(self) -> float:
@@ -253,9 +267,12 @@ class SimulatedHuman:
 
     def snapshot(self) -> dict:
         """Return the person's state carried between episodes, as plain values."""
-        return {'practiced_episodes': self.practiced_episodes,
-                'steps_on_task': self.steps_on_task, 'last_time': self._last_time,
-                'fatigue': self.fatigue.snapshot(), 'adaptation': self.adaptation.snapshot()}
+        snapshot = {'practiced_episodes': self.practiced_episodes,
+                    'steps_on_task': self.steps_on_task, 'last_time': self._last_time,
+                    'fatigue': self.fatigue.snapshot(), 'adaptation': self.adaptation.snapshot()}
+        if self.co_adaptation is not None:
+            snapshot['co_adaptation'] = self.co_adaptation.snapshot()
+        return snapshot
 
     def restore(self, snapshot: dict) -> None:
         """Take a state of :meth:`snapshot` (call :meth:`reset` afterwards)."""
@@ -264,6 +281,8 @@ class SimulatedHuman:
         self._last_time = snapshot['last_time']
         self.fatigue.restore(snapshot['fatigue'])
         self.adaptation.restore(snapshot['adaptation'])
+        if self.co_adaptation is not None and 'co_adaptation' in snapshot:
+            self.co_adaptation.restore(snapshot['co_adaptation'])
         self._acted_this_episode = False
 
     def _advance_clock(self, now: typing.Optional[float]) -> None:
@@ -275,6 +294,8 @@ class SimulatedHuman:
         if gap > 0.0:
             self.fatigue.work(min(gap, period))
             self.fatigue.rest(gap - period)
+            if self.co_adaptation is not None:
+                self.co_adaptation.rest(gap - period)
         self._last_time = float(now)
 
     # -- one step ------------------------------------------------------------------------
@@ -320,23 +341,38 @@ class SimulatedHuman:
                 # Accelerating the slider up presses the east end down: push up when the
                 # beam is above the angle the ball needs.
                 intent += (angle - target_angle) / profile.coupling_full_scale
-        intent = max(-1.0, min(1.0, intent))
+        gain, bandwidth, noise, lapses = self._co_adapt(seen)
+        intent = max(-1.0, min(1.0, intent * gain))
 
-        lapse = profile.lapse_probability * practice * fatigue.lapse_factor
+        lapse = profile.lapse_probability * practice * fatigue.lapse_factor * lapses
         if not self._lapsed(lapse, rng.random()):
             # Bandwidth: a slew-rate limit, then the neuromuscular lag toward that point.
-            step_limit = profile.max_rate * self.control_period
+            step_limit = profile.max_rate * self.control_period * bandwidth
             self._intent += max(-step_limit, min(step_limit, intent - self._intent))
             if profile.neuromuscular_time > 0.0:
-                follow = 1.0 - math.exp(-self.control_period / profile.neuromuscular_time)
+                follow = 1.0 - math.exp(-self.control_period * bandwidth
+                                        / profile.neuromuscular_time)
             else:
                 follow = 1.0
             self._stick += follow * (self._intent - self._stick)
         noise_std = (profile.motor_noise * abs(self._stick)
-                     + profile.motor_noise_floor) * practice * fatigue.noise_factor
+                     + profile.motor_noise_floor) * practice * fatigue.noise_factor * noise
         self._motor_state = advance(self._motor_state, self._motor_memory, rng)
         command = self._stick + noise_std * self._motor_state
-        return max(-1.0, min(1.0, float(command)))
+        self._command = max(-1.0, min(1.0, float(command)))
+        return self._command
+
+    def _co_adapt(self, seen) -> typing.Tuple[float, float, float, float]:
+        """Look at the partner; return (gain, bandwidth, noise, lapse) factors, 1 when off."""
+        co_adaptation = self.co_adaptation
+        if co_adaptation is None:
+            return 1.0, 1.0, 1.0, 1.0
+        if self.dof == ROTATION:
+            co_adaptation.observe(seen.slider, seen.slider_velocity, self._command)
+        else:
+            co_adaptation.observe(seen.pendulum, seen.pendulum_velocity, self._command)
+        return (co_adaptation.stiffness, co_adaptation.bandwidth_factor,
+                co_adaptation.noise_factor, co_adaptation.lapse_factor)
 
     def _lapsed(self, share: float, draw: float) -> bool:
         """Return whether attention lapses at this call (``draw``: uniform in [0, 1)).

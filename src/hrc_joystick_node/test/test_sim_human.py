@@ -28,8 +28,8 @@ def physics():
         yield model
 
 
-def test_the_four_profiles_exist_and_are_valid():
-    assert {'novice', 'skilled', 'paper', 'paper_symmetric'} <= set(PROFILES)
+def test_the_profiles_exist_and_are_valid():
+    assert {'novice', 'skilled', 'paper', 'paper_symmetric', 'paper_co_adapting'} <= set(PROFILES)
     for name, profile in PROFILES.items():
         assert profile.description, f'{name} has no description'
         if '_symmetric' in name:
@@ -41,7 +41,7 @@ def test_the_four_profiles_exist_and_are_valid():
         # than twice; human_profile.py, "The paper's person").
         assert profile.pendulum_bias * 0.5 > 2 * profile.slider_bias, name
         assert profile.pendulum_noise * 0.5 > profile.slider_noise, name
-        if name != 'paper':
+        if not name.startswith('paper'):
             assert profile.pendulum_noise * 0.5 > 2 * profile.slider_noise, name
 
 
@@ -80,8 +80,9 @@ def test_a_retired_profile_is_refused_with_the_commit_that_has_it(name):
         HumanCore(HumanParams(input='sim', profile=name), PROFILES)
 
 
-def test_at_most_four_profiles_none_versioned():
-    assert len(PROFILES) <= 4, sorted(PROFILES)
+def test_at_most_five_profiles_none_versioned():
+    # novice, skilled, paper and its two controls (symmetric perception; co-adapting).
+    assert len(PROFILES) <= 5, sorted(PROFILES)
     assert not [name for name in PROFILES if re.search(r'_v[0-9]+$', name)], sorted(PROFILES)
 
 
