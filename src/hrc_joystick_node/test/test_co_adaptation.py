@@ -112,7 +112,8 @@ def test_a_stiffer_person_pushes_harder_against_the_same_error():
     stiff, human = person_commands(only('stiffening_rate'), 20.0)
     gain = human.co_adaptation.stiffness
     assert gain > 1.0 + 0.7 * PROFILE.stiffness_ceiling
-    assert abs(numpy.mean(stiff[-100:])) > (1.0 + 0.5 * (gain - 1.0)) * abs(numpy.mean(calm[-100:]))
+    pushed, calm_push = abs(numpy.mean(stiff[-100:])), abs(numpy.mean(calm[-100:]))
+    assert pushed > (1.0 + 0.5 * (gain - 1.0)) * calm_push
 
 
 def test_beside_a_smooth_partner_the_co_adapting_person_acts_as_the_paper_person():
