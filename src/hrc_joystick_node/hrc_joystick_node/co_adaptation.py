@@ -29,7 +29,9 @@ The model (one call of :meth:`CoAdaptation.observe` per call of the person, ever
    ``1 + stiffness_ceiling``.
 3. **Slowing** (``slowing``). A broadband disturbance lowers the operator's bandwidth: the stick
    moves more slowly and follows the intent with a longer lag, the factor
-   ``B = 1 / (1 + slowing * X)`` on the slew rate, ``1 / B`` on the neuromuscular time.
+   ``B = max(bandwidth_floor, 1 / (1 + slowing * X))`` on the slew rate, ``1 / B`` on the
+   neuromuscular time. The floor keeps the loss within the published regression: the
+   crossover frequency falls to about half, not to nothing.
 4. **Frustration** (``frustration_rate``). A partner that keeps doing the unexpected erodes the
    person's trust; the frustration ``F`` in [0, 1) builds with the excess surprise and
    recovers with time (on task and at rest), ``dF/dt = frustration_rate * X * (1 - F) - F /
@@ -130,7 +132,9 @@ class CoAdaptation:
     @property
     def bandwidth_factor(self) -> float:
         """B in (0, 1]: the share of the slew rate left (slowing)."""
-        return 1.0 / (1.0 + self.profile.slowing * self.excess_surprise)
+        profile = self.profile
+        return max(profile.bandwidth_floor,
+                   1.0 / (1.0 + profile.slowing * self.excess_surprise))
 
     @property
     def noise_factor(self) -> float:

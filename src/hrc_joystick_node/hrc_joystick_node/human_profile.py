@@ -182,6 +182,8 @@ class HumanProfile:
                                      'intent', low=0.0, high=10.0)
     slowing: float = param(0.0, 'bandwidth lost per unit of excess surprise (0 = off)',
                            low=0.0, high=100.0)
+    bandwidth_floor: float = param(0.5, 'least share of the bandwidth slowing leaves', low=0.01,
+                                   high=1.0)
     frustration_rate: float = param(0.0, 'frustration built per s per unit of excess surprise '
                                     '(0 = off)', low=0.0, high=100.0)
     frustration_recovery_time: float = param(60.0, 'time constant of recovering from '
