@@ -22,8 +22,9 @@ with the mechanism, over the same ratio without. What a mechanism must show: it 
 exploring partner (its level moves), and it recovers in the last smooth phase.
 
 ``--calibrate`` prints the root mean squared prediction error of the person's forward model
-beside the smooth partner, per role: the reference scales of the profile
-(``slider_surprise_scale``, ``beam_surprise_scale``), measured, not fitted to an outcome.
+beside the smooth partner, per role (the person's mechanisms held inert by the largest scales,
+so the person is the paper's): the reference scales of the profile (``slider_surprise_scale``,
+``beam_surprise_scale``), measured, not fitted to an outcome.
 Pure: PyBullet physics and SimulatedHuman at the default human period 0.02 s, no ROS.
 """
 
