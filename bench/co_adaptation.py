@@ -4,6 +4,7 @@
     python bench/co_adaptation.py --calibrate         # the surprise scales of a smooth partner
     python bench/co_adaptation.py                     # each mechanism alone, then all together
     python bench/co_adaptation.py --mechanism stiffness --role translation --seeds 10
+    python bench/co_adaptation.py --replay bags/<experiment>/case2-seed0-paper_co_adapting ...
 
 The person (``paper_co_adapting`` of params/sim_human.yaml, or ``--profile``) plays three
 phases of ``--episodes`` episodes each beside a scripted partner on the other degree of
@@ -25,7 +26,14 @@ exploring partner (its level moves), and it recovers in the last smooth phase.
 beside the smooth partner, per role (the person's mechanisms held inert by the largest scales,
 so the person is the paper's): the reference scales of the profile (``slider_surprise_scale``,
 ``beam_surprise_scale``), measured, not fitted to an outcome.
-Pure: PyBullet physics and SimulatedHuman at the default human period 0.02 s, no ROS.
+``--replay`` reads recorded sessions instead: the states of each episode in which the person
+acted go through a fresh co-adapting person's internal model (the person's degree of freedom
+from the session's status), and it prints the unpredictability U the person met, the median
+over their episodes and the first and last five. The recorded states are true states at the
+control period (no perception noise), so U there is against the calibration's noisy reference:
+a partner the person could not tell from their own perception noise reads about 0.
+Pure: PyBullet physics and SimulatedHuman at the default human period 0.02 s, no ROS (the
+replay reads MCAP files with hrc_bag).
 """
 
 import argparse
@@ -35,7 +43,10 @@ import statistics
 import numpy as np
 
 from ball_holding import ideal_rotation, ideal_slider, partner_every, physics_params_at
+from hrc_bag.bag_reader import iter_messages, MessageDecoder, session_files
+from hrc_common.dof import ROTATION, TRANSLATION
 from hrc_common.smoothness import reversals_per_second
+from hrc_joystick_node.co_adaptation import CoAdaptation
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.sim_human import SimulatedHuman
 from hrc_sim_node.physics import SliderPendulumBall
@@ -124,6 +135,47 @@ def calibrate(profile, seeds: int, episodes: int) -> None:
               f'(sd {statistics.pstdev(errors):.4f}) -> {field}')
 
 
+def replay_unpredictability(profile, folder: str) -> list:
+    """Return U per episode the person acted in, replaying a recorded session (see module)."""
+    decoder, levels, per_episode = MessageDecoder(), None, []
+    for path in session_files(folder):
+        states, involved = [], False
+        for message in iter_messages(path, ['/hrc/state', '/hrc/episode', '/hrc/session']):
+            decoded = decoder.decode(message)
+            if message.topic == '/hrc/state':
+                states.append(decoded)
+            elif message.topic == '/hrc/episode':
+                involved = decoded.human_involved
+            elif levels is None and decoded.human_dof in (0, 1):
+                dof = TRANSLATION if decoded.human_dof == 0 else ROTATION
+                levels = CoAdaptation(profile, dof, 0.2)  # the states come every 0.2 s
+        if not involved or levels is None:
+            continue
+        levels.start_episode()
+        seen = []
+        for state in states:
+            if levels.partner_dof == TRANSLATION:
+                levels.observe(state.slider_position, state.slider_velocity, 0.0)
+            else:
+                levels.observe(state.pendulum_angle, state.pendulum_angular_velocity, 0.0)
+            seen.append(levels.unpredictability)
+        per_episode.append(statistics.fmean(seen) if seen else 0.0)
+    return per_episode
+
+
+def print_replays(profile, folders) -> None:
+    """Print the replayed unpredictability of each session folder."""
+    print('unpredictability U the person met, replayed from the bags (0 = below perception)')
+    for folder in folders:
+        values = replay_unpredictability(profile, folder)
+        if not values:
+            print(f'  {folder}: no episode with the person')
+            continue
+        print(f'  {folder}: {len(values)} episodes with the person, median U '
+              f'{statistics.median(values):.2f}; first {[round(v, 1) for v in values[:5]]}, '
+              f'last {[round(v, 1) for v in values[-5:]]}')
+
+
 def print_mechanism(name: str, profile, role: str, args) -> None:
     """Print the phase rows of ``name`` alone and of the same person without co-adaptation."""
     with_it = measure(alone(profile, name), role, args.seeds, args.episodes, args.explore_std)
@@ -158,6 +210,8 @@ def main(argv=None) -> int:
     parser.add_argument('--explore-std', type=float, default=0.5,
                         help="std of the partner's exploration (normalized command)")
     parser.add_argument('--calibrate', action='store_true')
+    parser.add_argument('--replay', nargs='+', metavar='SESSION_BAGS',
+                        help='recorded session folders to replay through the internal model')
     args = parser.parse_args(argv)
     problems = [text for bad, text in ((args.seeds < 1, '--seeds must be >= 1'),
                                        (args.episodes < 1, '--episodes must be >= 1'),
@@ -166,6 +220,9 @@ def main(argv=None) -> int:
     if problems:
         parser.error('; '.join(problems))
     profile = load_profile(args.profile)
+    if args.replay:
+        print_replays(profile, args.replay)
+        return 0
     if args.calibrate:
         calibrate(profile, args.seeds, args.episodes)
         return 0
