@@ -160,6 +160,8 @@ SESSIONS = {
     'composed': (['--case', '5', *SHORT], {'HRC_COMPOSE': 'sim,human,recorder'}),
     # the partner-aware observation (the partner model fitted at every step)
     'partner_aware': ([*ARGS, '--learning', 'partner_aware'], {}),
+    # the person who co-adapts to the robot's predictability (its internal model, every slice)
+    'co_adapting': ([*ARGS, '--set', 'human.profile=paper_co_adapting'], {}),
 }
 CONCURRENT_SESSIONS = 5     # at most this many at once (each graph is 4-5 processes)
 
@@ -282,6 +284,18 @@ def test_the_partner_aware_policy_is_the_same_in_the_graph_and_the_engine(sessio
         assert final['config']['params']['partner_inference'] is True, run_dir
         first_layer = next(iter(final['core']['sac']['actor'].values()))
         assert first_layer.shape[1] == 7 + 7, run_dir       # state, rates, a_h + the model
+
+
+def test_the_co_adapting_person_is_the_same_in_the_graph_and_the_engine(sessions):
+    """The human node's co-adapting person acts as the engine's, slice by slice.
+
+    The main session with the profile paper_co_adapting: bit for bit the same both ways, and
+    not the main session's person (co-adaptation changed what the person did).
+    """
+    graph_bag, engine_bag, _ = outcome_of(sessions, 'co_adapting')
+    co_adapting = assert_same(graph_bag, engine_bag, (0, 1, 2))
+    paper = by_episode(outcome_of(sessions, 'main')[0])
+    assert co_adapting['/hrc/human/action'] != paper['/hrc/human/action']
 
 
 def test_sim_human_and_recorder_in_one_process_give_the_same_session(sessions):
