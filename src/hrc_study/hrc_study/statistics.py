@@ -291,6 +291,9 @@ def signed_rank_permutation(differences) -> tuple:
     data = data[data != 0]
     if data.size == 0:
         return 1.0, 1.0
+    if data.size == 1:
+        # Two equally likely flips, -1 and +1 (scipy's permutation_test needs two samples).
+        return (0.5, 1.0) if data[0] < 0 else (1.0, 0.5)
     ranks = stats.rankdata(numpy.abs(data))
 
     def statistic(signs, axis=-1):

@@ -138,6 +138,10 @@ def test_the_exact_signed_rank_permutation_by_hand():
     # tied sizes stay exact: -1, -1, -1, +1: signed sum -2 (ranks 2.5 each: -5)
     less, _ = signed_rank_permutation([-1.0, -1.0, -1.0, 1.0])
     assert less == pytest.approx(5 / 16)                # 3 or 4 minus signs of 16 flips
+    # one pair that differs (the rest tied, as when every other seed sits at the floor): the
+    # two flips -1 and +1, so P(sum <= -1) = 1/2, P(sum >= -1) = 1; a study with it reports
+    assert signed_rank_permutation([0.0, -4.0, 0.0]) == (0.5, 1.0)
+    assert signed_rank_permutation([2.0]) == (1.0, 0.5)
 
 
 def test_paired_censored_differences_keep_only_known_orders():
