@@ -135,9 +135,14 @@ def calibrate(profile, seeds: int, episodes: int) -> None:
               f'(sd {statistics.pstdev(errors):.4f}) -> {field}')
 
 
+def stamp_seconds(state) -> float:
+    """Return a recorded state's stamp in s."""
+    return state.header.stamp.sec + state.header.stamp.nanosec * 1e-9
+
+
 def replay_unpredictability(profile, folder: str) -> list:
     """Return U per episode the person acted in, replaying a recorded session (see module)."""
-    decoder, levels, per_episode = MessageDecoder(), None, []
+    decoder, levels, person_dof, per_episode = MessageDecoder(), None, None, []
     for path in session_files(folder):
         states, involved = [], False
         for message in iter_messages(path, ['/hrc/state', '/hrc/episode', '/hrc/session']):
@@ -146,11 +151,13 @@ def replay_unpredictability(profile, folder: str) -> list:
                 states.append(decoded)
             elif message.topic == '/hrc/episode':
                 involved = decoded.human_involved
-            elif levels is None and decoded.human_dof in (0, 1):
-                dof = TRANSLATION if decoded.human_dof == 0 else ROTATION
-                levels = CoAdaptation(profile, dof, 0.2)  # the states come every 0.2 s
-        if not involved or levels is None:
+            elif person_dof is None and decoded.human_dof in (0, 1):
+                person_dof = TRANSLATION if decoded.human_dof == 0 else ROTATION
+        if not involved or person_dof is None or len(states) < 2:
             continue
+        if levels is None:  # the person looks at every state: the states' period, s
+            period = stamp_seconds(states[1]) - stamp_seconds(states[0])
+            levels = CoAdaptation(profile, person_dof, period)
         levels.start_episode()
         seen = []
         for state in states:

@@ -162,23 +162,24 @@ class HumanProfile:
     slow_learning_rate: float = param(0.05, 'learning rate per episode of the slow process',
                                       low=0.0, high=2.0)
     # co-adaptation to the partner's predictability (hrc_joystick_node.co_adaptation); off
-    # unless one of its three rates is > 0 (only paper_co_adapting); every value is a choice
+    # unless one of its three rates is > 0 (only paper_co_adapting, whose values these are:
+    # params/sim_human.yaml says which are measured and which are choices)
     partner_model_time: float = param(10.0, 'memory of the internal model of the partner (s)',
                                       low=0.2, high=10000.0)
     partner_sample_time: float = param(0.2, 'interval between two looks at the partner (s)',
                                        low=0.01, high=10.0)
     surprise_time: float = param(2.0, 'averaging time of the surprise (s)', low=0.2,
                                  high=1000.0)
-    slider_surprise_scale: float = param(1.0, "prediction error of the slider's acceleration "
+    slider_surprise_scale: float = param(0.26, "prediction error of the slider's acceleration "
                                          'beside a smooth partner (m/s^2)', low=1e-6, high=1e4)
-    beam_surprise_scale: float = param(1.0, "prediction error of the beam's angular "
+    beam_surprise_scale: float = param(0.22, "prediction error of the beam's angular "
                                        'acceleration beside a smooth partner (rad/s^2)',
                                        low=1e-6, high=1e4)
     stiffening_rate: float = param(0.0, 'stiffness gained per s per unit of excess surprise '
                                    '(0 = off)', low=0.0, high=100.0)
     stiffness_decay_time: float = param(10.0, 'time constant of relaxing the stiffness (s)',
                                         low=0.1, high=10000.0)
-    stiffness_ceiling: float = param(1.0, 'largest relative increase of the gain on the '
+    stiffness_ceiling: float = param(0.3, 'largest relative increase of the gain on the '
                                      'intent', low=0.0, high=10.0)
     slowing: float = param(0.0, 'bandwidth lost per unit of excess surprise (0 = off)',
                            low=0.0, high=100.0)
@@ -186,7 +187,7 @@ class HumanProfile:
                                    high=1.0)
     frustration_rate: float = param(0.0, 'frustration built per s per unit of excess surprise '
                                     '(0 = off)', low=0.0, high=100.0)
-    frustration_recovery_time: float = param(60.0, 'time constant of recovering from '
+    frustration_recovery_time: float = param(120.0, 'time constant of recovering from '
                                              'frustration (s)', low=0.1, high=100000.0)
     frustration_noise: float = param(0.5, 'relative increase of the motor noise at full '
                                      'frustration', low=0.0, high=10.0)

@@ -225,9 +225,7 @@ class SimulatedHuman:
         if self.episode is not None and int(episode) != self.episode:
             boundaries = max(1, int(episode) - self.episode)
             rest = self.profile.rest_between_episodes if rest_seconds is None else rest_seconds
-            self.fatigue.rest(boundaries * float(rest))
-            if self.co_adaptation is not None:
-                self.co_adaptation.rest(boundaries * float(rest))
+            self._rest(boundaries * float(rest))
         if self.co_adaptation is not None:
             self.co_adaptation.start_episode()
         self._acted_this_episode = False
@@ -293,10 +291,14 @@ class SimulatedHuman:
         gap = period if self._last_time is None else float(now) - self._last_time
         if gap > 0.0:
             self.fatigue.work(min(gap, period))
-            self.fatigue.rest(gap - period)
-            if self.co_adaptation is not None:
-                self.co_adaptation.rest(gap - period)
+            self._rest(gap - period)
         self._last_time = float(now)
+
+    def _rest(self, seconds: float) -> None:
+        """Rest ``seconds`` of simulation time: fatigue recovers, co-adaptation relaxes."""
+        self.fatigue.rest(seconds)
+        if self.co_adaptation is not None:
+            self.co_adaptation.rest(seconds)
 
     # -- one step ------------------------------------------------------------------------
     def act(self, state, subtasks, now: typing.Optional[float] = None) -> float:
