@@ -322,13 +322,6 @@ def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_co
     from hrc_common.session_control import PAUSE_SERVICE
 
     node = rclpy.create_node('observer', context=rclpy_context)
-    states, sessions, summaries, wrenches, steps = [], [], [], [], []
-    node.create_subscription(TaskState, topics.STATE, states.append, qos.STATE_QOS)
-    node.create_subscription(SessionStatus, topics.SESSION, sessions.append, qos.SESSION_QOS)
-    node.create_subscription(EpisodeSummary, topics.EPISODE, summaries.append, qos.EPISODE_QOS)
-    node.create_subscription(WrenchStamped, topics.ROBOT_CMD_WRENCH, wrenches.append,
-                             qos.COMMAND_QOS)
-    node.create_subscription(AgentStep, topics.AGENT_STEP, steps.append, qos.AGENT_STEP_QOS)
     pause = node.create_client(Trigger, PAUSE_SERVICE)
     executor = SingleThreadedExecutor(context=rclpy_context)
     executor.add_node(node)
@@ -339,12 +332,25 @@ def test_the_agent_runs_the_practice_with_the_real_sim_node(start_node, rclpy_co
         'case': 2, 'session_id': 'p-practice', 'practice_episodes': 2, 'mode': 'realtime',
         'episode_break': 0.2, 'checkpoint_dir': str(tmp_path / 'checkpoints'),
         'wait_for_subscribers': ['observer']})
+    # The agent starts its episodes only once 'observer' reads the states and the session:
+    # the pause is asked and answered before those readers exist, so the practice cannot end
+    # (and the agent exit) before the answer, however slow discovery is.
     answers = []
     deadline = time.monotonic() + 90
-    while agent.process.poll() is None and time.monotonic() < deadline:
+    while not (answers and answers[0].done()) and agent.process.poll() is None \
+            and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.05)
         if not answers and pause.service_is_ready():
             answers.append(pause.call_async(Trigger.Request()))
+    states, sessions, summaries, wrenches, steps = [], [], [], [], []
+    node.create_subscription(TaskState, topics.STATE, states.append, qos.STATE_QOS)
+    node.create_subscription(SessionStatus, topics.SESSION, sessions.append, qos.SESSION_QOS)
+    node.create_subscription(EpisodeSummary, topics.EPISODE, summaries.append, qos.EPISODE_QOS)
+    node.create_subscription(WrenchStamped, topics.ROBOT_CMD_WRENCH, wrenches.append,
+                             qos.COMMAND_QOS)
+    node.create_subscription(AgentStep, topics.AGENT_STEP, steps.append, qos.AGENT_STEP_QOS)
+    while agent.process.poll() is None and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
     for _ in range(20):
         executor.spin_once(timeout_sec=0.02)
     executor.shutdown()

@@ -29,6 +29,7 @@ class SummarySeen:
 
     episode: int
     session_id: str
+    steps: int = -1                         # control steps of the episode (-1: not said)
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ def boundary_event(type_name: str, message):
         return StateSeen(int(message.episode), int(message.step),
                          bool(message.terminated or message.truncated))
     if type_name == EPISODE_SUMMARY_TYPE:
-        return SummarySeen(int(message.episode), str(message.session_id))
+        return SummarySeen(int(message.episode), str(message.session_id), int(message.steps))
     if type_name == SESSION_STATUS_TYPE:
         return SessionSeen(plain_values(message))
     return None

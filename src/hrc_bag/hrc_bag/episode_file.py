@@ -7,6 +7,7 @@ the session's metadata.yaml (:mod:`hrc_bag.session_index`) may list it.
 """
 
 import collections
+from dataclasses import dataclass
 import os
 import pathlib
 import typing
@@ -164,3 +165,24 @@ class EpisodeFile:
             self._stream.close()
         except OSError:
             pass
+
+
+@dataclass
+class OpenEpisode:
+    """An episode file being written, and when and why it is to be closed."""
+
+    file: EpisodeFile
+    episode: typing.Optional[int]       # None for the end file
+    close_at: typing.Optional[float] = None     # monotonic s
+    reason: str = ''
+    attempt: int = 1                    # 1 = the first recording of the episode
+    last_step: int = -1                 # the highest TaskState step written
+    finished: bool = False              # its EpisodeSummary was handled
+    summary_steps: int = -1             # the steps its EpisodeSummary says (-1: not said)
+    final_seen: bool = False            # its final state (terminated or truncated) was handled
+
+    def schedule_close(self, close_at: float, reason: str) -> None:
+        """Close at ``close_at`` unless an earlier close is scheduled already."""
+        if self.close_at is None or close_at < self.close_at:
+            self.close_at = close_at
+            self.reason = reason

@@ -20,8 +20,11 @@ Episode boundaries (the rule; the node turns messages into the events of
   (SessionStatus, other topics) go to the newest open file.
 * The EpisodeSummary is the last message of an episode (the final state is not answered; the
   agent publishes the last AgentStep before the summary), so a file closes ``close_grace``
-  seconds (default 0: at once) after its EpisodeSummary is handled, or after the first state
-  of the next episode, or after a ``/hrc/session`` with phase done/aborted;
+  seconds (default 0: at once) after its EpisodeSummary is handled and it holds the state of
+  the summary's last step (a recorder that was stalled gets the states retransmitted by
+  their writer after the agent's summary: each topic keeps its order, the topics do not), or
+  after the first state of the next episode, or after a ``/hrc/session`` with phase
+  done/aborted;
   ``summary_timeout`` seconds after its final state (``terminated`` or ``truncated``) if
   nothing else closed it (a sim without an agent); or at shutdown. A message of an episode
   whose file closed already goes to the newest file (with a warning).
@@ -59,7 +62,6 @@ the recorder with a clear message.
 """
 
 import collections
-from dataclasses import dataclass
 import datetime
 import pathlib
 import time
@@ -71,7 +73,7 @@ import yaml
 from hrc_bag import cdr_peek, msgdefs
 from hrc_bag.bag_reader import recording_order
 from hrc_bag.boundaries import SessionSeen, StateSeen, SummarySeen
-from hrc_bag.episode_file import EpisodeFile
+from hrc_bag.episode_file import EpisodeFile, OpenEpisode
 from hrc_bag.format import (describe_error, episode_file_stem, file_mode,
                             index_named_file_stem, LatchedMessages, RawMessage,
                             RecordingError, session_custom_data, SESSION_RECORD, session_record,
@@ -91,25 +93,6 @@ def attempt_stem(session_id: str, episode: int, attempt: int) -> str:
     """Return the file name (without .mcap) of ``attempt`` (1, 2, ...) of ``episode``."""
     stem = episode_file_stem(session_id, episode)
     return stem if attempt <= 1 else f'{stem}_attempt{attempt}'
-
-
-@dataclass
-class OpenEpisode:
-    """An episode file being written, and when and why it is to be closed."""
-
-    file: EpisodeFile
-    episode: typing.Optional[int]       # None for the end file
-    close_at: typing.Optional[float] = None     # monotonic s
-    reason: str = ''
-    attempt: int = 1                    # 1 = the first recording of the episode
-    last_step: int = -1                 # the highest TaskState step written
-    finished: bool = False              # its EpisodeSummary was handled
-
-    def schedule_close(self, close_at: float, reason: str) -> None:
-        """Close at ``close_at`` unless an earlier close is scheduled already."""
-        if self.close_at is None or close_at < self.close_at:
-            self.close_at = close_at
-            self.reason = reason
 
 
 class EpisodeRecorder:
@@ -451,13 +434,34 @@ class EpisodeRecorder:
                 target.last_step = max(target.last_step, event.step)
         else:
             self._buffer(message)
-        if isinstance(event, SummarySeen) and number in self.open_files:
-            self.open_files[number].finished = True
-        if isinstance(event, StateSeen) and event.final and number in self.open_files:
-            self.open_files[number].schedule_close(now + self.params.summary_timeout,
-                                                   'no EpisodeSummary after the final state')
-        if isinstance(event, SummarySeen) and number in self.open_files:
-            self.open_files[number].schedule_close(now + grace, 'EpisodeSummary received')
+        episode = self.open_files.get(number) if number is not None else None
+        if episode is not None and isinstance(event, (StateSeen, SummarySeen)):
+            self._schedule_end(episode, event, now)
+
+    def _schedule_end(self, episode: OpenEpisode, event, now: float) -> None:
+        """Schedule the close an episode's final state or its EpisodeSummary calls for.
+
+        The summary closes the file once the file holds the episode's final state or the
+        summary's last step (an aborted episode has no final state); before that (the states
+        retransmitted after a stall come after the summary) the file waits, at most
+        ``summary_timeout`` s.
+        """
+        if isinstance(event, SummarySeen):
+            episode.finished = True
+            episode.summary_steps = event.steps
+        elif event.final:
+            episode.final_seen = True
+            if not episode.finished:
+                episode.schedule_close(now + self.params.summary_timeout,
+                                       'no EpisodeSummary after the final state')
+        if not episode.finished:
+            return
+        if episode.final_seen or episode.last_step >= episode.summary_steps:
+            episode.schedule_close(now + self.params.close_grace, 'EpisodeSummary received')
+        elif isinstance(event, SummarySeen):
+            episode.schedule_close(now + self.params.summary_timeout,
+                                   f'EpisodeSummary received, no state of its last step '
+                                   f'{episode.summary_steps}')
 
     def tick(self) -> None:
         """Handle due messages; close files whose time has come; write the chunk if due."""
