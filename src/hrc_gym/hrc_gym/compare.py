@@ -118,6 +118,7 @@ def train_sb3(setting: str, seed: int, episodes: int, env=None) -> tuple:
     # stable_baselines3: an optional dependency (the cross-check only), about 2 s to import
     from stable_baselines3 import PPO  # lazy: stable_baselines3 (optional, 2 s)
     from stable_baselines3.common.callbacks import BaseCallback  # lazy: as above
+    from stable_baselines3.common.logger import Logger  # lazy: as above
     from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize  # lazy: as above
 
     torch.set_num_threads(1)
@@ -136,6 +137,8 @@ def train_sb3(setting: str, seed: int, episodes: int, env=None) -> tuple:
                            gamma=params.gamma, clip_reward=math.inf)
     model = PPO('MlpPolicy', vec_env, seed=seed, device='cpu', verbose=0,
                 **sb3_ppo_kwargs(params))
+    # SB3's default logger makes an empty SB3-<date> folder in /tmp at every learn()
+    model.set_logger(Logger(folder=None, output_formats=[]))
     model.learn(total_timesteps=episodes * env.task.steps_per_episode,
                 callback=EpisodeRecorder())
     return records, model

@@ -23,6 +23,7 @@ MARGIN = 300.0
 @pytest.mark.slow
 def test_sb3_ppo_beats_a_random_policy_on_the_robot_alone_step():
     from stable_baselines3 import PPO
+    from stable_baselines3.common.logger import Logger
 
     torch.set_num_threads(1)
     env = make_env('alone')
@@ -30,6 +31,7 @@ def test_sb3_ppo_beats_a_random_policy_on_the_robot_alone_step():
     try:
         model = PPO('MlpPolicy', env, seed=0, device='cpu', n_steps=256, batch_size=64,
                     n_epochs=10, learning_rate=1e-3, gamma=0.98, clip_range=0.2)
+        model.set_logger(Logger(folder=None, output_formats=[]))    # no SB3-<date> in /tmp
         model.learn(STEPS)
         trained = run_policy(evaluation,
                              lambda observation: model.predict(observation,
