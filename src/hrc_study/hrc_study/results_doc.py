@@ -108,7 +108,7 @@ def _tables(study: dict) -> list:
              'The paper\'s numbers are one person per case; its error is "cumulative" and not '
              'defined further, so only the order of the errors compares, not their size.', '',
              '## Counted as the paper counts', '', paper_counting_markdown(rows),
-             paper_counting_note(), '',
+             paper_counting_note(rows), '',
              "## The person's time (what a lab budgets)", '', person_time_markdown(rows),
              PERSON_TIME_NOTE, '', "## The study's targets", '',
              '| target | measured | met |', '|---|---|---|']

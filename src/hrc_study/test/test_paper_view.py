@@ -9,7 +9,8 @@ from hrc_testing.study_records import make_session, paper_like
 import pytest
 
 from hrc_study.findings import evaluate_findings
-from hrc_study.paper_view import paper_counting_markdown, robustness_markdown
+from hrc_study.paper_view import (paper_counting_markdown, paper_counting_note,
+                                  robustness_markdown)
 
 PEAK = 10 / math.sqrt(2 * math.pi)      # every preset's component peak (params/task_tree.yaml)
 STEPS = 200                              # a 40 s episode at 0.2 s
@@ -168,3 +169,10 @@ def test_a_partners_first_session_pools_by_its_own_budget():
     assert pooling_problems([plain, pretrained]) == []
     pretrained.episode_limit = 300
     assert 'their episode limits' in pooling_problems([plain, pretrained])[0]
+
+
+def test_the_note_says_when_no_session_reached_the_paper_style_stop():
+    never = {2: [{'window_stopped': False}, {'window_stopped': False}]}
+    once = {2: [{'window_stopped': False}, {'window_stopped': True}]}
+    assert paper_counting_note(never).startswith('**No session reached the paper-style stop.**')
+    assert 'No session reached' not in paper_counting_note(once)
