@@ -20,10 +20,11 @@ Episode boundaries (the rule; the node turns messages into the events of
   (SessionStatus, other topics) go to the newest open file.
 * The EpisodeSummary is the last message of an episode (the final state is not answered; the
   agent publishes the last AgentStep before the summary), so a file closes ``close_grace``
-  seconds (default 0: at once) after its EpisodeSummary is handled and it holds the state of
-  the summary's last step (a recorder that was stalled gets the states retransmitted by
-  their writer after the agent's summary: each topic keeps its order, the topics do not), or
-  after the first state of the next episode, or after a ``/hrc/session`` with phase
+  seconds (default 0: at once) after its EpisodeSummary is handled and it holds the final
+  state or the state of the summary's last step, at most ``summary_timeout`` later (a
+  recorder that was stalled gets the states retransmitted by their writer after the agent's
+  summary: each topic keeps its order, the topics do not), or after the first state of the
+  next episode, or after a ``/hrc/session`` with phase
   done/aborted;
   ``summary_timeout`` seconds after its final state (``terminated`` or ``truncated``) if
   nothing else closed it (a sim without an agent); or at shutdown. A message of an episode

@@ -15,20 +15,15 @@ from rosbags.highlevel import AnyReader
 from hrc_bag.format import TopicDescription
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.recording import EpisodeRecorder
-from hrc_testing.bag_traffic import ManualClock, RecorderFeeder
+from hrc_testing.bag_traffic import ManualClock, QOS_PROFILE, RecorderFeeder
 
-PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
-           'durability': 'volatile', 'deadline': {'sec': 0, 'nsec': 0},
-           'lifespan': {'sec': 9223372036, 'nsec': 854775807}, 'liveliness': 'automatic',
-           'liveliness_lease_duration': {'sec': 9223372036, 'nsec': 854775807},
-           'avoid_ros_namespace_conventions': False}
 
 
 def make_recorder(tmp_path, clock, **changes):
     params = dataclasses.replace(RecorderParams(output_dir=str(tmp_path), session_id='s',
                                                 summary_timeout=3.0), **changes)
     return EpisodeRecorder(params, lambda topic, type_name: TopicDescription(
-        type_name, (PROFILE,), 'RIHS01_' + '0' * 64), clock=clock)
+        type_name, (QOS_PROFILE,), 'RIHS01_' + '0' * 64), clock=clock)
 
 
 def state_steps(path):

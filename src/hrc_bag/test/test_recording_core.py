@@ -17,14 +17,10 @@ from hrc_bag.format import RawMessage, RecordingError, SESSION_RECORD, TopicDesc
 from hrc_bag.recorder_params import RecorderParams
 from hrc_bag.boundaries import boundary_event, boundary_event_of_cdr
 from hrc_bag.recording import EpisodeRecorder
-from hrc_testing.bag_traffic import (ManualClock, record_in_process, RecorderFeeder, strategy_plan,
-                                     SyntheticSession, type_name_of)
+from hrc_testing.bag_traffic import (ManualClock, QOS_PROFILE, record_in_process, RecorderFeeder,
+                                     strategy_plan, SyntheticSession, type_name_of)
 
-PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
-           'durability': 'volatile', 'deadline': {'sec': 1, 'nsec': 0},
-           'lifespan': {'sec': 9223372036, 'nsec': 854775807}, 'liveliness': 'automatic',
-           'liveliness_lease_duration': {'sec': 9223372036, 'nsec': 854775807},
-           'avoid_ros_namespace_conventions': False}
+PROFILE = QOS_PROFILE
 
 
 @pytest.mark.parametrize('changes, reason', [

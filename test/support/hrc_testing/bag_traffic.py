@@ -73,6 +73,14 @@ class ManualClock:
         return self.now
 
 
+# A recorded topic's offered QoS as rosbag2 writes it (every field, so rosbags reads it).
+QOS_PROFILE = {'history': 'keep_last', 'depth': 10, 'reliability': 'reliable',
+               'durability': 'volatile', 'deadline': {'sec': 1, 'nsec': 0},
+               'lifespan': {'sec': 9223372036, 'nsec': 854775807}, 'liveliness': 'automatic',
+               'liveliness_lease_duration': {'sec': 9223372036, 'nsec': 854775807},
+               'avoid_ros_namespace_conventions': False}
+
+
 class RecorderFeeder:
     """Feed messages into an EpisodeRecorder as the node would, with increasing log times."""
 
