@@ -56,6 +56,7 @@ from hrc_study.statistics import bootstrap_interval
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from partners_first import evaluate, sessions  # noqa: E402  (bench/partners_first.py)
+from unlike_people_oracle import oracle_task, parse_sets, run_one  # noqa: E402
 
 ORACLE_CASE = {8: 2, 7: 1}          # the same role assignment in the paper's task first
 FIRST_TARGET, ADAPTED_TARGET = 2.0, 1.5
@@ -71,7 +72,7 @@ def adapted_error(task: dict, partner) -> tuple:
     params = with_overrides(trained, seed=task['seed'], start_from=str(task['checkpoint']),
                             resume_from='', max_training_episodes=task['adapt'],
                             evaluation_episodes=task['episodes'], checkpoint_dir='',
-                            torch_threads=1)
+                            torch_threads=1, **task['adapt_overrides'])
     physics = PhysicsParams()
     core = AgentCore(params, limits=SimLimits.of(physics))
     load_session_start(core)
@@ -156,16 +157,24 @@ def table(results: list, oracles: dict) -> list:
     return lines
 
 
-def main(argv=None) -> int:
+def parse_arguments(argv) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
-    parser.add_argument('runs', type=pathlib.Path, nargs='+',
+    parser.add_argument('runs', type=pathlib.Path, nargs='*',
                         help='<runs-dir>/<experiment>: partners-first robots, one folder each')
     parser.add_argument('--oracles', type=pathlib.Path,
-                        help='bench/unlike_people_oracle.py --json output (cases 2 and 1); '
-                        "without: each robot's errors over its own with the session's person "
-                        '(the robustness ratio of bench/partners_first.py)')
+                        help='the oracles: bench/unlike_people_oracle.py --json output (cases 2 '
+                        "and 1); without: each robot's errors over its own with the session's "
+                        'person (the robustness ratio of bench/partners_first.py)')
+    parser.add_argument('--train-oracles', action='store_true',
+                        help='train the oracles the scores need that --oracles lacks (up to '
+                        "--oracle-episodes of the partner's episodes each) and add them to it")
+    parser.add_argument('--oracle-episodes', type=int, default=300,
+                        help="an oracle's training episodes at most (default 300)")
     parser.add_argument('--episodes', type=int, default=3, help='evaluation episodes')
     parser.add_argument('--adapt', type=int, default=3, help="the partner's episodes at most")
+    parser.add_argument('--adapt-set', action='append', default=[], metavar='NAME=VALUE',
+                        help='an AgentParams override of the adapting session, over the '
+                        "robot's own configuration (repeatable; shown with the robot's name)")
     parser.add_argument('--profile', default='paper')
     parser.add_argument('--seeds', type=int, nargs='*', default=None,
                         help='only these seeds (default: every seed of the runs)')
@@ -174,29 +183,98 @@ def main(argv=None) -> int:
     parser.add_argument('--json', type=pathlib.Path, help='write every score here too')
     parser.add_argument('--scores', type=pathlib.Path,
                         help='the --json of an earlier run: make the table from its scores')
-    args = parser.parse_args(argv)
-    oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
-               for row in json.loads(args.oracles.read_text())} if args.oracles else None
-    if args.scores:
-        scores = json.loads(args.scores.read_text())
-        for row in scores:          # named again from the checkpoint (robots named before)
-            row['robot'] = robot_name(row['checkpoint'])
-        return write_table(scores, oracles, args.out)
-    tasks = [dict(robot=robot_name(entry['checkpoint']), case=entry['case'],
-                  seed=entry['seed'], checkpoint=entry['checkpoint'], who=who,
-                  profile=args.profile, episodes=args.episodes, adapt=args.adapt)
-             for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
-             and (args.seeds is None or entry['seed'] in args.seeds)
-             for who in ('person', *unlike_people(load_profile(args.profile)))]
-    if not tasks:
-        print(f'held_out_partners: no partners-first checkpoint under {args.runs}',
-              file=sys.stderr)
+    return parser.parse_args(argv)
+
+
+def argument_problems(args, adapt_overrides: dict) -> list:
+    """Return every reason the arguments cannot run (all at once)."""
+    problems = []
+    if not args.runs and not args.scores:
+        problems.append('give run folders or --scores')
+    if args.train_oracles and args.oracles is None:
+        problems.append('--train-oracles: give --oracles FILE to keep them in')
+    if args.oracles is not None and not args.train_oracles and not args.oracles.is_file():
+        problems.append(f'--oracles {args.oracles}: no such file (--train-oracles makes it)')
+    if min(args.episodes, args.adapt, args.oracle_episodes, args.parallel) < 1:
+        problems.append('--episodes, --adapt, --oracle-episodes and --parallel must be >= 1')
+    try:
+        with_overrides(AgentParams(), **adapt_overrides)
+    except (ValueError, TypeError) as error:
+        problems.append(f'--adapt-set: {error}')
+    return problems
+
+
+def adapting_name(overrides: dict) -> str:
+    """Return ', adapting with a=1 b=2' ('' without overrides) for the robot's name."""
+    if not overrides:
+        return ''
+    return ', adapting with ' + ' '.join(f'{name}={value}' for name, value in
+                                         sorted(overrides.items()))
+
+
+def scoring_tasks(args, adapt_overrides: dict) -> list:
+    """Return one task per robot and held-out partner."""
+    return [dict(robot=robot_name(entry['checkpoint']) + adapting_name(adapt_overrides),
+                 case=entry['case'], seed=entry['seed'], checkpoint=entry['checkpoint'],
+                 who=who, profile=args.profile, episodes=args.episodes, adapt=args.adapt,
+                 adapt_overrides=adapt_overrides)
+            for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
+            and (args.seeds is None or entry['seed'] in args.seeds)
+            for who in ('person', *unlike_people(load_profile(args.profile)))]
+
+
+def train_missing_oracles(args, needed, pool) -> list:
+    """Train the oracles of ``needed`` ((case, seed, partner)) not in --oracles; return all."""
+    rows = json.loads(args.oracles.read_text()) if args.oracles.is_file() else []
+    have = {(row['case'], row['seed'], row['who']) for row in rows
+            if row['profile'] == args.profile}
+    missing = sorted(set(needed) - have)
+    print(f'held_out_partners: training {len(missing)} oracles ({len(have)} in '
+          f'{args.oracles})', flush=True)
+    for row in pool.imap_unordered(run_one, [
+            oracle_task(case, seed, who, args.profile, args.oracle_episodes, args.episodes)
+            for case, seed, who in missing]):
+        rows.append(row)
+        args.oracles.write_text(json.dumps(rows, indent=2))   # kept as each one finishes
+        print(f"  oracle case {row['case']} seed {row['seed']} {row['who']}: error "
+              f"{row['fresh_error']:.4f} after {row['human']} episodes", flush=True)
+    return rows
+
+
+def main(argv=None) -> int:
+    args = parse_arguments(argv)
+    adapt_overrides, problems = parse_sets(args.adapt_set, '--adapt-set')
+    problems += argument_problems(args, adapt_overrides)
+    if problems:
+        print('held_out_partners: ' + '; '.join(problems), file=sys.stderr)
         return 2
-    print(f'held_out_partners: {len(tasks)} scores on {args.parallel} processes', flush=True)
+    if args.scores:
+        results = json.loads(args.scores.read_text())
+        for row in results:          # named again from the checkpoint (robots named before)
+            row['robot'] = robot_name(row['checkpoint']) + adapting_name(
+                row.get('adapt_overrides') or {})
+    else:
+        results = scoring_tasks(args, adapt_overrides)
+        if not results:
+            print(f'held_out_partners: no partners-first checkpoint under {args.runs}',
+                  file=sys.stderr)
+            return 2
     with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
-        results = pool.map(score, tasks)
-    if args.json:
+        oracle_rows = None
+        if args.train_oracles:
+            oracle_rows = train_missing_oracles(args, {(ORACLE_CASE[r['case']], r['seed'],
+                                                        r['who']) for r in results}, pool)
+        if not args.scores:
+            print(f'held_out_partners: {len(results)} scores on {args.parallel} processes',
+                  flush=True)
+            results = pool.map(score, results)
+    if args.json and not args.scores:
         args.json.write_text(json.dumps(results, indent=2))
+    if oracle_rows is None and args.oracles is not None:
+        oracle_rows = json.loads(args.oracles.read_text())
+    oracles = None if oracle_rows is None else {
+        (row['case'], row['seed'], row['who']): row['fresh_error'] for row in oracle_rows
+        if row['profile'] == args.profile}
     return write_table(results, oracles, args.out)
 
 

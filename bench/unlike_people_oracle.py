@@ -92,6 +92,25 @@ def run_one(task: dict) -> dict:
                 seconds=float(summary['wall_seconds']))
 
 
+def parse_sets(items, option: str) -> tuple:
+    """Return ({name: value}, problems) of NAME=VALUE items (agent.NAME accepted, YAML values)."""
+    overrides, problems = {}, []
+    for item in items:
+        name, equals, value = item.partition('=')
+        if not equals:
+            problems.append(f'{option} {item!r}: expected NAME=VALUE')
+            continue
+        overrides[name.removeprefix('agent.')] = yaml.safe_load(value)
+    return overrides, problems
+
+
+def oracle_task(case: int, seed: int, who: str, profile: str, episodes: int,
+                evaluation_episodes: int, overrides=None) -> dict:
+    """Return the task of :func:`run_one`: case ``case`` trained with ``who`` of seed ``seed``."""
+    return dict(case=case, seed=seed, who=who, profile=profile, episodes=episodes,
+                evaluation_episodes=evaluation_episodes, overrides=dict(overrides or {}))
+
+
 def median_ratio(rows, key: str, reference: dict) -> str:
     """Return the median over seeds of row[key] / reference[seed], as '1.23x' ('-': none)."""
     ratios = [row[key] / reference[row['seed']] for row in rows if row['seed'] in reference]
@@ -120,13 +139,7 @@ def main(argv=None) -> int:
         print('unlike_people_oracle: --episodes, --evaluation-episodes and --parallel must '
               'be >= 1', file=sys.stderr)
         return 2
-    problems, overrides = [], {}
-    for item in args.set:
-        name, equals, value = item.partition('=')
-        if not equals:
-            problems.append(f'--set {item!r}: expected NAME=VALUE')
-            continue
-        overrides[name.removeprefix('agent.')] = yaml.safe_load(value)
+    overrides, problems = parse_sets(args.set, '--set')
     for case in args.cases:
         try:
             params = with_overrides(AgentParams(), case=case,
@@ -145,8 +158,8 @@ def main(argv=None) -> int:
     if problems:
         print('unlike_people_oracle: ' + '; '.join(problems), file=sys.stderr)
         return 2
-    tasks = [dict(case=case, seed=seed, who=who, profile=args.profile, episodes=args.episodes,
-                  evaluation_episodes=args.evaluation_episodes, overrides=overrides)
+    tasks = [oracle_task(case, seed, who, args.profile, args.episodes, args.evaluation_episodes,
+                         overrides)
              for case in args.cases for seed in args.seeds for who in args.people]
     print(f'unlike_people_oracle: {len(tasks)} sessions on {args.parallel} processes; '
           f'settings {study_settings()} {overrides}', flush=True)
