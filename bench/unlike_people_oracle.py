@@ -167,6 +167,8 @@ def main(argv=None) -> int:
         results = []
         for result in pool.imap_unordered(run_one, tasks):
             results.append(result)
+            if args.json:           # kept as each one finishes: a stopped run loses none
+                args.json.write_text(json.dumps(results, indent=2))
             print(f"  case {result['case']} seed {result['seed']} {result['who']}: "
                   f"{result['human']} person's episodes, error {result['error']:.4f}, "
                   f"{'converged' if result['converged'] else 'not converged'}, "
@@ -188,8 +190,6 @@ def main(argv=None) -> int:
                   f"{median_ratio(mine, 'error', reference)} | "
                   f"{spread(r['fresh_error'] for r in mine)} | "
                   f"{median_ratio(mine, 'fresh_error', fresh_reference)} |")
-    if args.json:
-        args.json.write_text(json.dumps(results, indent=2))
     return 0
 
 
