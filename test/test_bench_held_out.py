@@ -1,0 +1,94 @@
+"""bench/held_out_partners.py: its arguments, the oracles it trains, the table's verdicts.
+
+The oracle sessions are replaced by a stand-in (no training): what is checked is which
+oracles the bench asks for, what it keeps, and the ratios it prints against them.
+"""
+
+import importlib.util
+import json
+import pathlib
+import sys
+
+import pytest
+
+BENCH = pathlib.Path(__file__).resolve().parents[1] / 'bench' / 'held_out_partners.py'
+
+
+@pytest.fixture
+def bench():
+    sys.path.insert(0, str(BENCH.parent))
+    try:
+        spec = importlib.util.spec_from_file_location('held_out_bench', BENCH)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(BENCH.parent))
+    return module
+
+
+class InlinePool:
+    """A process pool that runs each task here, in order (the stand-ins stay patched)."""
+
+    def imap_unordered(self, function, tasks):
+        return map(function, tasks)
+
+
+def test_bad_arguments_give_every_reason_and_exit_2(bench, capsys, tmp_path):
+    code = bench.main(['--train-oracles', '--adapt', '0', '--adapt-set', 'no_such=1',
+                       '--adapt-set', 'broken', str(tmp_path)])
+    assert code == 2
+    error = capsys.readouterr().err
+    for reason in ("--adapt-set 'broken': expected NAME=VALUE",
+                   '--train-oracles: give --oracles FILE',
+                   '--episodes, --adapt, --oracle-episodes and --parallel must be >= 1',
+                   "unexpected keyword argument 'no_such'"):
+        assert reason in error, error
+    assert 'Traceback' not in error
+    assert bench.main(['--oracles', str(tmp_path / 'none.json'), str(tmp_path)]) == 2
+    assert 'no such file (--train-oracles makes it)' in capsys.readouterr().err
+
+
+def test_only_the_missing_oracles_are_trained_and_each_is_kept(bench, monkeypatch, tmp_path):
+    oracles = tmp_path / 'oracles.json'
+    known = dict(case=2, seed=0, who='person', profile='paper', fresh_error=0.02)
+    other_profile = dict(known, profile='novice', fresh_error=9.0)
+    oracles.write_text(json.dumps([known, other_profile]))
+    asked = []
+
+    def train(task):
+        asked.append((task['case'], task['seed'], task['who'], task['episodes']))
+        return dict(task, fresh_error=0.05, human=task['episodes'])
+
+    monkeypatch.setattr(bench, 'run_one', train)
+    args = bench.parse_arguments(['--oracles', str(oracles), '--train-oracles',
+                                  '--oracle-episodes', '40', 'runs'])
+    rows = bench.train_missing_oracles(args, {(2, 0, 'person'), (2, 0, 'slower'),
+                                              (1, 1, 'timid')}, InlinePool())
+    assert sorted(asked) == [(1, 1, 'timid', 40), (2, 0, 'slower', 40)]
+    assert json.loads(oracles.read_text()) == rows and len(rows) == 4
+
+
+def score(robot, case, seed, who, first, adapted):
+    return dict(robot=robot, case=case, seed=seed, who=who, profile='paper', first=first,
+                adapted=adapted, adapt_episodes=3)
+
+
+def test_the_table_divides_by_the_oracle_and_judges_the_median(bench):
+    oracles = {(2, seed, 'slower'): 0.1 for seed in range(3)}
+    # met first 1.5x, 1.8x, 3.0x the oracle: median 1.8x meets 2x, the worst seed does not
+    results = [score('sac', 8, seed, 'slower', first, 0.1 * 1.6)
+               for seed, first in enumerate((0.15, 0.18, 0.30))]
+    lines = bench.table(results, oracles)
+    assert 'reference error (oracle)' in lines[0]
+    row = lines[2].split(' | ')
+    assert row[2:4] == ['slower', '0.1000']
+    assert row[4].startswith('0.1800, 1.80x')
+    assert row[5] == 'yes (worst 3.00x)'
+    assert row[6].startswith('0.1600, 1.60x') and row[7] == '**no** (worst 1.60x)'
+    assert row[8] == '3 (2.0) |'
+
+
+def test_an_adapting_override_is_named_with_the_robot(bench):
+    assert bench.adapting_name({}) == ''
+    assert bench.adapting_name({'sac_learning_starts': 20, 'a': 1}) == \
+        ', adapting with a=1 sac_learning_starts=20'
