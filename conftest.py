@@ -69,6 +69,8 @@ def start_node(ros_env, request):
     if failed is not None and failed.failed:
         for process in processes:
             print(f'----- output of {process.name} -----\n{process.output}')
+    for process in processes:
+        process.remove_log()
 
 
 # The quick tier (``make test-quick``, ``pytest -m quick``): pure cores and unit tests, for the

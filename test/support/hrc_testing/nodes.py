@@ -60,6 +60,11 @@ class NodeProcess:
         """Wait for the process to exit and return its exit code."""
         return self.process.wait(timeout=timeout)
 
+    def remove_log(self) -> None:
+        """Delete the output file (after the test: a run of the suite made ~50 in /tmp)."""
+        self._log.close()
+        pathlib.Path(self._log.name).unlink(missing_ok=True)
+
     def stop(self, timeout: float = 10.0) -> int:
         """SIGINT the process (as Ctrl-C would), then SIGKILL its group if it hangs."""
         if self.process.poll() is None:
