@@ -256,9 +256,12 @@ def main(argv=None) -> int:
         return 2
     if args.scores:
         results = json.loads(args.scores.read_text())
-        for row in results:          # named again from the checkpoint (robots named before)
-            row['robot'] = robot_name(row['checkpoint']) + adapting_name(
-                row.get('adapt_overrides') or {})
+        for row in results:
+            # named again from the checkpoint where it is here (scores of before named robots
+            # otherwise); kept scores (docs/partners/) keep their names without the robots
+            if pathlib.Path(row['checkpoint']).is_file():
+                row['robot'] = robot_name(row['checkpoint']) + adapting_name(
+                    row.get('adapt_overrides') or {})
     else:
         results = scoring_tasks(args, adapt_overrides)
         if not results:

@@ -92,3 +92,16 @@ def test_an_adapting_override_is_named_with_the_robot(bench):
     assert bench.adapting_name({}) == ''
     assert bench.adapting_name({'sac_learning_starts': 20, 'a': 1}) == \
         ', adapting with a=1 sac_learning_starts=20'
+
+
+def test_the_published_table_is_recomputed_from_its_kept_scores_and_oracles(bench):
+    folder = pathlib.Path(__file__).resolve().parents[1] / 'docs' / 'partners'
+    scores = json.loads((folder / 'held_out_scores.json').read_text())
+    oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
+               for row in json.loads((folder / 'held_out_oracles.json').read_text())
+               if row['profile'] == 'paper'}
+    page = (folder / 'held_out.md').read_text().splitlines()
+    lines = bench.table(scores, oracles)
+    assert len(lines) == 2 + 3 * 2 * 5     # three robots x two cases x five partners
+    for line in lines:
+        assert line in page, line
