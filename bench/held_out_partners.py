@@ -18,17 +18,21 @@ with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is 
   ``--adapt`` of the partner's episodes, then evaluated (``--episodes``): its error over the
   oracle's. The person's minutes are those episodes at 40 s.
 
-Without ``--oracles`` the reference is each robot's own error with the session's person met
-afresh (the robustness ratio of ``bench/partners_first.py``): an oracle for every held-out
-partner takes up to 300 of that partner's episodes per seed, hours on 2 cores.
+``--train-oracles`` trains the oracles the scores need that the ``--oracles`` file lacks
+(``bench/unlike_people_oracle.py``'s sessions, up to ``--oracle-episodes`` each; a capped one
+takes 5-14 minutes on 2 shared cores) and adds each to the file as it finishes, so one command
+runs the whole protocol and a second run reuses them. Without ``--oracles`` the reference is
+each robot's own error with the session's person met afresh (the robustness ratio of
+``bench/partners_first.py``).
 
-Medians over seeds with a 95% percentile bootstrap interval (seeded). Every run folder is one
-robot (its learning configuration is read from its checkpoints)::
+Medians over seeds with a 95% percentile bootstrap interval (seeded); the verdict is on the
+median ratio, the worst seed beside it. Every run folder is one robot (its learning
+configuration is read from its checkpoints)::
 
-    python bench/unlike_people_oracle.py --cases 2 1 --seeds 0 1 2 3 4 --json oracles.json
     hrc experiment --cases 7 8 --seeds 5 --checkpoints --learning sac --name pf-sac ...
     hrc experiment --cases 7 8 --seeds 5 --checkpoints --learning partner_aware --name pf-pa ...
-    python bench/held_out_partners.py runs/pf-sac runs/pf-pa --oracles oracles.json --out x.md
+    python bench/held_out_partners.py runs/pf-sac runs/pf-pa --oracles oracles.json \
+        --train-oracles --oracle-episodes 100 --out x.md
 """
 
 import argparse
