@@ -251,6 +251,22 @@ def train_missing_oracles(args, needed, pool) -> list:
     return rows
 
 
+def run_pool(args, results: list, pool) -> tuple:
+    """Train the missing oracles (--train-oracles) and score the robots; return (oracles, scores).
+
+    ``oracles`` is None when none were trained (they are read from --oracles then).
+    """
+    oracle_rows = None
+    if args.train_oracles:
+        oracle_rows = train_missing_oracles(args, {(ORACLE_CASE[r['case']], r['seed'], r['who'])
+                                                   for r in results}, pool)
+    if not args.scores:
+        print(f'held_out_partners: {len(results)} scores on {args.parallel} processes',
+              flush=True)
+        results = pool.map(score, results)
+    return oracle_rows, results
+
+
 def main(argv=None) -> int:
     args = parse_arguments(argv)
     adapt_overrides, problems = parse_sets(args.adapt_set, '--adapt-set')
@@ -272,15 +288,10 @@ def main(argv=None) -> int:
             print(f'held_out_partners: no partners-first checkpoint under {args.runs}',
                   file=sys.stderr)
             return 2
-    with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
-        oracle_rows = None
-        if args.train_oracles:
-            oracle_rows = train_missing_oracles(args, {(ORACLE_CASE[r['case']], r['seed'],
-                                                        r['who']) for r in results}, pool)
-        if not args.scores:
-            print(f'held_out_partners: {len(results)} scores on {args.parallel} processes',
-                  flush=True)
-            results = pool.map(score, results)
+    oracle_rows = None
+    if args.train_oracles or not args.scores:   # kept scores alone need no process
+        with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
+            oracle_rows, results = run_pool(args, results, pool)
     if args.json and not args.scores:
         args.json.write_text(json.dumps(results, indent=2))
     if oracle_rows is None and args.oracles is not None:
