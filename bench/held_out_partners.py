@@ -49,20 +49,20 @@ from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_session_start, read_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
-from hrc_common.params import from_dict, with_overrides
+from hrc_common.params import from_dict, ParameterError, with_overrides
 from hrc_engine.offline import run_session
-from hrc_engine.partners import SimulatedHumanPartner
+from hrc_joystick_node.human_model import load_human_model
 from hrc_joystick_node.human_profile import load_profile
-from hrc_joystick_node.population import sample_person
 from hrc_partners.partners_first import unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_study.statistics import bootstrap_interval
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from partners_first import evaluate, sessions  # noqa: E402  (bench/partners_first.py)
-from unlike_people_oracle import oracle_task, parse_sets, run_one  # noqa: E402
+from partners_first import evaluate, offline_partner, sessions  # noqa: E402  (bench/)
+from unlike_people_oracle import oracle_task, parse_sets, run_one, task_partner  # noqa: E402
 
 ORACLE_CASE = {8: 2, 7: 1}          # the same role assignment in the paper's task first
+HUMAN_DOF = {8: 'translation', 7: 'rotation'}   # the partner's degree of freedom per case
 FIRST_TARGET, ADAPTED_TARGET = 2.0, 1.5
 EPISODE_MINUTES = 40.0 / 60.0
 
@@ -81,16 +81,15 @@ def adapted_error(task: dict, partner) -> tuple:
     core = AgentCore(params, limits=SimLimits.of(physics))
     load_session_start(core)
     with SliderPendulumBall(physics) as sim:
-        summary = run_session(core, sim, SimulatedHumanPartner(
-            partner, core.human_dof, task['seed'], SimLimits.of(physics).human_step))
+        summary = run_session(core, sim, offline_partner(partner, core.human_dof, task['seed'],
+                                                         SimLimits.of(physics)))
     return float(summary['evaluation']['total_error']), int(summary['human_involved_episodes'])
 
 
 def score(task: dict) -> dict:
     """Score one robot with one held-out partner: met first and after adapting."""
     torch.set_num_threads(1)
-    person = sample_person(load_profile(task['profile']), task['seed'])
-    partner = dict(person=person, **unlike_people(person))[task['who']]
+    partner = task_partner(task)
     first = evaluate(task['checkpoint'], partner, task['seed'], task['episodes'])
     adapted, episodes = adapted_error(task, partner)
     return dict(task, checkpoint=str(task['checkpoint']), first=first, adapted=adapted,
@@ -121,9 +120,9 @@ def own_person_references(results: list) -> dict:
     The reference when no oracle was trained: each robot against itself with the session's
     person (keyed as the oracles are, per robot).
     """
+    partners = {r['who'] for r in results}
     return {(r['robot'], ORACLE_CASE[r['case']], r['seed'], who): r['first']
-            for r in results if r['who'] == 'person'
-            for who in ('person', *unlike_people(load_profile(r['profile'])))}
+            for r in results if r['who'] == 'person' for who in partners}
 
 
 def verdict(ratios, target: float) -> str:
@@ -185,6 +184,12 @@ def parse_arguments(argv) -> argparse.Namespace:
     parser.add_argument('--adapt-set', action='append', default=[], metavar='NAME=VALUE',
                         help='an AgentParams override of the adapting session, over the '
                         "robot's own configuration (repeatable; shown with the robot's name)")
+    parser.add_argument('--clone', action='append', default=[], metavar='NAME=MODEL',
+                        help='a cloned person as a held-out partner too (bench/held_out_clones.py'
+                        "; repeatable: one model per degree of freedom, 'clone:NAME' in the "
+                        "table; a case runs when the clone has the partner's DOF)")
+    parser.add_argument('--partners', nargs='+', metavar='NAME',
+                        help='only these partners (e.g. clone:novice; default: every one)')
     parser.add_argument('--profile', default='paper')
     parser.add_argument('--seeds', type=int, nargs='*', default=None,
                         help='only these seeds (default: every seed of the runs)')
@@ -214,6 +219,26 @@ def argument_problems(args, adapt_overrides: dict) -> list:
     return problems
 
 
+def parse_clones(items) -> tuple:
+    """Return ({'clone:NAME': {dof: model file}}, problems) of NAME=MODEL items."""
+    clones, problems = {}, []
+    for item in items:
+        name, equals, path = item.partition('=')
+        if not equals or not name:
+            problems.append(f'--clone {item!r}: expected NAME=MODEL')
+            continue
+        try:
+            dof = load_human_model(path)[0]['dof']
+        except ParameterError as error:
+            problems.append(f'--clone {item}: {error}')
+            continue
+        models = clones.setdefault(f'clone:{name}', {})
+        if dof in models:
+            problems.append(f'--clone {item}: {name} has a {dof} model already ({models[dof]})')
+        models[dof] = path
+    return clones, problems
+
+
 def adapting_name(overrides: dict) -> str:
     """Return ', adapting with a=1 b=2' ('' without overrides) for the robot's name."""
     if not overrides:
@@ -222,19 +247,29 @@ def adapting_name(overrides: dict) -> str:
                                          sorted(overrides.items()))
 
 
-def scoring_tasks(args, adapt_overrides: dict) -> list:
+def partners_of(case: int, clones: dict, profile: str) -> list:
+    """Return the held-out partners of ``case``: the people, then the clones of its DOF."""
+    return ['person', *unlike_people(load_profile(profile)),
+            *(name for name, models in clones.items() if HUMAN_DOF[case] in models)]
+
+
+def scoring_tasks(args, adapt_overrides: dict, clones: dict) -> list:
     """Return one task per robot and held-out partner."""
     return [dict(robot=robot_name(entry['checkpoint']) + adapting_name(adapt_overrides),
                  case=entry['case'], seed=entry['seed'], checkpoint=entry['checkpoint'],
                  who=who, profile=args.profile, episodes=args.episodes, adapt=args.adapt,
-                 adapt_overrides=adapt_overrides)
+                 adapt_overrides=adapt_overrides, clones=clones)
             for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
             and (args.seeds is None or entry['seed'] in args.seeds)
-            for who in ('person', *unlike_people(load_profile(args.profile)))]
+            for who in partners_of(entry['case'], clones, args.profile)
+            if args.partners is None or who in args.partners]
 
 
-def train_missing_oracles(args, needed, pool) -> list:
-    """Train the oracles of ``needed`` ((case, seed, partner)) not in --oracles; return all."""
+def train_missing_oracles(args, needed, pool, clones=None) -> list:
+    """Train the oracles of ``needed`` ((case, seed, partner)) not in --oracles; return all.
+
+    ``clones``: the cloned partners' model files ({'clone:NAME': {dof: model file}}).
+    """
     rows = json.loads(args.oracles.read_text()) if args.oracles.is_file() else []
     have = {(row['case'], row['seed'], row['who']) for row in rows
             if row['profile'] == args.profile}
@@ -242,8 +277,8 @@ def train_missing_oracles(args, needed, pool) -> list:
     print(f'held_out_partners: training {len(missing)} oracles ({len(have)} in '
           f'{args.oracles})', flush=True)
     for row in pool.imap_unordered(run_one, [
-            oracle_task(case, seed, who, args.profile, args.oracle_episodes, args.episodes)
-            for case, seed, who in missing]):
+            oracle_task(case, seed, who, args.profile, args.oracle_episodes, args.episodes,
+                        clones=clones) for case, seed, who in missing]):
         rows.append(row)
         args.oracles.write_text(json.dumps(rows, indent=2))   # kept as each one finishes
         print(f"  oracle case {row['case']} seed {row['seed']} {row['who']}: error "
@@ -251,7 +286,7 @@ def train_missing_oracles(args, needed, pool) -> list:
     return rows
 
 
-def run_pool(args, results: list, pool) -> tuple:
+def run_pool(args, results: list, pool, clones=None) -> tuple:
     """Train the missing oracles (--train-oracles) and score the robots; return (oracles, scores).
 
     ``oracles`` is None when none were trained (they are read from --oracles then).
@@ -259,7 +294,7 @@ def run_pool(args, results: list, pool) -> tuple:
     oracle_rows = None
     if args.train_oracles:
         oracle_rows = train_missing_oracles(args, {(ORACLE_CASE[r['case']], r['seed'], r['who'])
-                                                   for r in results}, pool)
+                                                   for r in results}, pool, clones)
     if not args.scores:
         print(f'held_out_partners: {len(results)} scores on {args.parallel} processes',
               flush=True)
@@ -270,7 +305,8 @@ def run_pool(args, results: list, pool) -> tuple:
 def main(argv=None) -> int:
     args = parse_arguments(argv)
     adapt_overrides, problems = parse_sets(args.adapt_set, '--adapt-set')
-    problems += argument_problems(args, adapt_overrides)
+    clones, clone_problems = parse_clones(args.clone)
+    problems += clone_problems + argument_problems(args, adapt_overrides)
     if problems:
         print('held_out_partners: ' + '; '.join(problems), file=sys.stderr)
         return 2
@@ -283,7 +319,7 @@ def main(argv=None) -> int:
                 row['robot'] = robot_name(row['checkpoint']) + adapting_name(
                     row.get('adapt_overrides') or {})
     else:
-        results = scoring_tasks(args, adapt_overrides)
+        results = scoring_tasks(args, adapt_overrides, clones)
         if not results:
             print(f'held_out_partners: no partners-first checkpoint under {args.runs}',
                   file=sys.stderr)
@@ -291,7 +327,7 @@ def main(argv=None) -> int:
     oracle_rows = None
     if args.train_oracles or not args.scores:   # kept scores alone need no process
         with multiprocessing.get_context('spawn').Pool(args.parallel) as pool:
-            oracle_rows, results = run_pool(args, results, pool)
+            oracle_rows, results = run_pool(args, results, pool, clones)
     if args.json and not args.scores:
         args.json.write_text(json.dumps(results, indent=2))
     if oracle_rows is None and args.oracles is not None:

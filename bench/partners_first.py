@@ -27,7 +27,7 @@ import torch
 from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_common.contract import SimLimits
 from hrc_engine.offline import evaluation_core, run_session
-from hrc_engine.partners import SimulatedHumanPartner
+from hrc_engine.partners import ClonedPartner, SimulatedHumanPartner
 from hrc_joystick_node.population import sample_person
 from hrc_joystick_node.human_profile import load_profile
 from hrc_partners.partners_first import unlike_people
@@ -62,17 +62,28 @@ def sessions(run: pathlib.Path) -> list:
     return found
 
 
-def evaluate(checkpoint, profile, seed: int, episodes: int) -> float:
-    """Return the mean total error of the checkpoint's frozen policy with ``profile``.
+def offline_partner(partner, dof: str, seed: int, limits: SimLimits):
+    """Return the offline loop's partner on ``dof``.
 
-    The person acts at the sim's human_period, as the engine's person.
+    ``partner``: a simulated person (a ``HumanProfile``: acts at the sim's human_period, as
+    the engine's person) or a cloned person ({dof: model file}: acts at the control period,
+    ``ClonedPartner``).
+    """
+    if isinstance(partner, dict):
+        return ClonedPartner(partner[dof], dof, limits)
+    return SimulatedHumanPartner(partner, dof, seed, limits.human_step)
+
+
+def evaluate(checkpoint, partner, seed: int, episodes: int) -> float:
+    """Return the mean total error of the checkpoint's frozen policy with ``partner``.
+
+    ``partner``: as :func:`offline_partner` takes it.
     """
     physics = PhysicsParams()
     core = evaluation_core(checkpoint, seed, episodes)
-    partner = SimulatedHumanPartner(profile, core.human_dof, seed,
-                                    SimLimits.of(physics).human_step)
     with SliderPendulumBall(physics) as sim:
-        return float(run_session(core, sim, partner)['evaluation']['total_error'])
+        return float(run_session(core, sim, offline_partner(
+            partner, core.human_dof, seed, SimLimits.of(physics)))['evaluation']['total_error'])
 
 
 def main(argv=None) -> int:

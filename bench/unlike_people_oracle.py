@@ -42,14 +42,13 @@ from hrc_common.params import with_overrides
 from hrc_common.paths import params_dir
 from hrc_common.session_plan import DEFAULT_LEARNING, load_learning
 from hrc_engine.offline import run_session
-from hrc_engine.partners import SimulatedHumanPartner
 from hrc_joystick_node.human_profile import load_profile
 from hrc_joystick_node.population import sample_person
 from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from partners_first import evaluate, spread  # noqa: E402  (bench/partners_first.py: the same)
+from partners_first import evaluate, offline_partner, spread  # noqa: E402  (bench/partners_first.py)
 
 PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
 
@@ -64,8 +63,7 @@ def study_settings() -> dict:
 def run_one(task: dict) -> dict:
     """Train one session offline with ``task['who']`` as the person; return its numbers."""
     torch.set_num_threads(1)
-    person = sample_person(load_profile(task['profile']), task['seed'])
-    people = dict(person=person, **unlike_people(person))
+    partner = task_partner(task)
     physics = PhysicsParams()
     limits = SimLimits.of(physics)
     params = with_overrides(AgentParams(), case=task['case'], seed=task['seed'],
@@ -74,22 +72,33 @@ def run_one(task: dict) -> dict:
                             checkpoint_dir='', torch_threads=1,
                             **dict(study_settings(), **task['overrides']))
     core = AgentCore(params, limits=limits)
-    partner = SimulatedHumanPartner(people[task['who']], core.human_dof, task['seed'],
-                                    limits.human_step)
     with SliderPendulumBall(physics) as sim:
-        summary = run_session(core, sim, partner)
+        summary = run_session(core, sim, offline_partner(partner, core.human_dof,
+                                                         task['seed'], limits))
     with tempfile.TemporaryDirectory(prefix='oracle-') as scratch:
         checkpoint = pathlib.Path(scratch) / 'trained.pt'
         save_checkpoint(core, checkpoint)
         # As bench/partners_first.py evaluates the partners-first robots: the frozen policy
         # with the same person met afresh (new to the task), offline.
-        fresh = evaluate(checkpoint, people[task['who']], task['seed'],
-                         task['evaluation_episodes'])
+        fresh = evaluate(checkpoint, partner, task['seed'], task['evaluation_episodes'])
     return dict(task, converged=bool(summary['converged']), fresh_error=fresh,
                 human=int(summary['human_involved_episodes']),
                 total=int(summary['training_episodes']),
                 error=float(summary['evaluation']['total_error']),
                 seconds=float(summary['wall_seconds']))
+
+
+def task_partner(task: dict):
+    """Return the partner ``task['who']``: a person's ``HumanProfile``, or a clone's model files.
+
+    ``task['clones']`` ({name: {dof: model file}}, optional) names the cloned people; any other
+    name is person ``seed`` of the profile or one of the people unlike them.
+    """
+    clones = task.get('clones') or {}
+    if task['who'] in clones:
+        return clones[task['who']]
+    person = sample_person(load_profile(task['profile']), task['seed'])
+    return dict(person=person, **unlike_people(person))[task['who']]
 
 
 def parse_sets(items, option: str) -> tuple:
@@ -105,10 +114,14 @@ def parse_sets(items, option: str) -> tuple:
 
 
 def oracle_task(case: int, seed: int, who: str, profile: str, episodes: int,
-                evaluation_episodes: int, overrides=None) -> dict:
-    """Return the task of :func:`run_one`: case ``case`` trained with ``who`` of seed ``seed``."""
+                evaluation_episodes: int, overrides=None, clones=None) -> dict:
+    """Return the task of :func:`run_one`: case ``case`` trained with ``who`` of seed ``seed``.
+
+    ``clones``: {name: {dof: model file}} of the cloned people (:func:`task_partner`).
+    """
     return dict(case=case, seed=seed, who=who, profile=profile, episodes=episodes,
-                evaluation_episodes=evaluation_episodes, overrides=dict(overrides or {}))
+                evaluation_episodes=evaluation_episodes, overrides=dict(overrides or {}),
+                clones=dict(clones or {}))
 
 
 def median_ratio(rows, key: str, reference: dict) -> str:
