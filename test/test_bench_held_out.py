@@ -105,3 +105,54 @@ def test_the_published_table_is_recomputed_from_its_kept_scores_and_oracles(benc
     assert len(lines) == 2 + 3 * 2 * 5     # three robots x two cases x five partners
     for line in lines:
         assert line in page, line
+
+
+@pytest.fixture(scope='module')
+def clone_models(tmp_path_factory):
+    """A person recorded and cloned on both DOFs by bench/held_out_clones.py (small: 1 episode
+    of each of 2 sessions per DOF, 5 epochs)."""
+    folder = tmp_path_factory.mktemp('clones')
+    spec = importlib.util.spec_from_file_location('held_out_clones',
+                                                  BENCH.parent / 'held_out_clones.py')
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    code = module.main(['--person', 'novice', '--sessions', '2', '--episodes', '1',
+                        '--epochs', '5', '--out', str(folder)])
+    assert code == 0
+    return folder
+
+
+def test_the_clone_bench_refuses_bad_arguments_all_at_once(capsys, tmp_path):
+    spec = importlib.util.spec_from_file_location('held_out_clones',
+                                                  BENCH.parent / 'held_out_clones.py')
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    code = module.main(['--person', 'nobody', '--sessions', '1', '--epochs', '0',
+                        '--out', str(tmp_path / 'missing')])
+    assert code == 2
+    error = capsys.readouterr().err
+    for reason in ('--person nobody', '--sessions must be >= 2', '--epochs must be >= 1',
+                   'no such folder'):
+        assert reason in error, error
+
+
+def test_a_clone_is_a_held_out_partner_of_the_cases_of_its_dof(bench, clone_models, capsys):
+    rotation = str(clone_models / 'novice-rotation.pt')
+    translation = str(clone_models / 'novice-translation.pt')
+    clones, problems = bench.parse_clones([f'novice={rotation}', f'novice={translation}'])
+    assert problems == []
+    assert clones == {'clone:novice': {'rotation': rotation, 'translation': translation}}
+    only_rotation, _ = bench.parse_clones([f'novice={rotation}'])
+    # case 7: the partner rotates (the clone's DOF); case 8: it translates (no model: no row)
+    assert bench.partners_of(7, only_rotation, 'paper')[-1] == 'clone:novice'
+    assert 'clone:novice' not in bench.partners_of(8, only_rotation, 'paper')
+    task = dict(who='clone:novice', profile='paper', seed=0, clones=clones)
+    assert bench.task_partner(task) == clones['clone:novice']
+    limits = bench.SimLimits.of(bench.PhysicsParams())
+    partner = bench.offline_partner(bench.task_partner(task), 'translation', 0, limits)
+    assert type(partner).__name__ == 'ClonedPartner'
+    _, problems = bench.parse_clones([f'novice={rotation}', f'novice={rotation}', 'x=/no.pt'])
+    assert 'novice has a rotation model already' in problems[0]
+    assert 'x=/no.pt: model_file /no.pt: cannot read' in problems[1]
+    assert bench.main(['--clone', 'bare', 'runs']) == 2
+    assert "--clone 'bare': expected NAME=MODEL" in capsys.readouterr().err
