@@ -103,6 +103,10 @@ class HumanParams:
                         low=-1, high=2 ** 31 - 1)
     seed: int = param(0, 'seed of the simulated human (with the episode index)', low=0,
                       high=2 ** 31 - 1)
+    practiced_episodes: int = param(
+        0, 'simulated human: episodes the person has practised before this session (a '
+        'returning person: their learning curve starts there; sim_human.SimulatedHuman)',
+        low=0, high=100000)
     model_file: str = param('', 'cloned human-model checkpoint (.pt, hrc_joystick_node.'
                             'human_model) used with input model')
     script_file: str = param('', 'stick script (CSV "time,axis[,enable]", time in s from each '
@@ -250,7 +254,8 @@ class HumanCore:
             return ClonedHuman(self.params.model_file, dof, seed=self.params.seed,
                                control_period=control_period)
         return SimulatedHuman(self.profile, dof, seed=self.params.seed,
-                              control_period=control_period)
+                              control_period=control_period,
+                              practiced_episodes=self.params.practiced_episodes)
 
     def on_session(self, dof: str, involved: bool, subtasks, aborted: bool = False
                    ) -> typing.Tuple[bool, typing.List[str]]:

@@ -228,3 +228,19 @@ def test_the_simulated_person_acts_at_the_sims_human_period_on_slice_states():
     assert not second.repeated and second.slice == 1
     assert core.answer(0, 0, stamp(0, 0) + 20_000_000, State(), slice_index=1).repeated
     assert first.slice == 0
+
+
+def test_a_returning_simulated_person_starts_with_their_practice():
+    def practice(**changes):
+        core = HumanCore(HumanParams(input='sim', profile='paper', seed=3, **changes), PROFILES)
+        core.set_limits(LIMITS)
+        core.on_inputs(False, '', False, '')
+        core.answer(0, 0, stamp(0, 0), State())
+        return core.sim_human.practiced_episodes, core.sim_human.practice_factor
+
+    new_episodes, new_factor = practice()
+    back_episodes, back_factor = practice(practiced_episodes=40)
+    assert (new_episodes, back_episodes) == (0, 40)
+    # paper: untrained_factor 1.5 over learning_episodes 15; after 40 episodes e^-40/15 is left
+    assert new_factor == pytest.approx(1.5)
+    assert back_factor == pytest.approx(1 + 0.5 * math.exp(-40 / 15))
