@@ -52,8 +52,7 @@ from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
 from hrc_engine.offline import run_session
 from hrc_joystick_node.human_model import load_human_model
-from hrc_joystick_node.human_profile import load_profile
-from hrc_partners.partners_first import unlike_people
+from hrc_partners.partners_first import UNLIKE_TRAITS
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_study.statistics import bootstrap_interval
 
@@ -247,9 +246,9 @@ def adapting_name(overrides: dict) -> str:
                                          sorted(overrides.items()))
 
 
-def partners_of(case: int, clones: dict, profile: str) -> list:
+def partners_of(case: int, clones: dict) -> list:
     """Return the held-out partners of ``case``: the people, then the clones of its DOF."""
-    return ['person', *unlike_people(load_profile(profile)),
+    return ['person', *UNLIKE_TRAITS,
             *(name for name, models in clones.items() if HUMAN_DOF[case] in models)]
 
 
@@ -261,7 +260,7 @@ def scoring_tasks(args, adapt_overrides: dict, clones: dict) -> list:
                  adapt_overrides=adapt_overrides, clones=clones)
             for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
             and (args.seeds is None or entry['seed'] in args.seeds)
-            for who in partners_of(entry['case'], clones, args.profile)
+            for who in partners_of(entry['case'], clones)
             if args.partners is None or who in args.partners]
 
 
@@ -271,8 +270,11 @@ def train_missing_oracles(args, needed, pool, clones=None) -> list:
     ``clones``: the cloned partners' model files ({'clone:NAME': {dof: model file}}).
     """
     rows = json.loads(args.oracles.read_text()) if args.oracles.is_file() else []
+    clones = clones or {}
+    # a clone's oracle counts only if it trained with the same model files
     have = {(row['case'], row['seed'], row['who']) for row in rows
-            if row['profile'] == args.profile}
+            if row['profile'] == args.profile
+            and (row.get('clones') or {}).get(row['who']) == clones.get(row['who'])}
     missing = sorted(set(needed) - have)
     print(f'held_out_partners: training {len(missing)} oracles ({len(have)} in '
           f'{args.oracles})', flush=True)
@@ -307,6 +309,10 @@ def main(argv=None) -> int:
     adapt_overrides, problems = parse_sets(args.adapt_set, '--adapt-set')
     clones, clone_problems = parse_clones(args.clone)
     problems += clone_problems + argument_problems(args, adapt_overrides)
+    known = set(partners_of(7, clones)) | set(partners_of(8, clones))
+    unknown = sorted(set(args.partners or ()) - known)
+    if unknown:
+        problems.append(f'--partners: unknown {unknown} (known: {sorted(known)})')
     if problems:
         print('held_out_partners: ' + '; '.join(problems), file=sys.stderr)
         return 2

@@ -108,27 +108,28 @@ def test_the_published_table_is_recomputed_from_its_kept_scores_and_oracles(benc
         assert line in page, line
 
 
-@pytest.fixture(scope='module')
-def clone_models(tmp_path_factory):
-    """A person recorded and cloned on both DOFs by bench/held_out_clones.py (small: 1 episode
-    of each of 2 sessions per DOF, 5 epochs)."""
-    folder = tmp_path_factory.mktemp('clones')
+def clone_bench():
+    """Return bench/held_out_clones.py as a module."""
     spec = importlib.util.spec_from_file_location('held_out_clones',
                                                   BENCH.parent / 'held_out_clones.py')
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    code = module.main(['--person', 'novice', '--sessions', '2', '--episodes', '1',
-                        '--epochs', '5', '--out', str(folder)])
+    return module
+
+
+@pytest.fixture(scope='module')
+def clone_models(tmp_path_factory):
+    # A person recorded and cloned on both DOFs by the clone bench (small: 1 episode of each
+    # of 2 sessions per DOF, 5 epochs).
+    folder = tmp_path_factory.mktemp('clones')
+    code = clone_bench().main(['--person', 'novice', '--sessions', '2', '--episodes', '1',
+                               '--epochs', '5', '--out', str(folder)])
     assert code == 0
     return folder
 
 
 def test_the_clone_bench_refuses_bad_arguments_all_at_once(capsys, tmp_path):
-    spec = importlib.util.spec_from_file_location('held_out_clones',
-                                                  BENCH.parent / 'held_out_clones.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    code = module.main(['--person', 'nobody', '--sessions', '1', '--epochs', '0',
+    code = clone_bench().main(['--person', 'nobody', '--sessions', '1', '--epochs', '0',
                         '--out', str(tmp_path / 'missing')])
     assert code == 2
     error = capsys.readouterr().err
@@ -145,8 +146,8 @@ def test_a_clone_is_a_held_out_partner_of_the_cases_of_its_dof(bench, clone_mode
     assert clones == {'clone:novice': {'rotation': rotation, 'translation': translation}}
     only_rotation, _ = bench.parse_clones([f'novice={rotation}'])
     # case 7: the partner rotates (the clone's DOF); case 8: it translates (no model: no row)
-    assert bench.partners_of(7, only_rotation, 'paper')[-1] == 'clone:novice'
-    assert 'clone:novice' not in bench.partners_of(8, only_rotation, 'paper')
+    assert bench.partners_of(7, only_rotation)[-1] == 'clone:novice'
+    assert 'clone:novice' not in bench.partners_of(8, only_rotation)
     task = dict(who='clone:novice', profile='paper', seed=0, clones=clones)
     assert bench.task_partner(task) == clones['clone:novice']
     limits = bench.SimLimits.of(bench.PhysicsParams())
@@ -155,5 +156,24 @@ def test_a_clone_is_a_held_out_partner_of_the_cases_of_its_dof(bench, clone_mode
     _, problems = bench.parse_clones([f'novice={rotation}', f'novice={rotation}', 'x=/no.pt'])
     assert 'novice has a rotation model already' in problems[0]
     assert 'x=/no.pt: model_file /no.pt: cannot read' in problems[1]
-    assert bench.main(['--clone', 'bare', 'runs']) == 2
-    assert "--clone 'bare': expected NAME=MODEL" in capsys.readouterr().err
+    assert bench.main(['runs', '--clone', 'bare', '--partners', 'clone:novice']) == 2
+    error = capsys.readouterr().err
+    assert "--clone 'bare': expected NAME=MODEL" in error
+    assert "--partners: unknown ['clone:novice']" in error
+
+
+def test_a_clones_oracle_is_kept_only_for_the_same_model(bench, monkeypatch, tmp_path):
+    oracles = tmp_path / 'oracles.json'
+    old = dict(case=2, seed=0, who='clone:a', profile='paper', fresh_error=0.02,
+               clones={'clone:a': {'translation': 'old.pt'}})
+    oracles.write_text(json.dumps([old]))
+    asked = []
+    monkeypatch.setattr(bench, 'run_one', lambda task: asked.append(task['clones']) or
+                        dict(task, fresh_error=0.03, human=5))
+    args = bench.parse_arguments(['--oracles', str(oracles), '--train-oracles', 'runs'])
+    same = {'clone:a': {'translation': 'old.pt'}}
+    bench.train_missing_oracles(args, {(2, 0, 'clone:a')}, InlinePool(), same)
+    assert asked == []
+    other = {'clone:a': {'translation': 'new.pt'}}
+    bench.train_missing_oracles(args, {(2, 0, 'clone:a')}, InlinePool(), other)
+    assert asked == [other]
