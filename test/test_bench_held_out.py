@@ -102,8 +102,8 @@ def test_the_published_table_is_recomputed_from_its_kept_scores_and_oracles(benc
                if row['profile'] == 'paper'}
     page = (folder / 'held_out.md').read_text().splitlines()
     lines = bench.table(scores, oracles)
-    # three robots x two cases x five partners, and the clone of the default robot in both cases
-    assert len(lines) == 2 + 3 * 2 * 5 + 2
+    # three robots x two cases x five partners, and two clones with the default robot
+    assert len(lines) == 2 + 3 * 2 * 5 + 2 * 2
     for line in lines:
         assert line in page, line
 
