@@ -15,7 +15,8 @@ with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is 
   ``--episodes`` episodes), its total error over the oracle's;
 * **after adapting**: a session with the partner that starts from the robot's policy (as a
   returning person's: the last step, the first episode judges it, then SAC learns) for at most
-  ``--adapt`` of the partner's episodes, then evaluated (``--episodes``): its error over the
+  ``--adapt`` of the partner's episodes, then its policy evaluated as met first is (the
+  partner met afresh, the same episodes: the three errors are paired): its error over the
   oracle's. The person's minutes are those episodes at 40 s.
 
 ``--train-oracles`` trains the oracles the scores need that the ``--oracles`` file lacks
@@ -41,12 +42,13 @@ import multiprocessing
 import pathlib
 import statistics
 import sys
+import tempfile
 
 import numpy
 import torch
 
 from hrc_agent_node.agent_core import AgentCore
-from hrc_agent_node.checkpoint import load_session_start, read_checkpoint
+from hrc_agent_node.checkpoint import load_session_start, read_checkpoint, save_checkpoint
 from hrc_agent_node.config import AgentParams
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
@@ -67,7 +69,14 @@ EPISODE_MINUTES = 40.0 / 60.0
 
 
 def adapted_error(task: dict, partner) -> tuple:
-    """Return (evaluation error, the partner's episodes) after adapting to ``partner``."""
+    """Return the errors after adapting to ``partner``, and the partner's episodes.
+
+    (error, the partner's episodes, the session's own evaluation error). ``error`` is the
+    adapted policy's evaluated as the robot met first and the oracle are (``evaluate``: the
+    partner met afresh, the same evaluation episodes), so the three are paired: the session's
+    own evaluation comes after its training episodes, from other starting states (with a
+    practised partner).
+    """
     config = read_checkpoint(task['checkpoint'])['config']
     known = AgentParams.__dataclass_fields__
     trained = from_dict(AgentParams, {name: value for name, value in config['params'].items()
@@ -82,7 +91,12 @@ def adapted_error(task: dict, partner) -> tuple:
     with SliderPendulumBall(physics) as sim:
         summary = run_session(core, sim, offline_partner(partner, core.human_dof, task['seed'],
                                                          SimLimits.of(physics)))
-    return float(summary['evaluation']['total_error']), int(summary['human_involved_episodes'])
+    with tempfile.TemporaryDirectory(prefix='adapted-') as scratch:
+        checkpoint = pathlib.Path(scratch) / 'adapted.pt'
+        save_checkpoint(core, checkpoint)
+        error = evaluate(checkpoint, partner, task['seed'], task['episodes'])
+    return (error, int(summary['human_involved_episodes']),
+            float(summary['evaluation']['total_error']))
 
 
 def score(task: dict) -> dict:
@@ -90,9 +104,9 @@ def score(task: dict) -> dict:
     torch.set_num_threads(1)
     partner = task_partner(task)
     first = evaluate(task['checkpoint'], partner, task['seed'], task['episodes'])
-    adapted, episodes = adapted_error(task, partner)
+    adapted, episodes, in_session = adapted_error(task, partner)
     return dict(task, checkpoint=str(task['checkpoint']), first=first, adapted=adapted,
-                adapt_episodes=episodes)
+                adapt_episodes=episodes, adapted_in_session=in_session)
 
 
 def robot_name(checkpoint) -> str:

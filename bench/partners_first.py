@@ -62,6 +62,12 @@ def sessions(run: pathlib.Path) -> list:
     return found
 
 
+# Every policy is evaluated on the same episodes (their starting states and the partner's
+# noise follow the episode index and the seed), so errors of two policies are paired. Far
+# from any training episode's index.
+EVALUATION_FIRST_EPISODE = 1_000_000
+
+
 def offline_partner(partner, dof: str, seed: int, limits: SimLimits):
     """Return the offline loop's partner on ``dof``.
 
@@ -80,7 +86,9 @@ def evaluate(checkpoint, partner, seed: int, episodes: int) -> float:
     ``partner``: as :func:`offline_partner` takes it.
     """
     physics = PhysicsParams()
-    core = evaluation_core(checkpoint, seed, episodes)
+    # a policy adapted from another (agent.start_from in its checkpoint) is evaluated alone
+    core = evaluation_core(checkpoint, seed, episodes, {'start_from': ''})
+    core.episode = EVALUATION_FIRST_EPISODE     # not the checkpoint's next episode
     with SliderPendulumBall(physics) as sim:
         return float(run_session(core, sim, offline_partner(
             partner, core.human_dof, seed, SimLimits.of(physics)))['evaluation']['total_error'])
