@@ -22,7 +22,8 @@ with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is 
 ``--train-oracles`` trains the oracles the scores need that the ``--oracles`` file lacks
 (``bench/unlike_people_oracle.py``'s sessions, up to ``--oracle-episodes`` each; a capped one
 takes 5-14 minutes on 2 shared cores) and adds each to the file as it finishes, so one command
-runs the whole protocol and a second run reuses them. Without ``--oracles`` the reference is
+runs the whole protocol and a second run reuses them; each oracle's policy is kept beside the
+file (``<oracles>-checkpoints/``). Without ``--oracles`` the reference is
 each robot's own error with the session's person met afresh (the robustness ratio of
 ``bench/partners_first.py``).
 
@@ -292,9 +293,12 @@ def train_missing_oracles(args, needed, pool, clones=None) -> list:
     missing = sorted(set(needed) - have)
     print(f'held_out_partners: training {len(missing)} oracles ({len(have)} in '
           f'{args.oracles})', flush=True)
+    kept = args.oracles.with_name(args.oracles.stem + '-checkpoints')   # the oracles' policies
+    kept.mkdir(exist_ok=True)
     for row in pool.imap_unordered(run_one, [
-            oracle_task(case, seed, who, args.profile, args.oracle_episodes, args.episodes,
-                        clones=clones) for case, seed, who in missing]):
+            dict(oracle_task(case, seed, who, args.profile, args.oracle_episodes, args.episodes,
+                             clones=clones), keep_in=str(kept))
+            for case, seed, who in missing]):
         rows.append(row)
         args.oracles.write_text(json.dumps(rows, indent=2))   # kept as each one finishes
         print(f"  oracle case {row['case']} seed {row['seed']} {row['who']}: error "

@@ -76,11 +76,16 @@ def run_one(task: dict) -> dict:
         summary = run_session(core, sim, offline_partner(partner, core.human_dof,
                                                          task['seed'], limits))
     with tempfile.TemporaryDirectory(prefix='oracle-') as scratch:
-        checkpoint = pathlib.Path(scratch) / 'trained.pt'
+        # kept in task['keep_in'] when given (its policy can be evaluated again without
+        # training it again), else in a scratch folder
+        folder = pathlib.Path(task.get('keep_in') or scratch)
+        checkpoint = folder / f"case{task['case']}-seed{task['seed']}-{task['who']}.pt"
         save_checkpoint(core, checkpoint)
         # As bench/partners_first.py evaluates the partners-first robots: the frozen policy
         # with the same person met afresh (new to the task), offline.
         fresh = evaluate(checkpoint, partner, task['seed'], task['evaluation_episodes'])
+    if task.get('keep_in'):
+        task = dict(task, checkpoint=str(checkpoint))
     return dict(task, converged=bool(summary['converged']), fresh_error=fresh,
                 human=int(summary['human_involved_episodes']),
                 total=int(summary['training_episodes']),
