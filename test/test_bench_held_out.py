@@ -177,3 +177,19 @@ def test_a_clones_oracle_is_kept_only_for_the_same_model(bench, monkeypatch, tmp
     other = {'clone:a': {'translation': 'new.pt'}}
     bench.train_missing_oracles(args, {(2, 0, 'clone:a')}, InlinePool(), other)
     assert asked == [other]
+
+
+def test_every_policy_is_evaluated_on_the_same_episodes(bench, tmp_path):
+    # One policy saved at two points of its episode count. Met first, after adapting and the
+    # oracle are paired only if an evaluation does not start at the checkpoint's next episode
+    # (the starting states and the person's noise follow the episode index).
+    physics = bench.PhysicsParams()
+    params = bench.with_overrides(bench.AgentParams(), case=2, seed=0, checkpoint_dir='',
+                                  torch_threads=1)
+    core = bench.AgentCore(params, limits=bench.SimLimits.of(physics))
+    early, late = tmp_path / 'early.pt', tmp_path / 'late.pt'
+    bench.save_checkpoint(core, early)
+    core.episode = 37
+    bench.save_checkpoint(core, late)
+    person = bench.task_partner(dict(who='person', profile='paper', seed=0))
+    assert bench.evaluate(early, person, 0, 1) == bench.evaluate(late, person, 0, 1)
