@@ -60,7 +60,8 @@ from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 from hrc_study.statistics import bootstrap_interval
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from partners_first import evaluate, offline_partner, sessions  # noqa: E402  (bench/)
+from partners_first import (EVALUATION_FIRST_EPISODE, evaluate, offline_partner,  # noqa: E402
+                            sessions)
 from unlike_people_oracle import oracle_task, parse_sets, run_one, task_partner  # noqa: E402
 
 ORACLE_CASE = {8: 2, 7: 1}          # the same role assignment in the paper's task first
@@ -145,18 +146,20 @@ def verdict(ratios, target: float) -> str:
     return f'{met} (worst {max(ratios):.2f}x)'
 
 
-def table(results: list, oracles: dict) -> list:
+def table(results: list, oracles: dict, unpaired=frozenset()) -> list:
     """Return the Markdown lines: per robot, case and partner the ratios to the reference.
 
     ``oracles`` None: the reference is the robot's own error with the session's person.
+    ``unpaired``: the oracles' keys whose evaluation was not on the paired episodes (before
+    ``EVALUATION_FIRST_EPISODE``): their reference is marked.
     """
     own = own_person_references(results) if oracles is None else None
     reference = 'oracle' if oracles is not None else "its own with the session's person"
     lines = [f"| robot | case (robot's DOF) | partner | reference error ({reference}) | "
              'met first: error, / reference | '
              f'median <= {FIRST_TARGET:g}x | after adapting: error, / reference | '
-             f'median <= {ADAPTED_TARGET:g}x | '
-             "the partner's episodes (minutes) |", '|---|---|---|---|---|---|---|---|---|']
+             f'median <= {ADAPTED_TARGET:g}x | after adapting / met first | '
+             "the partner's episodes (minutes) |", '|---|---|---|---|---|---|---|---|---|---|']
     keys = sorted({(r['robot'], r['case'], r['who']) for r in results})
     for robot, case, who in keys:
         rows = [r for r in results if (r['robot'], r['case'], r['who']) == (robot, case, who)]
@@ -167,15 +170,19 @@ def table(results: list, oracles: dict) -> list:
             continue
         first = [r['first'] / o for r, o in pairs]
         adapted = [r['adapted'] / o for r, o in pairs]
+        # 1.00 exactly: the judge kept the robot's policy (paired evaluations, same episodes)
+        change = [r['adapted'] / r['first'] for r, _ in pairs]
         episodes = statistics.median(r['adapt_episodes'] for r, _ in pairs)
         dof = 'rotation' if case == 8 else 'translation'
+        marked = ' (unpaired)' if any((ORACLE_CASE[case], r['seed'], who) in unpaired
+                                      for r, _ in pairs) else ''
         lines.append(
             f'| {robot} | {case} ({dof}) | {who} | '
-            f'{statistics.median(o for _, o in pairs):.4f} | '
+            f'{statistics.median(o for _, o in pairs):.4f}{marked} | '
             f"{statistics.median(r['first'] for r, _ in pairs):.4f}, {interval_text(first)} | "
             f'{verdict(first, FIRST_TARGET)} | '
             f"{statistics.median(r['adapted'] for r, _ in pairs):.4f}, {interval_text(adapted)} | "
-            f'{verdict(adapted, ADAPTED_TARGET)} | '
+            f'{verdict(adapted, ADAPTED_TARGET)} | {interval_text(change)} | '
             f'{episodes:g} ({episodes * EPISODE_MINUTES:.1f}) |')
     return lines
 
@@ -359,12 +366,18 @@ def main(argv=None) -> int:
     oracles = None if oracle_rows is None else {
         (row['case'], row['seed'], row['who']): row['fresh_error'] for row in oracle_rows
         if row['profile'] == args.profile}
-    return write_table(results, oracles, args.out)
+    return write_table(results, oracles, args.out, unpaired_oracles(oracle_rows or []))
 
 
-def write_table(results: list, oracles: dict, out) -> int:
+def unpaired_oracles(rows: list) -> set:
+    """Return the keys of the oracles not evaluated on the paired episodes (older files)."""
+    return {(row['case'], row['seed'], row['who']) for row in rows
+            if row.get('evaluated_from') != EVALUATION_FIRST_EPISODE}
+
+
+def write_table(results: list, oracles: dict, out, unpaired=frozenset()) -> int:
     """Print the table (and write it to ``out``); return 0."""
-    lines = table(results, oracles)
+    lines = table(results, oracles, unpaired)
     print('\n'.join(lines))
     if out:
         out.write_text('\n'.join(lines) + '\n')

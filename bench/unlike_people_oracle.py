@@ -48,7 +48,8 @@ from hrc_partners.partners_first import UNLIKE_TRAITS, unlike_people
 from hrc_sim_node.physics import PhysicsParams, SliderPendulumBall
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from partners_first import evaluate, offline_partner, spread  # noqa: E402  (bench/partners_first.py)
+from partners_first import (EVALUATION_FIRST_EPISODE, evaluate, offline_partner,  # noqa: E402
+                            spread)
 
 PEOPLE = ('person',) + tuple(UNLIKE_TRAITS)
 
@@ -87,6 +88,7 @@ def run_one(task: dict) -> dict:
     if task.get('keep_in'):
         task = dict(task, checkpoint=str(checkpoint))
     return dict(task, converged=bool(summary['converged']), fresh_error=fresh,
+                evaluated_from=EVALUATION_FIRST_EPISODE,
                 human=int(summary['human_involved_episodes']),
                 total=int(summary['training_episodes']),
                 error=float(summary['evaluation']['total_error']),
