@@ -51,6 +51,7 @@ import torch
 from hrc_agent_node.agent_core import AgentCore
 from hrc_agent_node.checkpoint import load_session_start, read_checkpoint, save_checkpoint
 from hrc_agent_node.config import AgentParams
+from hrc_common.cases import case_table
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
 from hrc_engine.offline import run_session
@@ -65,7 +66,6 @@ from partners_first import (EVALUATION_FIRST_EPISODE, evaluate, offline_partner,
 from unlike_people_oracle import oracle_task, parse_sets, run_one, task_partner  # noqa: E402
 
 ORACLE_CASE = {8: 2, 7: 1}          # the same role assignment in the paper's task first
-HUMAN_DOF = {8: 'translation', 7: 'rotation'}   # the partner's degree of freedom per case
 FIRST_TARGET, ADAPTED_TARGET = 2.0, 1.5
 EPISODE_MINUTES = 40.0 / 60.0
 
@@ -173,7 +173,7 @@ def table(results: list, oracles: dict, unpaired=frozenset()) -> list:
         # 1.00 exactly: the judge kept the robot's policy (paired evaluations, same episodes)
         change = [r['adapted'] / r['first'] for r, _ in pairs]
         episodes = statistics.median(r['adapt_episodes'] for r, _ in pairs)
-        dof = 'rotation' if case == 8 else 'translation'
+        dof = case_table()[case].robot_dof
         marked = ' (unpaired)' if any((ORACLE_CASE[case], r['seed'], who) in unpaired
                                       for r, _ in pairs) else ''
         lines.append(
@@ -271,7 +271,7 @@ def adapting_name(overrides: dict) -> str:
 def partners_of(case: int, clones: dict) -> list:
     """Return the held-out partners of ``case``: the people, then the clones of its DOF."""
     return ['person', *UNLIKE_TRAITS,
-            *(name for name, models in clones.items() if HUMAN_DOF[case] in models)]
+            *(name for name, models in clones.items() if case_table()[case].human_dof in models)]
 
 
 def scoring_tasks(args, adapt_overrides: dict, clones: dict) -> list:
