@@ -13,11 +13,14 @@ with the partner: the final checkpoints of ``hrc experiment --checkpoints``) is 
 
 * **met first**: its frozen policy with the partner met afresh (the partner's first
   ``--episodes`` episodes), its total error over the oracle's;
-* **after adapting**: a session with the partner that starts from the robot's policy (as a
-  returning person's: the last step, the first episode judges it, then SAC learns) for at most
-  ``--adapt`` of the partner's episodes, then its policy evaluated as met first is (the
+* **after adapting**: a session with the partner that starts from the robot's policy and
+  learns from each of ``--adapt`` of the partner's episodes (``adapting``: the last step, no
+  judging; SAC learns inside the episodes), then its policy evaluated as met first is (the
   partner met afresh, the same episodes: the three errors are paired): its error over the
-  oracle's. The person's minutes are those episodes at 40 s.
+  oracle's. The person's minutes are those episodes at 40 s. ``--adapt-set
+  start_from_judged=true --adapt-set judging_interval=0`` adapts by the paper's rule instead (a
+  returning person's start: the first episode judges the inherited policy, and a policy the
+  judge passes learns no more).
 
 ``--train-oracles`` trains the oracles the scores need that the ``--oracles`` file lacks
 (``bench/unlike_people_oracle.py``'s sessions, up to ``--oracle-episodes`` each; a capped one
@@ -70,6 +73,18 @@ FIRST_TARGET, ADAPTED_TARGET = 2.0, 1.5
 EPISODE_MINUTES = 40.0 / 60.0
 
 
+def adapting(adapt: int, overrides: dict) -> dict:
+    """Return the adapting session's AgentParams but its start: ``overrides`` over ours.
+
+    The robot learns from every one of the partner's ``adapt`` episodes: no judging episode
+    (with ``judging_interval`` equal to the budget none falls due before the budget ends).
+    Chosen by measurement: adapting by the paper's rule (the first episode judges, a policy the
+    judge passes learns no more) never adapts to a partner with whom the inherited policy meets
+    the step, however much better that partner's oracle is (docs/partners/held_out.md).
+    """
+    return {'start_from_judged': False, 'judging_interval': adapt, **overrides}
+
+
 def adapted_error(task: dict, partner) -> tuple:
     """Return the errors after adapting to ``partner``, and the partner's episodes.
 
@@ -86,7 +101,7 @@ def adapted_error(task: dict, partner) -> tuple:
     params = with_overrides(trained, seed=task['seed'], start_from=str(task['checkpoint']),
                             resume_from='', max_training_episodes=task['adapt'],
                             evaluation_episodes=task['episodes'], checkpoint_dir='',
-                            torch_threads=1, **task['adapt_overrides'])
+                            torch_threads=1, **task['adapting'])
     physics = PhysicsParams()
     core = AgentCore(params, limits=SimLimits.of(physics))
     load_session_start(core)
@@ -279,7 +294,8 @@ def scoring_tasks(args, adapt_overrides: dict, clones: dict) -> list:
     return [dict(robot=robot_name(entry['checkpoint']) + adapting_name(adapt_overrides),
                  case=entry['case'], seed=entry['seed'], checkpoint=entry['checkpoint'],
                  who=who, profile=args.profile, episodes=args.episodes, adapt=args.adapt,
-                 adapt_overrides=adapt_overrides, clones=clones)
+                 adapt_overrides=adapt_overrides, adapting=adapting(args.adapt, adapt_overrides),
+                 clones=clones)
             for run in args.runs for entry in sessions(run) if entry['case'] in ORACLE_CASE
             and (args.seeds is None or entry['seed'] in args.seeds)
             for who in partners_of(entry['case'], clones)

@@ -91,6 +91,14 @@ def test_the_table_divides_by_the_oracle_and_judges_the_median(bench):
     assert marked[3] == '0.1000 (unpaired)'
 
 
+def test_the_robot_adapts_by_learning_from_every_one_of_the_budget(bench):
+    # no judging start, and no judging episode falls due inside the budget
+    assert bench.adapting(3, {}) == {'start_from_judged': False, 'judging_interval': 3}
+    judged = bench.adapting(3, {'start_from_judged': True, 'judging_interval': 0})
+    assert judged == {'start_from_judged': True, 'judging_interval': 0}   # the paper's rule
+    bench.with_overrides(bench.AgentParams(), **bench.adapting(3, {}))  # valid parameters
+
+
 def test_an_adapting_override_is_named_with_the_robot(bench):
     assert bench.adapting_name({}) == ''
     assert bench.adapting_name({'sac_learning_starts': 20, 'a': 1}) == \

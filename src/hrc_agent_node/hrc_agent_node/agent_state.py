@@ -64,7 +64,8 @@ class CheckpointState:
         """Start a new session with the policy just loaded from a finished one (start_from).
 
         A returning person: the counters from zero, the strategy at its last step (the one
-        with the person), whose first episode judges the policy it starts with.
+        with the person), whose first episode judges the policy it starts with
+        (``start_from_judged``; otherwise it trains from the first episode).
         """
         self.episode = self.total_episodes = self.human_involved_episodes = 0
         self.population_episodes = self.judging_episodes = 0
@@ -72,7 +73,7 @@ class CheckpointState:
         while not self.progress.is_last_step:
             self.progress.skip()
         self._start_step(previous)
-        self.judging_due = True
+        self.judging_due = self.params.start_from_judged
 
     def evaluation_finished(self) -> bool:
         """Return whether the evaluation has its episodes: ``evaluation_episodes`` complete ones.

@@ -236,8 +236,10 @@ def load_session_start(core) -> str:
         except CheckpointError as error:
             raise CheckpointError(f'start_from rejected: {error}') from None
         core.start_after()
+        first = ('its first episode judges that policy' if params.start_from_judged else
+                 'it learns from the first episode')
         return (f'started from the policy of {params.start_from} (a returning person): the '
-                f'last training step, its first episode judges that policy')
+                f'last training step, {first}')
     if not params.resume_from:
         return ''
     try:

@@ -70,6 +70,11 @@ class AgentParams:
                                 'from (a returning person): counters from zero, the '
                                 "strategy's last step, its first episode judges the policy; "
                                 'empty = a new policy')
+    start_from_judged: bool = param(
+        True, "start_from: the session's first episode judges the inherited policy (the "
+        "paper's rule: a policy that already meets the step trains no more); false = it "
+        'trains from the first episode (adapting to a new person for max_training_episodes; '
+        'judging_interval decides the judging after)')
     human_action_source: str = param(
         'applied', "What the robot observes as the human action a_h: applied = the human's "
         'command the sim applied in the last control period (read from the state: the two act '

@@ -4,19 +4,21 @@ Two in-process sessions of case 2 (task first: the robot alone, then the person)
 PyBullet sim and the simulated person, 8 s episodes: the first runs to its end and leaves
 final.pt; the second starts from it (agent.start_from): its counters start at zero, it skips
 the robot-alone step, and its first episode is a judging episode of the inherited policy with
-the person. Without the start (a fresh policy) the first episode is the robot alone, training.
+the person. Without the start (a fresh policy) the first episode is the robot alone, training;
+with ``agent.start_from_judged: false`` (adapting) it is a training episode with the person.
 """
 
+from hrc_common.contract import EpisodeKind
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import EngineConfig, SummariesSession
 
 OVERRIDES = {'sim.episode_duration': 8.0}
 
 
-def run(tmp_path, session_id, **settings):
+def run(tmp_path, session_id, overrides=(), **settings):
     session = SummariesSession(EngineConfig(SessionSettings(
         case=2, seed=0, session_id=session_id, record=False, runs_dir=str(tmp_path / 'runs'),
-        evaluation_episodes=1, overrides=OVERRIDES, **settings)))
+        evaluation_episodes=1, overrides={**OVERRIDES, **dict(overrides)}, **settings)))
     session.run()
     return session.summaries
 
@@ -30,3 +32,14 @@ def test_the_second_session_judges_the_inherited_policy_with_the_person_first(tm
     opening = second[0]
     assert opening['episode'] == 0 and opening['training_step'] == 1      # the last step
     assert opening['human_involved'] and opening['kind'] == 2            # KIND_JUDGING
+
+
+def test_a_start_not_judged_learns_from_the_first_episode_with_the_person(tmp_path):
+    """Adapting to a new person (``agent.start_from_judged: false``): no judging first."""
+    run(tmp_path, 'first', training_episodes=6)
+    final = tmp_path / 'runs' / 'checkpoints' / 'first' / 'final.pt'
+    adapting = run(tmp_path, 'adapting', training_episodes=2, start_from=str(final),
+                   overrides={'agent.start_from_judged': False})
+    opening = adapting[0]
+    assert opening['episode'] == 0 and opening['training_step'] == 1
+    assert opening['human_involved'] and opening['kind'] == EpisodeKind.TRAINING
