@@ -108,11 +108,13 @@ def test_an_adapting_override_is_named_with_the_robot(bench):
 def test_the_published_tables_are_recomputed_from_their_kept_scores_and_oracles(bench):
     folder = pathlib.Path(__file__).resolve().parents[1] / 'docs' / 'partners'
     page = (folder / 'held_out.md').read_text().splitlines()
-    for kind, rows in (('', 2 * 7), ('_unpaired', 3 * 2 * 5 + 2 * 2)):
-        # paired: the default robot, both cases x seven partners; before pairing: three
-        # robots x two cases x five partners, and two clones with the default robot
-        scores = json.loads((folder / f'held_out{kind}_scores.json').read_text())
-        oracle_rows = json.loads((folder / f'held_out{kind}_oracles.json').read_text())
+    for scores_kind, oracles_kind, rows in (('', '', 2 * 7), ('_judged', '', 2 * 7),
+                                            ('_unpaired', '_unpaired', 3 * 2 * 5 + 2 * 2)):
+        # paired: the default robot, both cases x seven partners, adapting from every episode
+        # and by the paper's rule (judged); before pairing: three robots x two cases x five
+        # partners, and two clones with the default robot
+        scores = json.loads((folder / f'held_out{scores_kind}_scores.json').read_text())
+        oracle_rows = json.loads((folder / f'held_out{oracles_kind}_oracles.json').read_text())
         oracles = {(row['case'], row['seed'], row['who']): row['fresh_error']
                    for row in oracle_rows if row['profile'] == 'paper'}
         lines = bench.table(scores, oracles, bench.unpaired_oracles(oracle_rows))
