@@ -55,7 +55,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--start-from', default='', metavar='CHECKPOINT',
                         help="a finished session's final.pt: a new session starts from its "
                         "policy at the strategy's last step (with --study-dir found by itself "
-                        'for a subject back for a case they finished)')
+                        'for a subject back for a case they finished); its first episode '
+                        'judges that policy (--set agent.start_from_judged=false: it learns '
+                        'from the first)')
     parser.add_argument('--fresh-start', action='store_true',
                         help='with --study-dir: a new robot even for a subject back for a case '
                         'they finished')

@@ -45,7 +45,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--resume-from', default='', help='continue from this checkpoint')
     parser.add_argument('--start-from', default='', metavar='CHECKPOINT',
                         help="a new session from a finished session's policy (a returning "
-                        "person): the strategy's last step, its first episode judges it")
+                        "person): the strategy's last step, its first episode judges it "
+                        '(--set agent.start_from_judged=false: it learns from the first)')
     parser.add_argument('--set', action='append', default=[], metavar='NODE.NAME=VALUE',
                         help='override a node parameter (YAML value), as with session')
     parser.add_argument('--json', action='store_true', help='print the result as JSON')
