@@ -57,6 +57,7 @@ from hrc_agent_node.config import AgentParams
 from hrc_common.cases import case_table
 from hrc_common.contract import SimLimits
 from hrc_common.params import from_dict, ParameterError, with_overrides
+from hrc_common.session_plan import adapting_agent_parameters
 from hrc_engine.offline import run_session
 from hrc_joystick_node.human_model import load_human_model
 from hrc_partners.partners_first import UNLIKE_TRAITS
@@ -76,13 +77,13 @@ EPISODE_MINUTES = 40.0 / 60.0
 def adapting(adapt: int, overrides: dict) -> dict:
     """Return the adapting session's AgentParams but its start: ``overrides`` over ours.
 
-    The robot learns from every one of the partner's ``adapt`` episodes: no judging episode
-    (with ``judging_interval`` equal to the budget none falls due before the budget ends).
-    Chosen by measurement: adapting by the paper's rule (the first episode judges, a policy the
-    judge passes learns no more) never adapts to a partner with whom the inherited policy meets
-    the step, however much better that partner's oracle is (docs/partners/held_out.md).
+    Ours are ``hrc session --adapt-from``'s (``adapting_agent_parameters``): the robot learns
+    from every one of the partner's ``adapt`` episodes, no judging episode. Chosen by
+    measurement: adapting by the paper's rule (the first episode judges, a policy the judge
+    passes learns no more) never adapts to a partner with whom the inherited policy meets the
+    step, however much better that partner's oracle is (docs/partners/held_out.md).
     """
-    return {'start_from_judged': False, 'judging_interval': adapt, **overrides}
+    return {**adapting_agent_parameters(adapt), **overrides}
 
 
 def adapted_error(task: dict, partner) -> tuple:
@@ -99,8 +100,8 @@ def adapted_error(task: dict, partner) -> tuple:
     trained = from_dict(AgentParams, {name: value for name, value in config['params'].items()
                                       if name in known})
     params = with_overrides(trained, seed=task['seed'], start_from=str(task['checkpoint']),
-                            resume_from='', max_training_episodes=task['adapt'],
-                            evaluation_episodes=task['episodes'], checkpoint_dir='',
+                            resume_from='', evaluation_episodes=task['episodes'],
+                            checkpoint_dir='',
                             torch_threads=1, **task['adapting'])
     physics = PhysicsParams()
     core = AgentCore(params, limits=SimLimits.of(physics))

@@ -93,9 +93,11 @@ def test_the_table_divides_by_the_oracle_and_judges_the_median(bench):
 
 def test_the_robot_adapts_by_learning_from_every_one_of_the_budget(bench):
     # no judging start, and no judging episode falls due inside the budget
-    assert bench.adapting(3, {}) == {'start_from_judged': False, 'judging_interval': 3}
+    assert bench.adapting(3, {}) == {'start_from_judged': False, 'max_training_episodes': 3,
+                                     'judging_interval': 3}     # hrc session --adapt-from's
     judged = bench.adapting(3, {'start_from_judged': True, 'judging_interval': 0})
-    assert judged == {'start_from_judged': True, 'judging_interval': 0}   # the paper's rule
+    assert judged == {'start_from_judged': True, 'max_training_episodes': 3,
+                      'judging_interval': 0}                    # the paper's rule
     bench.with_overrides(bench.AgentParams(), **bench.adapting(3, {}))  # valid parameters
 
 

@@ -236,10 +236,11 @@ def load_session_start(core) -> str:
         except CheckpointError as error:
             raise CheckpointError(f'start_from rejected: {error}') from None
         core.start_after()
-        first = ('its first episode judges that policy' if params.start_from_judged else
-                 'it learns from the first episode')
-        return (f'started from the policy of {params.start_from} (a returning person): the '
-                f'last training step, {first}')
+        if params.start_from_judged:
+            return (f'started from the policy of {params.start_from} (a returning person): the '
+                    'last training step, its first episode judges that policy')
+        return (f'started from the policy of {params.start_from} (adapting to a new person): '
+                "the last training step, learning from each of the person's episodes")
     if not params.resume_from:
         return ''
     try:

@@ -90,7 +90,7 @@ def prepare_parameters(settings: SessionSettings, options, params_dir: pathlib.P
         # agent waits for it (wait_for_subscribers) as long as the runner waits for its input.
         agent = parameters['agent']
         agent['reset_timeout'] = max(float(agent['reset_timeout']), float(options.input_wait))
-    if not (settings.resume_from or settings.start_from):
+    if not (settings.resume_from or settings.start_from or settings.adapt_from):
         # Partners first (cases 7, 8): the robot alone and with the simulated population in
         # this process first (no person: minutes), then the graph from that checkpoint.
         start = pretrain_if_needed(parameters, run_dir)

@@ -59,7 +59,7 @@ def start_returning_person(settings: SessionSettings, options) -> None:
     ``settings.start_from``; session.yaml and the index entry record it.
     """
     if not (options.study_dir and settings.subject_id) or settings.resume_from \
-            or settings.start_from or options.fresh_start:
+            or settings.start_from or settings.adapt_from or options.fresh_start:
         return
     try:
         found = returning_start(load_index(options.study_dir), settings.subject_id,
@@ -113,7 +113,7 @@ def index_session(settings: SessionSettings, options, kind: str, started: str,
         bags=str((pathlib.Path(settings.bags_dir) / session_id).resolve()),
         run_dir=str(run_dir.resolve()),
         tlx_file=str(tlx.resolve()) if kind == 'condition' and tlx_stored(
-            tlx, session_id) else '', start_from=settings.start_from)
+            tlx, session_id) else '', start_from=settings.start_from or settings.adapt_from)
     path = record_session(options.study_dir, entry)
     print(f'[session] {kind} {session_id} (exit {int(code)}) recorded in the study index '
           f'{path}', flush=True)

@@ -80,6 +80,10 @@ def load_learning(params_dir: pathlib.Path, name: str) -> dict:
 
 # The settings a session owns that are not one node's parameter: checked here, not by a node.
 SESSION_MODES = ('lockstep', 'realtime')
+# The person's episodes a robot trained with others learns from by default (--adapt-from): 3
+# (2 minutes) brought every held-out partner within 1.5x of the robot trained for them
+# (docs/partners/held_out.md).
+ADAPT_EPISODES = 3
 
 
 @dataclass
@@ -120,6 +124,11 @@ class SessionSettings:
     resume_from: str = param('', "A checkpoint to continue from ('' = a new agent)")
     start_from: str = param('', "A finished session's checkpoint whose policy a new session "
                                 "starts from (a returning person; '' = a new policy)")
+    adapt_from: str = param('', "A checkpoint of a robot trained with other people (e.g. a "
+                                "partners-first session's final.pt) that a new person's session "
+                                "starts from, learning from each of the person's episodes "
+                                f'(training_episodes of them, {ADAPT_EPISODES} by default; no '
+                                "judging); '' = none")
     subject_id: str = param('', "The person's study id (kept in session.yaml, owner-only; never "
                                 'in a file name)')
     notes: str = param('', 'Free text kept in session.yaml (owner-only)')
@@ -145,8 +154,13 @@ class SessionSettings:
         if self.resume_from and self.start_from:
             reasons.append('--resume-from continues a session, --start-from starts a new one '
                            "from a finished session's policy: give one")
-        if self.start_from and not pathlib.Path(str(self.start_from)).is_file():
-            reasons.append(f'--start-from {self.start_from}: no such checkpoint file')
+        if self.adapt_from and (self.resume_from or self.start_from):
+            reasons.append('--adapt-from starts a new session from a robot trained with others; '
+                           'it cannot be combined with --resume-from or --start-from')
+        for value, option in ((self.start_from, '--start-from'), (self.adapt_from,
+                                                                  '--adapt-from')):
+            if value and not pathlib.Path(str(value)).is_file():
+                reasons.append(f'{option} {value}: no such checkpoint file')
         for key in self.overrides if isinstance(self.overrides, dict) else ():
             if key.split('.', 1)[0] not in NODES:
                 reasons.append(f'--set {key}: the node must be one of {sorted(NODES)}')
@@ -254,9 +268,21 @@ SETTING_OPTIONS = {'seed': '--seed', 'mode': '--mode', 'case': '--case', 'input'
                    'profile': '--profile', 'robot_dof': '--case', 'dof': '--case',
                    'session_id': '--session-id', 'max_training_episodes': '--episodes',
                    'evaluation_episodes': '--eval-episodes', 'resume_from': '--resume-from',
-                   'start_from': '--start-from',
+                   'start_from': '--start-from or --adapt-from',
+                   'start_from_judged': '--adapt-from',
                    'checkpoint_dir': '--runs-dir', 'output_dir': '--bags-dir',
                    'practice_episodes': '--practice'}
+
+
+def adapting_agent_parameters(episodes: int) -> dict:
+    """Return the agent parameters of a robot, started from a policy, adapting to a new person.
+
+    It learns from each of the person's ``episodes`` (its budget), and no judging episode falls
+    due before the budget ends: the judge would keep an inherited policy that merely meets the
+    step, however much better a robot trained for the person is (docs/partners/held_out.md).
+    """
+    return {'start_from_judged': False, 'max_training_episodes': int(episodes),
+            'judging_interval': int(episodes)}
 
 
 def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
@@ -288,6 +314,10 @@ def _apply_settings(settings: SessionSettings, parameters: dict) -> None:
         agent['resume_from'] = settings.resume_from
     if settings.start_from:
         agent['start_from'] = settings.start_from
+    if settings.adapt_from:
+        # adapting to a new person as docs/partners/held_out.md measured best
+        agent['start_from'] = settings.adapt_from
+        agent.update(adapting_agent_parameters(settings.training_episodes or ADAPT_EPISODES))
     human['input'] = settings.human_input
     if settings.human_profile:
         human['profile'] = settings.human_profile

@@ -168,3 +168,38 @@ def test_overrides_go_back_to_the_command_line_unchanged():
     assert arguments[0::2] == ['--set'] * len(overrides)
     assert parse_overrides(arguments[1::2]) == overrides
     assert arguments[1] == 'sim.episode_duration=2.0'
+
+
+def test_adapt_from_learns_from_each_of_the_persons_episodes_without_judging(tmp_path):
+    """--adapt-from: the inherited policy learns from every one of the person's episodes."""
+    checkpoint = tmp_path / 'final.pt'
+    checkpoint.write_bytes(b'')
+    agent = compose(SessionSettings(case=8, adapt_from=str(checkpoint)), PARAMS)['agent']
+    assert agent['start_from'] == str(checkpoint) and agent['start_from_judged'] is False
+    # three episodes by default (what the held-out protocol measured), and no judging episode
+    # falls due before they end
+    assert agent['max_training_episodes'] == agent['judging_interval'] == 3
+    longer = compose(SessionSettings(case=8, adapt_from=str(checkpoint), training_episodes=5),
+                     PARAMS)['agent']
+    assert longer['max_training_episodes'] == longer['judging_interval'] == 5
+    # a returning person's start judges the inherited policy first, as before
+    returning = compose(SessionSettings(case=8, start_from=str(checkpoint)), PARAMS)['agent']
+    assert returning['start_from_judged'] is True
+
+
+def test_adapt_from_is_refused_with_another_start_or_a_judged_start(tmp_path):
+    checkpoint = tmp_path / 'final.pt'
+    checkpoint.write_bytes(b'')
+    settings = SessionSettings(case=8, adapt_from=str(tmp_path / 'missing.pt'),
+                               start_from=str(checkpoint),
+                               overrides={'agent.start_from_judged': True})
+    with pytest.raises(ValueError) as error:
+        compose(settings, PARAMS)
+    text = str(error.value)
+    assert 'cannot be combined with --resume-from or --start-from' in text
+    assert f'--adapt-from {tmp_path / "missing.pt"}: no such checkpoint file' in text
+    settings.start_from, settings.adapt_from = '', str(checkpoint)
+    with pytest.raises(ValueError) as error:
+        compose(settings, PARAMS)
+    assert ('--set agent.start_from_judged=True: the session sets agent.start_from_judged '
+            'itself (False); use --adapt-from') in str(error.value)

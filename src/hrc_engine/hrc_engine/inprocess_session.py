@@ -46,7 +46,8 @@ def parse_args(argv=None) -> tuple:
         evaluation_episodes=options.eval_episodes,
         session_id=options.session_id, bags_dir=options.bags_dir, runs_dir=options.runs_dir,
         record=not options.no_record, resume_from=options.resume_from,
-        start_from=options.start_from, overrides=overrides)
+        start_from=options.start_from, adapt_from=options.adapt_from,
+        overrides=overrides)
     # the engine loads the cores, torch among them (seconds): --help and usage errors answer
     # without it
     from hrc_engine.engine import EngineConfig  # lazy: torch (seconds), see above

@@ -5,7 +5,7 @@ PyBullet sim and the simulated person, 8 s episodes: the first runs to its end a
 final.pt; the second starts from it (agent.start_from): its counters start at zero, it skips
 the robot-alone step, and its first episode is a judging episode of the inherited policy with
 the person. Without the start (a fresh policy) the first episode is the robot alone, training;
-with ``agent.start_from_judged: false`` (adapting) it is a training episode with the person.
+adapting to a new person (``adapt_from``) it trains with the person from the first episode.
 """
 
 from hrc_common.contract import EpisodeKind
@@ -34,12 +34,13 @@ def test_the_second_session_judges_the_inherited_policy_with_the_person_first(tm
     assert opening['human_involved'] and opening['kind'] == 2            # KIND_JUDGING
 
 
-def test_a_start_not_judged_learns_from_the_first_episode_with_the_person(tmp_path):
-    """Adapting to a new person (``agent.start_from_judged: false``): no judging first."""
+def test_adapt_from_learns_from_each_of_the_persons_episodes_then_evaluates(tmp_path):
+    """A new person meets a robot trained before (``--adapt-from``): three training episodes
+    with the person, no judging episode, then the evaluation."""
     run(tmp_path, 'first', training_episodes=6)
     final = tmp_path / 'runs' / 'checkpoints' / 'first' / 'final.pt'
-    adapting = run(tmp_path, 'adapting', training_episodes=2, start_from=str(final),
-                   overrides={'agent.start_from_judged': False})
-    opening = adapting[0]
-    assert opening['episode'] == 0 and opening['training_step'] == 1
-    assert opening['human_involved'] and opening['kind'] == EpisodeKind.TRAINING
+    adapting = run(tmp_path, 'adapting', adapt_from=str(final))
+    kinds = [summary['kind'] for summary in adapting]
+    assert kinds == [EpisodeKind.TRAINING] * 3 + [EpisodeKind.EVALUATION]
+    assert all(summary['human_involved'] and summary['training_step'] == 1
+               for summary in adapting)
