@@ -35,8 +35,10 @@ def test_the_second_session_judges_the_inherited_policy_with_the_person_first(tm
 
 
 def test_adapt_from_learns_from_each_of_the_persons_episodes_then_evaluates(tmp_path):
-    """A new person meets a robot trained before (``--adapt-from``): three training episodes
-    with the person, no judging episode, then the evaluation."""
+    """A new person meets a robot trained before (``--adapt-from``).
+
+    Three training episodes with the person, no judging episode, then the evaluation.
+    """
     run(tmp_path, 'first', training_episodes=6)
     final = tmp_path / 'runs' / 'checkpoints' / 'first' / 'final.pt'
     adapting = run(tmp_path, 'adapting', adapt_from=str(final))
