@@ -95,10 +95,13 @@ def main(argv=None) -> int:
         result = write_results(sessions, arguments.out, command,
                                read_experiment(arguments.paths), arguments.weights,
                                arguments.seed, arguments.note)
-    except ValueError as error:
+    except OSError as error:     # --out not writable: the user's to mend (exit 1, no traceback)
         progress.close()
-        log(str(error))
+        log(f'cannot write the results to {arguments.out}: {error}')
         return 1
+    # Any other error in the statistics is a defect of hrc and keeps its traceback: a
+    # ValueError caught here once made scipy's failure on a one-pair comparison look like a
+    # user mistake.
     progress.show(len(folders) + 1, f'hrc_results: wrote the tables, findings and figures to '
                   f'{arguments.out}')
     progress.close()

@@ -2,7 +2,8 @@
 
 It pooled practice-only sessions, sessions where nobody acted as the person, sessions of other
 episode limits and repeats of one case with one person as "N seeds" of a profile, and wrote
-into the repository's docs/ when no --out was given.
+into the repository's docs/ when no --out was given. An --out it cannot write is one line; an
+error inside the statistics is hrc's own and keeps its traceback.
 """
 
 from hrc_msgs.msg import EpisodeSummary
@@ -60,3 +61,23 @@ def test_they_are_pooled_when_asked(mixed, tmp_path):
 
 def test_without_out_nothing_goes_into_the_repositorys_docs():
     assert results_args.build_parser().parse_args(['bags']).out == 'results'
+
+
+def test_an_out_that_cannot_be_written_is_one_line_without_a_traceback(mixed, tmp_path, capsys):
+    taken = tmp_path / 'taken'
+    taken.write_text('a file, not a folder')
+    arguments = [str(mixed), '--out', str(taken), '--pool-configurations']
+    assert results_cli.main(arguments) == 1
+    err = capsys.readouterr().err
+    assert f'hrc_results: cannot write the results to {taken}: ' in err
+    assert 'Traceback' not in err
+
+
+def test_an_error_inside_the_statistics_keeps_its_traceback(mixed, tmp_path, monkeypatch):
+    """A defect of hrc (here a ValueError raised inside) is not passed off as a user mistake."""
+    def failing(*args, **kwargs):
+        raise ValueError('each sample in `data` must contain two or more observations')
+
+    monkeypatch.setattr(results_cli, 'write_results', failing)
+    with pytest.raises(ValueError, match='two or more observations'):
+        results_cli.main([str(mixed), '--out', str(tmp_path / 'out'), '--pool-configurations'])
