@@ -6,7 +6,7 @@ import shlex
 import sys
 
 from hrc_common import bounded_yaml
-from hrc_common.session_plan import (ADAPT_EPISODES, add_learning_option, NODES, new_session_id,
+from hrc_common.session_plan import (add_adapt_option, add_learning_option, NODES, new_session_id,
                                      parse_overrides, SessionSettings)
 from hrc_live.study import consent_problem, load_registry, StudyError
 import yaml
@@ -58,11 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
                         'for a subject back for a case they finished); its first episode '
                         'judges that policy (--set agent.start_from_judged=false: it learns '
                         'from the first)')
-    parser.add_argument('--adapt-from', default='', metavar='CHECKPOINT',
-                        help='a robot trained with other people (e.g. a partners-first '
-                        "session's final.pt) meets a new person: it starts from that policy "
-                        "and learns from each of the person's episodes, --episodes of them "
-                        f'(default {ADAPT_EPISODES}), no judging; then the evaluation')
+    add_adapt_option(parser)
     parser.add_argument('--fresh-start', action='store_true',
                         help='with --study-dir: a new robot even for a subject back for a case '
                         'they finished')

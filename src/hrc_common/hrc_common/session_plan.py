@@ -46,6 +46,21 @@ LEARNING_HELP = ('learning configuration: params/learning/<name>.yaml (default '
                  'partner_aware: sac observing a model of its partner)')
 
 
+# The person's episodes a robot trained with others learns from by default (--adapt-from): 3
+# (2 minutes) brought every held-out partner within 1.5x of the robot trained for them
+# (docs/partners/held_out.md).
+ADAPT_EPISODES = 3
+
+
+def add_adapt_option(parser) -> None:
+    """Add ``--adapt-from CHECKPOINT`` (one help for the graph's and the engine's session)."""
+    parser.add_argument('--adapt-from', default='', metavar='CHECKPOINT',
+                        help='a robot trained with other people (e.g. a partners-first '
+                        "session's final.pt) meets a new person: it starts from that policy "
+                        "and learns from each of the person's episodes, --episodes of them "
+                        f'(default {ADAPT_EPISODES}), no judging; then the evaluation')
+
+
 def add_learning_option(parser) -> None:
     """Add ``--learning NAME`` (one help for every command that runs sessions)."""
     parser.add_argument('--learning', default=DEFAULT_LEARNING, metavar='NAME',
@@ -80,10 +95,6 @@ def load_learning(params_dir: pathlib.Path, name: str) -> dict:
 
 # The settings a session owns that are not one node's parameter: checked here, not by a node.
 SESSION_MODES = ('lockstep', 'realtime')
-# The person's episodes a robot trained with others learns from by default (--adapt-from): 3
-# (2 minutes) brought every held-out partner within 1.5x of the robot trained for them
-# (docs/partners/held_out.md).
-ADAPT_EPISODES = 3
 
 
 @dataclass

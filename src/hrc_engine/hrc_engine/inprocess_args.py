@@ -6,7 +6,7 @@ PyBullet (the engine loads them); ``hrc_engine.inprocess_session.parse_args`` ch
 
 import argparse
 
-from hrc_common.session_plan import ADAPT_EPISODES, add_learning_option
+from hrc_common.session_plan import add_adapt_option, add_learning_option
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -47,11 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="a new session from a finished session's policy (a returning "
                         "person): the strategy's last step, its first episode judges it "
                         '(--set agent.start_from_judged=false: it learns from the first)')
-    parser.add_argument('--adapt-from', default='', metavar='CHECKPOINT',
-                        help='a robot trained with other people (e.g. a partners-first '
-                        "session's final.pt) meets a new person: it starts from that policy "
-                        "and learns from each of the person's episodes, --episodes of them "
-                        f'(default {ADAPT_EPISODES}), no judging; then the evaluation')
+    add_adapt_option(parser)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.NAME=VALUE',
                         help='override a node parameter (YAML value), as with session')
     parser.add_argument('--json', action='store_true', help='print the result as JSON')
