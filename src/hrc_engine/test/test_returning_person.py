@@ -8,6 +8,9 @@ the person. Without the start (a fresh policy) the first episode is the robot al
 adapting to a new person (``adapt_from``) it trains with the person from the first episode.
 """
 
+import torch
+
+from hrc_agent_node.checkpoint import read_checkpoint
 from hrc_common.contract import EpisodeKind
 from hrc_common.session_plan import SessionSettings
 from hrc_engine.engine import EngineConfig, SummariesSession
@@ -40,9 +43,18 @@ def test_adapt_from_learns_from_each_of_the_persons_episodes_then_evaluates(tmp_
     Three training episodes with the person, no judging episode, then the evaluation.
     """
     run(tmp_path, 'first', training_episodes=6)
-    final = tmp_path / 'runs' / 'checkpoints' / 'first' / 'final.pt'
-    adapting = run(tmp_path, 'adapting', adapt_from=str(final))
+    checkpoints = tmp_path / 'runs' / 'checkpoints'
+    # SAC starts learning after 20 of the person's transitions (three 8 s episodes hold 120;
+    # a study's 40 s episodes hold 200 each, over the default 200)
+    adapting = run(tmp_path, 'adapting', adapt_from=str(checkpoints / 'first' / 'final.pt'),
+                   overrides={'agent.sac_learning_starts': 20})
     kinds = [summary['kind'] for summary in adapting]
     assert kinds == [EpisodeKind.TRAINING] * 3 + [EpisodeKind.EVALUATION]
     assert all(summary['human_involved'] and summary['training_step'] == 1
                for summary in adapting)
+    # the policy learned from the person's episodes
+    before, after = (read_checkpoint(checkpoints / name / 'final.pt')['core']['sac']
+                     for name in ('first', 'adapting'))
+    assert after['updates'] > before['updates']
+    assert any(not torch.equal(before['actor'][name], after['actor'][name])
+               for name in before['actor'])
