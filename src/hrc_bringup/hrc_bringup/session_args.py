@@ -56,8 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="a finished session's final.pt: a new session starts from its "
                         "policy at the strategy's last step (with --study-dir found by itself "
                         'for a subject back for a case they finished); its first episode '
-                        'judges that policy (--set agent.start_from_judged=false: it learns '
-                        'from the first)')
+                        'judges that policy (--adapt-from for a new person: it learns from '
+                        'the first)')
     add_adapt_option(parser)
     parser.add_argument('--fresh-start', action='store_true',
                         help='with --study-dir: a new robot even for a subject back for a case '

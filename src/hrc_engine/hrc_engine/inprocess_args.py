@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--start-from', default='', metavar='CHECKPOINT',
                         help="a new session from a finished session's policy (a returning "
                         "person): the strategy's last step, its first episode judges it "
-                        '(--set agent.start_from_judged=false: it learns from the first)')
+                        '(--adapt-from for a new person: it learns from the first)')
     add_adapt_option(parser)
     parser.add_argument('--set', action='append', default=[], metavar='NODE.NAME=VALUE',
                         help='override a node parameter (YAML value), as with session')
